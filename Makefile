@@ -1,0 +1,36 @@
+# The README's two commands live here: `make demo` and `make test`. Both install what is missing first.
+BUILD      ?= build
+ASAN_BUILD ?= build-asan
+JOBS       ?= $(shell nproc)
+CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
+
+.PHONY: deps build demo test test-sanitize bench clean
+
+deps:
+	@bash scripts/install-deps.sh
+
+build: deps
+	cmake -S . -B $(BUILD) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=Release
+	cmake --build $(BUILD) -j $(JOBS)
+
+# The main job on a bundled example: mesh the simple biped and write a glTF you can open anywhere.
+demo: build
+	@mkdir -p out
+	$(BUILD)/puppeteer/puppeteer check examples/simple_biped.wrl
+	$(BUILD)/puppeteer/puppeteer mesh examples/simple_biped.wrl --cell 0.02 -o out/simple_biped.glb
+	@echo "demo: wrote out/simple_biped.glb (open it in Blender or any glTF viewer)"
+
+test: build
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) --timeout 600
+
+# The same tests under AddressSanitizer + UndefinedBehaviorSanitizer (Debug build, slow tests skipped).
+test-sanitize: deps
+	cmake -S . -B $(ASAN_BUILD) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=Debug -DIMPS_SANITIZE=ON -DIMPS_BUILD_BENCH=OFF
+	cmake --build $(ASAN_BUILD) -j $(JOBS)
+	cd $(ASAN_BUILD) && ctest --output-on-failure -j $(JOBS) -LE slow --timeout 900
+
+bench: build
+	$(BUILD)/bench/imps_bench
+
+clean:
+	rm -rf $(BUILD) $(ASAN_BUILD) out

@@ -1,0 +1,86 @@
+// A character: the scene graph compiled into joints, joint-local primitives and the blend graph.
+//
+// Joints are the scene's RigidTransforms, addressed by DEF name (unnamed ones get "joint<N>"). Each primitive belongs
+// to the joint whose RigidTransform directly contains it (or to no joint, -1, at the root of a flat scene).
+// The unwanted-blending rule (thesis 3.7, figure 3-1): a primitive blends with its siblings (same joint), its parent
+// (primitives of the nearest ancestor joint that holds primitives) and its children (primitives of joints whose
+// nearest primitive-holding ancestor is its joint) — never with a grandparent or grandchild. BlendGroup nodes then
+// add (blend TRUE) or remove (blend FALSE) pairs, later groups winning. A flat scene (blend node at the root) blends
+// everything with everything.
+#pragma once
+
+#include <expected>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <glm/gtc/quaternion.hpp>
+#include <glm/vec3.hpp>
+
+#include "imps/diagnostic.h"
+#include "imps/field.h"
+#include "imps/primitives.h"
+#include "imps/scene.h"
+
+namespace imps {
+
+// A rigid transform: x -> rotation * x + translation.
+struct Rigid {
+  glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};
+  glm::vec3 translation{0.0f};
+  glm::vec3 apply(const glm::vec3& x) const { return rotation * x + translation; }
+  Rigid operator*(const Rigid& b) const { return {rotation * b.rotation, rotation * b.translation + translation}; }
+  Rigid inverse() const {
+    const glm::quat inv = glm::conjugate(rotation);
+    return {inv, -(inv * translation)};
+  }
+};
+
+// Converts a VRML axis-angle rotation to a unit quaternion (identity for a zero axis).
+glm::quat toQuat(const Rotation& r);
+
+struct Joint {
+  std::string name;
+  int parent = -1;  // index of the parent joint, -1 for a root
+  Rigid rest;       // the file's translation and rotation, relative to the parent
+};
+
+struct CharacterPrimitive {
+  std::string name;  // DEF name or "<kind><N>"
+  int joint = -1;    // owning joint, -1 for none
+  Primitive local;   // in the joint's frame (world frame when joint == -1)
+  float blendParam = 0.0f;
+  glm::vec3 color{0.8f};
+};
+
+class Character {
+ public:
+  // Compiles a scene. Errors (with the scene's source locations): no scene graph, no primitives, nested blend
+  // nodes, a blendParam of the wrong sign for the blend in force.
+  static std::expected<Character, Diagnostics> fromScene(const Scene& scene);
+
+  const std::vector<Joint>& joints() const { return joints_; }
+  const std::vector<CharacterPrimitive>& primitives() const { return primitives_; }
+  const BlendFunction& blend() const { return blend_; }
+  float isoValue() const { return iso_; }
+  bool hierarchical() const { return hierarchical_; }
+  // Index of the joint with this name, or -1.
+  int findJoint(std::string_view name) const;
+  // Primitives that primitive i blends with (ascending, excluding i).
+  const std::vector<uint32_t>& blendNeighbours(size_t i) const { return neighbours_[i]; }
+  // The sets the field takes its maximum over (field.h): {i} + neighbours(i) per primitive, with duplicates and
+  // subsets removed; one set of everything for a flat scene.
+  const BlendSets& blendSets() const { return sets_; }
+
+ private:
+  std::vector<Joint> joints_;
+  std::vector<CharacterPrimitive> primitives_;
+  std::vector<std::vector<uint32_t>> neighbours_;
+  BlendSets sets_;
+  BlendFunction blend_;
+  float iso_ = 1.0f;
+  bool hierarchical_ = false;
+  friend class CharacterBuilder;
+};
+
+}  // namespace imps

@@ -1,0 +1,50 @@
+// Diagnostics for bad input: where it is (file:line:column) and what was expected.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace imps {
+
+// A position in an input file. Lines and columns count from 1; 0 means "unknown".
+struct SourceLoc {
+  std::string file;
+  int line = 0;
+  int column = 0;
+};
+
+enum class Severity { Error, Warning, Note };
+
+// One message about an input, printed as `file:line:column: error: message`.
+struct Diagnostic {
+  Severity severity = Severity::Error;
+  SourceLoc loc;
+  std::string message;
+
+  std::string str() const;
+};
+
+// Diagnostics collected while reading or validating one input. Errors make the input invalid; warnings do not.
+class Diagnostics {
+ public:
+  void error(SourceLoc loc, std::string message);
+  void warning(SourceLoc loc, std::string message);
+  void note(SourceLoc loc, std::string message);
+
+  bool hasErrors() const { return errorCount_ > 0; }
+  int errorCount() const { return errorCount_; }
+  const std::vector<Diagnostic>& all() const { return items_; }
+  // Every diagnostic, one per line, in the order reported.
+  std::string str() const;
+  void append(const Diagnostics& other);
+
+ private:
+  std::vector<Diagnostic> items_;
+  int errorCount_ = 0;
+};
+
+// The closest candidate to `word` by edit distance, or "" when none is close enough to be a likely typo.
+// Used for "did you mean 'radius'?" suggestions.
+std::string closestMatch(const std::string& word, const std::vector<std::string>& candidates);
+
+}  // namespace imps

@@ -1,0 +1,109 @@
+// The field of a posed character: world-space primitives, their blend and the blend sets that encode which
+// primitives may blend (the unwanted-blending rule of thesis 3.7). Evaluates value, gradient and colour.
+//
+// F(x) = max over blend sets S of blend(S)(x). A flat scene has one set holding every primitive. A hierarchical one
+// has, for each primitive, the set of it and its blend neighbours (Character::blendSets), so a hand that touches a
+// hip is unioned with it, never blended. The field convention (F >= 0, surface at iso, inside larger) is in blend.h.
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "imps/blend.h"
+#include "imps/primitives.h"
+
+namespace imps {
+
+// Sets of primitive indices in compressed form: set s is members[offsets[s] .. offsets[s+1]), ascending.
+struct BlendSets {
+  std::vector<uint32_t> offsets{0};
+  std::vector<uint32_t> members;
+  size_t count() const { return offsets.size() - 1; }
+  std::span<const uint32_t> set(size_t s) const {
+    return {members.data() + offsets[s], members.data() + offsets[s + 1]};
+  }
+  void add(std::span<const uint32_t> sortedMembers);
+  // One set with primitives 0..n-1.
+  static BlendSets all(size_t n);
+};
+
+// Value, gradient, colour and owner at one point.
+struct FieldSample {
+  float value = 0.0f;
+  glm::vec3 gradient{0.0f};
+  glm::vec3 color{0.8f};
+  int owner = -1;  // the primitive contributing most in the winning set (the thesis's particle owner), -1 if none
+};
+
+// Reusable per-thread scratch for batched evaluation: the candidate primitives of a region and the blend sets
+// restricted to them (Field::prepare). No allocation on the hot path once warmed up.
+struct FieldScratch {
+  std::vector<uint32_t> candidates;                          // ascending primitive indices
+  std::vector<uint32_t> localSetOffsets, localSetMembers;  // sets as indices into candidates
+  bool singleSet = false;                                    // every candidate is in the one set
+  std::vector<float> terms;                                  // candidates x points
+  std::vector<int32_t> globalToLocal;
+};
+
+class Field {
+ public:
+  Field() = default;
+  // `params`: per-primitive blend parameter; `colors`: per-primitive diffuse colour. Sizes must match.
+  Field(std::vector<Primitive> primitives, std::vector<float> params, std::vector<glm::vec3> colors,
+        BlendFunction blend, BlendSets sets, float iso = 1.0f);
+
+  size_t size() const { return primitives_.size(); }
+  float iso() const { return iso_; }
+  const BlendFunction& blend() const { return blend_; }
+  const BlendSets& sets() const { return sets_; }
+  const std::vector<Primitive>& primitives() const { return primitives_; }
+  const Primitive& primitive(size_t i) const { return primitives_[i]; }
+  float param(size_t i) const { return params_[i]; }
+  glm::vec3 color(size_t i) const { return colors_[i]; }
+  // Replaces the world-space primitives (same count and order), e.g. after a new pose.
+  void setPrimitives(std::vector<Primitive> primitives);
+
+  // Support of primitive i: where it can affect F (d < supportDistance(i)), and its box.
+  float supportDistance(size_t i) const { return support_[i]; }
+  const Box& supportBox(size_t i) const { return supportBoxes_[i]; }
+  // Union of every support box: F is exactly 0 outside it.
+  Box bounds() const;
+  // A box enclosing every point with F >= iso (conservative, much tighter than bounds()).
+  Box surfaceBounds() const;
+
+  // Point evaluation over every primitive (culled by support boxes).
+  float value(const glm::vec3& x) const;
+  FieldSample sample(const glm::vec3& x) const;
+
+  // Batched evaluation over a region. prepare() collects the primitives whose support box overlaps `region`;
+  // the other calls then evaluate points inside `region` using only those. Values are bit-identical to value(x)
+  // for every point in the region, whatever the region: this is what lets polygonizers split space into blocks
+  // and threads and still agree exactly on shared samples.
+  void prepare(const Box& region, FieldScratch& scratch) const;
+  void prepare(std::span<const uint32_t> candidates, FieldScratch& scratch) const;
+  void values(std::span<const glm::vec3> points, std::span<float> out, FieldScratch& scratch) const;
+  float value(const glm::vec3& x, FieldScratch& scratch) const;
+  FieldSample sample(const glm::vec3& x, FieldScratch& scratch) const;
+
+  // Conservative bounds of F over a box inside the prepared region: lower <= F(x) <= upper for all x in box.
+  float upperBound(const Box& box, const FieldScratch& scratch) const;
+  float lowerBound(const Box& box, const FieldScratch& scratch) const;
+
+ private:
+  void prepareSets(FieldScratch& scratch) const;
+  float combine(const float* terms, size_t stride, size_t point, const FieldScratch& scratch,
+                int* winningSet) const;
+
+  std::vector<Primitive> primitives_;
+  std::vector<float> params_;
+  std::vector<glm::vec3> colors_;
+  std::vector<float> support_;
+  std::vector<Box> supportBoxes_;
+  BlendFunction blend_;
+  BlendSets sets_;
+  float iso_ = 1.0f;
+};
+
+}  // namespace imps

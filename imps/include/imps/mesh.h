@@ -1,0 +1,77 @@
+// The triangle mesh every polygonizer produces: flat arrays ready for GL upload and export, plus topology checks.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+namespace imps {
+
+// An indexed triangle mesh. Vertex attributes are interleaved per attribute, not per vertex:
+// positions[3i..3i+2] (metres, world space), normals[3i..] (unit, pointing out of the surface, i.e. down the field
+// gradient), colors[3i..] (linear RGB in [0, 1]). Triangles are indices[3t..3t+2], counter-clockwise seen from
+// outside. normals and colors are either empty or as long as positions.
+struct Mesh {
+  std::vector<float> positions;
+  std::vector<float> normals;
+  std::vector<float> colors;
+  std::vector<uint32_t> indices;
+
+  size_t vertexCount() const { return positions.size() / 3; }
+  size_t triangleCount() const { return indices.size() / 3; }
+  glm::vec3 position(size_t v) const { return {positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]}; }
+  glm::vec3 normal(size_t v) const { return {normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]}; }
+  glm::vec3 color(size_t v) const { return {colors[3 * v], colors[3 * v + 1], colors[3 * v + 2]}; }
+  void clear() {
+    positions.clear();
+    normals.clear();
+    colors.clear();
+    indices.clear();
+  }
+  bool operator==(const Mesh&) const = default;
+};
+
+// What the topology of a mesh is. A closed 2-manifold has boundaryEdges == 0, nonManifoldEdges == 0,
+// nonManifoldVertices == 0 and orientationConflicts == 0.
+struct MeshTopology {
+  size_t boundaryEdges = 0;         // edges used by exactly one triangle (holes)
+  size_t nonManifoldEdges = 0;      // edges used by three or more triangles
+  size_t nonManifoldVertices = 0;   // vertices whose triangle fan is not a single disk or half-disk
+  size_t orientationConflicts = 0;  // interior edges traversed in the same direction by both triangles
+  size_t degenerateTriangles = 0;   // triangles repeating a vertex index
+  size_t unusedVertices = 0;        // vertices no triangle references
+  size_t components = 0;            // connected components (by shared edges)
+  long eulerCharacteristic = 0;     // V - E + F over used vertices
+  bool closedManifold() const {
+    return boundaryEdges == 0 && nonManifoldEdges == 0 && nonManifoldVertices == 0 && orientationConflicts == 0 &&
+           degenerateTriangles == 0;
+  }
+};
+
+// Counts the topological defects of `mesh` (O(triangles log triangles)). Degenerate triangles are counted and then
+// ignored: they add no edges, faces or connections. A vertex on a non-manifold edge is also a non-manifold vertex
+// (its fan falls apart into several pieces once the non-manifold edge is cut). eulerCharacteristic counts the
+// vertices, edges and faces of the non-degenerate triangles. Every index must be < mesh.vertexCount() (checked;
+// a bad index is a bug in whoever built the mesh).
+MeshTopology analyzeTopology(const Mesh& mesh);
+
+// Signed volume enclosed by the mesh (positive when triangles face outward); meaningful for closed meshes.
+double signedVolume(const Mesh& mesh);
+
+// Axis-aligned bounding box of all vertices (used or not), in the mesh's space. For an empty mesh min > max
+// (min = +inf, max = -inf), so `empty()` is true.
+struct MeshBounds {
+  glm::vec3 min{std::numeric_limits<float>::infinity()};
+  glm::vec3 max{-std::numeric_limits<float>::infinity()};
+  bool empty() const { return !(min.x <= max.x && min.y <= max.y && min.z <= max.z); }
+};
+MeshBounds bounds(const Mesh& mesh);
+
+// Appends `source` to `target`, offsetting its indices. normals (and colors) of the result are kept only if both
+// meshes have them, or if `target` is empty; otherwise they are dropped so the Mesh invariant holds.
+void appendMesh(Mesh& target, const Mesh& source);
+
+}  // namespace imps

@@ -1,0 +1,20 @@
+// The one threading layer: every parallel loop in the project goes through here (oneTBB underneath).
+//
+// Determinism contract: parallelFor calls body(i) exactly once for every i in [0, n), in an unspecified order and
+// on unspecified threads. Algorithms that write per-index outputs and merge them in index order therefore produce
+// identical results for 1 thread and for N threads.
+#pragma once
+
+#include <cstddef>
+#include <functional>
+
+namespace imps {
+
+// Number of worker threads for a requested count: `requested` if > 0, else the machine's hardware concurrency.
+int resolveThreads(int requested);
+
+// Runs body(i) for i in [0, n) on up to `threads` threads (0 = all cores). Returns when every call has returned.
+// `grain` is the smallest number of consecutive indices given to one task.
+void parallelFor(size_t n, int threads, const std::function<void(size_t)>& body, size_t grain = 1);
+
+}  // namespace imps

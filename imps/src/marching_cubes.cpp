@@ -1,0 +1,658 @@
+// Marching Cubes over blocks of 8^3 cells: bin primitives to blocks, skip blocks by field bounds, sample, find edge
+// vertices, triangulate from a face-consistent case table, concatenate in block order.
+// Based on: Lorensen & Cline 1987; Nielson & Hamann 1991 (asymptotic decider).
+#include "imps/marching_cubes.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+
+#include "imps/check.h"
+#include "imps/parallel.h"
+
+namespace imps {
+namespace {
+
+constexpr int kBlock = 8;                          // cells per block side
+constexpr int kBlockVerts = kBlock + 1;            // samples per block side
+constexpr int kBlockSamples = kBlockVerts * kBlockVerts * kBlockVerts;
+constexpr int kBlockEdges = 3 * kBlock * kBlock * kBlock;  // edges owned by a block (start vertex in [0, B)^3)
+constexpr int kCentre = 12;                        // table code of a cell's first loop-centre vertex
+constexpr uint32_t kProvisional = 0x80000000u;     // triangle index of a centre vertex before final numbering
+
+// ---- The case table ------------------------------------------------------------------------------------------
+// Corners: c = x | y << 1 | z << 2. Edge e = axis * 4 + m, starting at the corner with that axis' bit clear, m the
+// other two bits (lower axis first). Faces: (axis a, side s), corners cycled counter-clockwise seen from outside.
+
+int edgeId(int startCorner, int axis) {
+  const int b0 = (axis + 1) % 3, b1 = (axis + 2) % 3;
+  const int lo = std::min(b0, b1), hi = std::max(b0, b1);
+  return axis * 4 + ((startCorner >> lo) & 1) + 2 * ((startCorner >> hi) & 1);
+}
+int edgeStart(int e) {
+  const int axis = e / 4, m = e % 4;
+  const int b0 = (axis + 1) % 3, b1 = (axis + 2) % 3;
+  const int lo = std::min(b0, b1), hi = std::max(b0, b1);
+  return ((m & 1) << lo) | (((m >> 1) & 1) << hi);
+}
+
+struct Face {
+  int axis, side;
+  std::array<int, 4> cycle;      // corners, counter-clockwise from outside
+  std::array<int, 4> cycleEdge;  // edge between cycle[k] and cycle[k+1]
+  std::array<int, 4> canonical;  // corners at (u,v) = (0,0), (1,0), (1,1), (0,1) for the decider
+};
+
+std::array<Face, 6> makeFaces() {
+  std::array<Face, 6> faces{};
+  int f = 0;
+  for (int a = 0; a < 3; ++a)
+    for (int s = 0; s < 2; ++s, ++f) {
+      const int u = (a + 1) % 3, v = (a + 2) % 3;
+      auto corner = [&](int cu, int cv) { return (s << a) | (cu << u) | (cv << v); };
+      const std::array<std::array<int, 2>, 4> ccw = {{{0, 0}, {1, 0}, {1, 1}, {0, 1}}};
+      Face& face = faces[f];
+      face.axis = a;
+      face.side = s;
+      for (int k = 0; k < 4; ++k) {
+        face.canonical[k] = corner(ccw[k][0], ccw[k][1]);
+        const int kk = s == 1 ? k : (4 - k) % 4;  // the far side is seen from +a, the near side from -a
+        face.cycle[k] = corner(ccw[kk][0], ccw[kk][1]);
+      }
+      for (int k = 0; k < 4; ++k) {
+        const int c0 = face.cycle[k], c1 = face.cycle[(k + 1) % 4];
+        const int diff = c0 ^ c1;
+        const int axis = diff == 1 ? 0 : diff == 2 ? 1 : 2;
+        face.cycleEdge[k] = edgeId(std::min(c0, c1), axis);
+      }
+    }
+  return faces;
+}
+
+struct CaseTable {
+  std::array<Face, 6> faces = makeFaces();
+  std::array<uint8_t, 256> ambiguousFaces{};  // bit f: face f has diagonal inside corners
+  // entries[(case << 6) | joinedMask]: triangle count then 3 edge ids per triangle.
+  std::vector<std::array<uint8_t, 37>> entries = std::vector<std::array<uint8_t, 37>>(256 * 64);
+
+  CaseTable() {
+    for (int c = 0; c < 256; ++c) {
+      for (int f = 0; f < 6; ++f) {
+        int changes = 0;
+        for (int k = 0; k < 4; ++k)
+          changes += ((c >> faces[f].cycle[k]) & 1) != ((c >> faces[f].cycle[(k + 1) % 4]) & 1);
+        if (changes == 4) ambiguousFaces[c] |= uint8_t(1u << f);
+      }
+      for (int joined = 0; joined < 64; ++joined) {
+        if ((joined & ~ambiguousFaces[c]) != 0) continue;  // only meaningful bits
+        build(c, joined, entries[(c << 6) | joined]);
+      }
+    }
+  }
+
+  // Two cube edges lie on a common face.
+  bool shareFace(int e0, int e1) const {
+    for (const Face& f : faces) {
+      bool a = false, b = false;
+      for (int k = 0; k < 4; ++k) {
+        a |= f.cycleEdge[k] == e0;
+        b |= f.cycleEdge[k] == e1;
+      }
+      if (a && b) return true;
+    }
+    return false;
+  }
+
+  // Triangulates a loop of crossing edges without any diagonal between two crossings on a common face: the cell
+  // across that face may triangulate the same pair, and the edge would then have four triangles. Dynamic
+  // programming over the polygon (n <= 12). A few long loops (e.g. nine crossings) have no such triangulation;
+  // they get a vertex of their own at the loop's centre (code kCentre + k for the k-th such loop of the cell),
+  // fanned to every loop vertex, which no other cell can share.
+  void triangulateLoop(const int* loop, int n, std::array<uint8_t, 37>& out, int& triangles, int& centres) const {
+    auto allowed = [&](int i, int j) {
+      const int d = (j - i + n) % n;
+      return d == 1 || d == n - 1 || !shareFace(loop[i], loop[j]);
+    };
+    // ok[i][j]: the sub-polygon i..j (i < j) can be triangulated using only allowed diagonals; via[i][j] the apex.
+    std::array<std::array<bool, 12>, 12> ok{};
+    std::array<std::array<int, 12>, 12> via{};
+    for (int i = 0; i + 1 < n; ++i) ok[i][i + 1] = true;
+    for (int len = 2; len < n; ++len)
+      for (int i = 0; i + len < n; ++i) {
+        const int j = i + len;
+        if (!allowed(i, j)) continue;
+        for (int k = i + 1; k < j && !ok[i][j]; ++k)
+          if (ok[i][k] && ok[k][j]) {
+            ok[i][j] = true;
+            via[i][j] = k;
+          }
+      }
+    auto emit = [&](int a, int b, int c) {
+      out[1 + 3 * triangles] = uint8_t(a);
+      out[2 + 3 * triangles] = uint8_t(b);
+      out[3 + 3 * triangles] = uint8_t(c);
+      ++triangles;
+    };
+    if (!ok[0][n - 1]) {
+      const int centre = kCentre + centres++;
+      IMPS_CHECK_LE(centres, 2);
+      for (int i = 0; i < n; ++i) emit(centre, loop[i], loop[(i + 1) % n]);
+      return;
+    }
+    // Emit triangles (i, k, j) keeping the loop's orientation.
+    std::array<std::array<int, 2>, 12> stack;
+    int top = 0;
+    stack[top++] = {0, n - 1};
+    while (top > 0) {
+      const auto [i, j] = stack[--top];
+      if (j - i < 2) continue;
+      const int k = via[i][j];
+      emit(loop[i], loop[k], loop[j]);
+      stack[top++] = {i, k};
+      stack[top++] = {k, j};
+    }
+  }
+
+  // Contour segments on each face go from an entry crossing (outside -> inside along the cycle) to an exit; chained
+  // across faces they form loops, each triangulated (triangulateLoop). Orientation: counter-clockwise seen from outside.
+  void build(int c, int joined, std::array<uint8_t, 37>& out) const {
+    std::array<int, 12> next;
+    next.fill(-1);
+    for (int f = 0; f < 6; ++f) {
+      const Face& face = faces[f];
+      std::array<int, 4> kind{};  // 0 none, +1 entry, -1 exit
+      int crossings = 0;
+      for (int k = 0; k < 4; ++k) {
+        const bool in0 = (c >> face.cycle[k]) & 1, in1 = (c >> face.cycle[(k + 1) % 4]) & 1;
+        kind[k] = in0 == in1 ? 0 : (in1 ? 1 : -1);
+        crossings += kind[k] != 0;
+      }
+      if (crossings == 2) {
+        int entry = -1, exit = -1;
+        for (int k = 0; k < 4; ++k) {
+          if (kind[k] == 1) entry = k;
+          if (kind[k] == -1) exit = k;
+        }
+        next[face.cycleEdge[entry]] = face.cycleEdge[exit];
+      } else if (crossings == 4) {
+        const bool join = (joined >> f) & 1;
+        for (int k = 0; k < 4; ++k)
+          if (kind[k] == 1) next[face.cycleEdge[k]] = face.cycleEdge[join ? (k + 3) % 4 : (k + 1) % 4];
+      }
+    }
+    int triangles = 0, centres = 0;
+    std::array<bool, 12> used{};
+    for (int start = 0; start < 12; ++start) {
+      if (next[start] < 0 || used[start]) continue;
+      std::array<int, 12> loop;
+      int n = 0;
+      for (int e = start; !used[e]; e = next[e]) {
+        IMPS_CHECK(next[e] >= 0);
+        used[e] = true;
+        loop[n++] = e;
+      }
+      triangulateLoop(loop.data(), n, out, triangles, centres);
+    }
+    out[0] = uint8_t(triangles);
+  }
+};
+
+const CaseTable& caseTable() {
+  static const CaseTable table;
+  return table;
+}
+
+// ---- Grid and blocks -----------------------------------------------------------------------------------------
+
+struct Grid {
+  glm::vec3 origin{0.0f}, cell{1.0f};
+  glm::ivec3 cells{0};   // multiple of kBlock
+  glm::ivec3 blocks{0};
+  glm::vec3 vertex(int i, int j, int k) const {
+    return {origin.x + float(i) * cell.x, origin.y + float(j) * cell.y, origin.z + float(k) * cell.z};
+  }
+  glm::ivec3 verts() const { return cells + 1; }
+  size_t blockIndex(int bx, int by, int bz) const { return size_t(bx) + size_t(blocks.x) * (size_t(by) + size_t(blocks.y) * size_t(bz)); }
+  Box blockBox(int bx, int by, int bz) const {
+    Box b;
+    b.lo = vertex(bx * kBlock, by * kBlock, bz * kBlock);
+    b.hi = vertex((bx + 1) * kBlock, (by + 1) * kBlock, (bz + 1) * kBlock);
+    return b;
+  }
+  int64_t vertexKey(int i, int j, int k) const {
+    return int64_t(i) + int64_t(verts().x) * (int64_t(j) + int64_t(verts().y) * int64_t(k));
+  }
+};
+
+Grid makeGrid(const Field& field, const MarchingCubesOptions& o) {
+  Grid g;
+  Box bounds = field.surfaceBounds();
+  if (bounds.empty()) return g;
+  const glm::vec3 size = glm::max(bounds.size(), glm::vec3(1e-6f));
+  if (o.cellSize > 0.0f) {
+    g.cell = glm::vec3(o.cellSize);
+  } else if (o.gridResolution.x > 0 && o.gridResolution.y > 0 && o.gridResolution.z > 0) {
+    g.cell = size / glm::vec3(o.gridResolution);
+  } else {
+    g.cell = glm::vec3(std::max({size.x, size.y, size.z}) / float(std::max(o.resolution, 1)));
+  }
+  // One cell of margin on each side so no surface touches the grid boundary, rounded up to whole blocks and
+  // centred on the bounds.
+  glm::ivec3 need = glm::ivec3(glm::ceil(size / g.cell)) + 2;
+  g.blocks = (need + kBlock - 1) / kBlock;
+  g.cells = g.blocks * kBlock;
+  g.origin = bounds.center() - 0.5f * glm::vec3(g.cells) * g.cell;
+  return g;
+}
+
+// A grid vertex moved onto a skeleton point.
+struct Snap {
+  int64_t key;
+  glm::vec3 position;
+  float value;
+};
+
+struct BlockResult {
+  bool sampled = false, hasSurface = false;
+  std::vector<float> samples;                   // kBlockSamples
+  std::vector<int32_t> edgeVertex;              // kBlockEdges: local vertex index or -1
+  std::vector<float> positions, normals, colors;
+  std::vector<uint32_t> triangles;              // global indices (centre vertices provisional until step 6)
+  std::vector<float> centrePositions, centreNormals, centreColors;  // loop-centre vertices of this block
+  std::vector<std::pair<int, glm::vec3>> moved;  // sample index -> moved position
+  uint32_t base = 0;
+};
+
+inline int sampleIndex(int i, int j, int k) { return i + kBlockVerts * (j + kBlockVerts * k); }
+inline int ownedEdgeIndex(int axis, int i, int j, int k) { return axis * kBlock * kBlock * kBlock + i + kBlock * (j + kBlock * k); }
+
+}  // namespace
+
+struct MarchingCubes::State {
+  std::vector<BlockResult> blocks;
+  std::vector<uint32_t> binOffsets, binMembers;
+};
+
+MarchingCubes::MarchingCubes() : state_(std::make_unique<State>()) {}
+MarchingCubes::~MarchingCubes() = default;
+
+Mesh polygonize(const Field& field, const MarchingCubesOptions& options, MarchingCubesStats* stats) {
+  MarchingCubes mc;
+  Mesh mesh;
+  mc.polygonize(field, options, mesh, stats);
+  return mesh;
+}
+
+namespace {
+
+// Skeleton points of primitive i at spacing <= step.
+void skeletonPoints(const Primitive& p, float step, std::vector<glm::vec3>& out) {
+  out.clear();
+  glm::vec3 a = p.center, b = p.center;
+  if (p.kind == PrimitiveKind::LineSeg) {
+    a = p.p1;
+    b = p.p2;
+  } else if (p.kind == PrimitiveKind::Ellipsoid) {
+    const int major = p.radii.x >= p.radii.y && p.radii.x >= p.radii.z ? 0 : p.radii.y >= p.radii.z ? 1 : 2;
+    const float minor = std::min({p.radii.x, p.radii.y, p.radii.z});
+    glm::vec3 axis(0.0f);
+    axis[major] = p.radii[major] - minor;
+    axis = p.rotation * axis;
+    a = p.center - axis;
+    b = p.center + axis;
+  }
+  const int n = std::max(1, int(std::ceil(glm::length(b - a) / step)));
+  for (int s = 0; s <= n; ++s) out.push_back(a + (b - a) * (float(s) / float(n)));
+}
+
+std::vector<Snap> thinFeatureSnaps(const Field& field, const Grid& g) {
+  std::vector<Snap> snaps;
+  const float iso = field.iso();
+  const float step = 0.5f * std::min({g.cell.x, g.cell.y, g.cell.z});
+  std::vector<glm::vec3> points;
+  FieldScratch scratch;
+  auto nearest = [&](const glm::vec3& p) { return glm::ivec3(glm::round((p - g.origin) / g.cell)); };
+  auto valueAt = [&](const glm::vec3& x) {
+    Box b;
+    b.extend(x);
+    field.prepare(b, scratch);
+    return field.value(x, scratch);
+  };
+  auto consider = [&](const glm::ivec3& v, const glm::vec3& p, float fp) {
+    if (glm::any(glm::lessThan(v, glm::ivec3(1))) || glm::any(glm::greaterThan(v, g.cells - 1))) return;
+    const glm::vec3 gv = g.vertex(v.x, v.y, v.z);
+    if (valueAt(gv) >= iso) return;  // already inside: nothing to preserve
+    snaps.push_back({g.vertexKey(v.x, v.y, v.z), p, fp});
+  };
+  for (size_t i = 0; i < field.size(); ++i) {
+    skeletonPoints(field.primitive(i), step, points);
+    glm::ivec3 previous(-1);
+    glm::vec3 previousPoint(0.0f);
+    float previousValue = 0.0f;
+    for (const glm::vec3& p : points) {
+      const float fp = valueAt(p);
+      if (fp < iso) {
+        previous = glm::ivec3(-1);
+        continue;
+      }
+      const glm::ivec3 v = nearest(p);
+      consider(v, p, fp);
+      // 6-connect to the previous skeleton vertex: step one axis at a time through grid vertices, each moved onto
+      // whichever of the two skeleton points is nearer.
+      if (previous.x >= 0) {
+        glm::ivec3 w = previous;
+        for (int axis = 0; axis < 3; ++axis)
+          while (w[axis] != v[axis]) {
+            w[axis] += v[axis] > w[axis] ? 1 : -1;
+            if (w == v) break;
+            const glm::vec3 gw = g.vertex(w.x, w.y, w.z);
+            const bool nearPrev = glm::length(gw - previousPoint) < glm::length(gw - p);
+            consider(w, nearPrev ? previousPoint : p, nearPrev ? previousValue : fp);
+          }
+      }
+      previous = v;
+      previousPoint = p;
+      previousValue = fp;
+    }
+  }
+  // One snap per vertex: the deepest skeleton point wins.
+  std::sort(snaps.begin(), snaps.end(), [](const Snap& a, const Snap& b) {
+    return a.key != b.key ? a.key < b.key : a.value > b.value;
+  });
+  snaps.erase(std::unique(snaps.begin(), snaps.end(), [](const Snap& a, const Snap& b) { return a.key == b.key; }),
+              snaps.end());
+  return snaps;
+}
+
+}  // namespace
+
+void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& options, Mesh& out,
+                               MarchingCubesStats* stats) {
+  const auto start = std::chrono::steady_clock::now();
+  out.clear();
+  const CaseTable& table = caseTable();
+  const Grid g = makeGrid(field, options);
+  const float iso = field.iso();
+  const size_t blockCount = size_t(g.blocks.x) * size_t(g.blocks.y) * size_t(g.blocks.z);
+  State& st = *state_;
+  st.blocks.resize(blockCount);
+
+  // 1. Bin primitives into the blocks their support boxes overlap (grown by a cell for moved vertices).
+  st.binOffsets.assign(blockCount + 1, 0);
+  auto blockRange = [&](const Box& b, glm::ivec3& lo, glm::ivec3& hi) {
+    lo = glm::clamp(glm::ivec3(glm::floor((b.lo - g.cell - g.origin) / (g.cell * float(kBlock)))), glm::ivec3(0), g.blocks - 1);
+    hi = glm::clamp(glm::ivec3(glm::floor((b.hi + g.cell - g.origin) / (g.cell * float(kBlock)))), glm::ivec3(0), g.blocks - 1);
+  };
+  for (int pass = 0; pass < 2; ++pass) {
+    std::vector<uint32_t> cursor;
+    if (pass == 1) {
+      for (size_t b = 0; b < blockCount; ++b) st.binOffsets[b + 1] += st.binOffsets[b];
+      st.binMembers.resize(st.binOffsets[blockCount]);
+      cursor.assign(st.binOffsets.begin(), st.binOffsets.end() - 1);
+    }
+    for (size_t i = 0; i < field.size() && blockCount > 0; ++i) {
+      glm::ivec3 lo, hi;
+      blockRange(field.supportBox(i), lo, hi);
+      for (int z = lo.z; z <= hi.z; ++z)
+        for (int y = lo.y; y <= hi.y; ++y)
+          for (int x = lo.x; x <= hi.x; ++x) {
+            const size_t b = g.blockIndex(x, y, z);
+            if (pass == 0) ++st.binOffsets[b + 1];
+            else st.binMembers[cursor[b]++] = uint32_t(i);
+          }
+    }
+  }
+
+  // 2. Thin features: grid vertices moved onto skeleton points. Blocks holding one must be sampled.
+  const std::vector<Snap> snaps = options.preserveThinFeatures && blockCount > 0 ? thinFeatureSnaps(field, g)
+                                                                                 : std::vector<Snap>{};
+  std::vector<uint8_t> forced(blockCount, 0);
+  for (const Snap& s : snaps) {
+    const int64_t vx = s.key % g.verts().x, vy = (s.key / g.verts().x) % g.verts().y, vz = s.key / (int64_t(g.verts().x) * g.verts().y);
+    for (int dz = -1; dz <= 0; ++dz)
+      for (int dy = -1; dy <= 0; ++dy)
+        for (int dx = -1; dx <= 0; ++dx) {
+          // The block whose closed vertex range holds (vx, vy, vz): floor(v / B) and, on a block boundary, the one below.
+          const int64_t bx = (vx + dx * (vx % kBlock == 0 ? 1 : 0)) / kBlock;
+          const int64_t by = (vy + dy * (vy % kBlock == 0 ? 1 : 0)) / kBlock;
+          const int64_t bz = (vz + dz * (vz % kBlock == 0 ? 1 : 0)) / kBlock;
+          if (bx >= 0 && by >= 0 && bz >= 0 && bx < g.blocks.x && by < g.blocks.y && bz < g.blocks.z)
+            forced[g.blockIndex(int(bx), int(by), int(bz))] = 1;
+        }
+  }
+
+  // 3. Per block: bound test, samples, owned edge vertices.
+  const int threads = options.threads;
+  parallelFor(blockCount, threads, [&](size_t b) {
+    thread_local FieldScratch scratch;
+    thread_local std::vector<glm::vec3> points;
+    BlockResult& r = st.blocks[b];
+    r.sampled = r.hasSurface = false;
+    r.positions.clear();
+    r.normals.clear();
+    r.colors.clear();
+    r.triangles.clear();
+    r.moved.clear();
+    const int bx = int(b % size_t(g.blocks.x)), by = int((b / size_t(g.blocks.x)) % size_t(g.blocks.y)),
+              bz = int(b / (size_t(g.blocks.x) * size_t(g.blocks.y)));
+    const Box box = g.blockBox(bx, by, bz);
+    const std::span<const uint32_t> cand(st.binMembers.data() + st.binOffsets[b], st.binOffsets[b + 1] - st.binOffsets[b]);
+    if (cand.empty() && !forced[b]) return;
+    field.prepare(cand, scratch);
+    if (!forced[b]) {
+      if (field.upperBound(box, scratch) < iso * (1.0f - 1e-3f)) return;
+      if (field.lowerBound(box, scratch) > iso * (1.0f + 1e-3f)) return;
+    }
+    r.sampled = true;
+    points.resize(kBlockSamples);
+    for (int k = 0; k < kBlockVerts; ++k)
+      for (int j = 0; j < kBlockVerts; ++j)
+        for (int i = 0; i < kBlockVerts; ++i)
+          points[sampleIndex(i, j, k)] = g.vertex(bx * kBlock + i, by * kBlock + j, bz * kBlock + k);
+    r.samples.resize(kBlockSamples);
+    field.values(points, r.samples, scratch);
+    if (!snaps.empty()) {
+      for (int k = 0; k < kBlockVerts; ++k)
+        for (int j = 0; j < kBlockVerts; ++j) {
+          const int64_t rowKey = g.vertexKey(bx * kBlock, by * kBlock + j, bz * kBlock + k);
+          auto it = std::lower_bound(snaps.begin(), snaps.end(), rowKey, [](const Snap& s, int64_t key) { return s.key < key; });
+          for (; it != snaps.end() && it->key <= rowKey + kBlock; ++it) {
+            const int s = sampleIndex(int(it->key - rowKey), j, k);
+            r.samples[s] = it->value;
+            points[s] = it->position;
+            r.moved.emplace_back(s, it->position);
+          }
+        }
+    }
+    bool anyIn = false, anyOut = false;
+    for (float v : r.samples) (v >= iso ? anyIn : anyOut) = true;
+    r.hasSurface = anyIn && anyOut;
+    if (!r.hasSurface) return;
+
+    r.edgeVertex.assign(kBlockEdges, -1);
+    for (int k = 0; k < kBlock; ++k)
+      for (int j = 0; j < kBlock; ++j)
+        for (int i = 0; i < kBlock; ++i) {
+          const int s0 = sampleIndex(i, j, k);
+          const float f0 = r.samples[s0];
+          for (int axis = 0; axis < 3; ++axis) {
+            const int s1 = s0 + (axis == 0 ? 1 : axis == 1 ? kBlockVerts : kBlockVerts * kBlockVerts);
+            const float f1 = r.samples[s1];
+            if ((f0 >= iso) == (f1 >= iso)) continue;
+            // Illinois root finding on the true field between the two (possibly moved) sample positions.
+            const glm::vec3 pa = points[s0], pb = points[s1];
+            float ta = 0.0f, tb = 1.0f, ga = f0 - iso, gb = f1 - iso;
+            float t = ga / (ga - gb);
+            int side = 0;
+            for (int it = 0; it < options.rootIterations; ++it) {
+              const float gt = field.value(pa + t * (pb - pa), scratch) - iso;
+              if (std::abs(gt) <= 1e-6f * iso) break;
+              if ((gt > 0.0f) == (ga > 0.0f)) {
+                ta = t;
+                ga = gt;
+                if (side == -1) gb *= 0.5f;
+                side = -1;
+              } else {
+                tb = t;
+                gb = gt;
+                if (side == 1) ga *= 0.5f;
+                side = 1;
+              }
+              t = ta + (tb - ta) * ga / (ga - gb);
+            }
+            const glm::vec3 x = pa + t * (pb - pa);
+            r.edgeVertex[ownedEdgeIndex(axis, i, j, k)] = int32_t(r.positions.size() / 3);
+            r.positions.insert(r.positions.end(), {x.x, x.y, x.z});
+            if (options.computeNormals || options.computeColors) {
+              const FieldSample fs = field.sample(x, scratch);
+              const float len = glm::length(fs.gradient);
+              const glm::vec3 n = len > 0.0f ? -fs.gradient / len : glm::normalize(pb - pa) * (f0 >= iso ? 1.0f : -1.0f);
+              if (options.computeNormals) r.normals.insert(r.normals.end(), {n.x, n.y, n.z});
+              if (options.computeColors) r.colors.insert(r.colors.end(), {fs.color.x, fs.color.y, fs.color.z});
+            }
+          }
+        }
+  }, 1);
+
+  // 4. Global vertex numbering in block order.
+  uint32_t total = 0;
+  for (BlockResult& r : st.blocks) {
+    r.base = total;
+    if (r.hasSurface) total += uint32_t(r.positions.size() / 3);
+  }
+
+  // 5. Triangles: each cell's case, ambiguous faces decided from their four samples, edges mapped to the owning
+  // block's vertex.
+  parallelFor(blockCount, threads, [&](size_t b) {
+    BlockResult& r = st.blocks[b];
+    if (!r.hasSurface) return;
+    const int bx = int(b % size_t(g.blocks.x)), by = int((b / size_t(g.blocks.x)) % size_t(g.blocks.y)),
+              bz = int(b / (size_t(g.blocks.x) * size_t(g.blocks.y)));
+    r.centrePositions.clear();
+    r.centreNormals.clear();
+    r.centreColors.clear();
+    thread_local FieldScratch scratch;
+    bool prepared = false;
+    // The block owning cell (i, j, k)'s cube edge e, and the vertex's index in it.
+    auto edgeVertex = [&](int i, int j, int k, int e) -> std::pair<const BlockResult*, uint32_t> {
+      const int corner = edgeStart(e), axis = e / 4;
+      int vi = i + (corner & 1), vj = j + ((corner >> 1) & 1), vk = k + ((corner >> 2) & 1);
+      int ox = 0, oy = 0, oz = 0;
+      if (vi == kBlock) { vi = 0; ox = 1; }
+      if (vj == kBlock) { vj = 0; oy = 1; }
+      if (vk == kBlock) { vk = 0; oz = 1; }
+      const BlockResult& owner = (ox | oy | oz) ? st.blocks[g.blockIndex(bx + ox, by + oy, bz + oz)] : r;
+      IMPS_CHECK(owner.hasSurface);
+      const int32_t local = owner.edgeVertex[ownedEdgeIndex(axis, vi, vj, vk)];
+      IMPS_CHECK(local >= 0);
+      return {&owner, uint32_t(local)};
+    };
+    for (int k = 0; k < kBlock; ++k)
+      for (int j = 0; j < kBlock; ++j)
+        for (int i = 0; i < kBlock; ++i) {
+          float f[8];
+          int cs = 0;
+          for (int c = 0; c < 8; ++c) {
+            f[c] = r.samples[sampleIndex(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1))];
+            if (f[c] >= iso) cs |= 1 << c;
+          }
+          if (cs == 0 || cs == 255) continue;
+          int joined = 0;
+          const uint8_t ambiguous = table.ambiguousFaces[cs];
+          if (ambiguous) {
+            for (int face = 0; face < 6; ++face) {
+              if (!((ambiguous >> face) & 1)) continue;
+              const auto& cc = table.faces[face].canonical;
+              const float a = f[cc[0]] - iso, bb = f[cc[1]] - iso, c2 = f[cc[2]] - iso, d = f[cc[3]] - iso;
+              // Bilinear saddle value: inside corners are joined when it is inside.
+              const float denom = a + c2 - bb - d;
+              const float saddle = denom != 0.0f ? (a * c2 - bb * d) / denom : 0.0f;
+              if (saddle >= 0.0f) joined |= 1 << face;
+            }
+          }
+          const auto& entry = table.entries[(cs << 6) | joined];
+          // Loop-centre vertices: the mean of the loop's vertices, then Newton steps onto the surface.
+          uint32_t centreIndex[2] = {0, 0};
+          for (int centre = 0; centre < 2; ++centre) {
+            glm::vec3 sum(0.0f);
+            int count = 0;
+            for (int t = 0; t < entry[0]; ++t) {
+              if (entry[1 + 3 * t] != kCentre + centre) continue;
+              const auto [owner, local] = edgeVertex(i, j, k, entry[2 + 3 * t]);
+              sum += glm::vec3(owner->positions[3 * local], owner->positions[3 * local + 1], owner->positions[3 * local + 2]);
+              ++count;
+            }
+            if (count == 0) break;
+            if (!prepared) {
+              field.prepare(std::span<const uint32_t>(st.binMembers.data() + st.binOffsets[b],
+                                                      st.binOffsets[b + 1] - st.binOffsets[b]), scratch);
+              prepared = true;
+            }
+            glm::vec3 x = sum / float(count);
+            FieldSample fs = field.sample(x, scratch);
+            for (int step = 0; step < 3; ++step) {
+              const float g2 = glm::dot(fs.gradient, fs.gradient);
+              if (g2 <= 0.0f) break;
+              x -= (fs.value - iso) / g2 * fs.gradient;
+              fs = field.sample(x, scratch);
+            }
+            centreIndex[centre] = kProvisional | uint32_t(r.centrePositions.size() / 3);
+            r.centrePositions.insert(r.centrePositions.end(), {x.x, x.y, x.z});
+            const float len = glm::length(fs.gradient);
+            const glm::vec3 n = len > 0.0f ? -fs.gradient / len : glm::vec3(0, 0, 1);
+            if (options.computeNormals) r.centreNormals.insert(r.centreNormals.end(), {n.x, n.y, n.z});
+            if (options.computeColors) r.centreColors.insert(r.centreColors.end(), {fs.color.x, fs.color.y, fs.color.z});
+          }
+          for (int t = 0; t < entry[0]; ++t)
+            for (int v = 0; v < 3; ++v) {
+              const int code = entry[1 + 3 * t + v];
+              if (code >= kCentre) {
+                r.triangles.push_back(centreIndex[code - kCentre]);
+              } else {
+                const auto [owner, local] = edgeVertex(i, j, k, code);
+                r.triangles.push_back(owner->base + local);
+              }
+            }
+        }
+  }, 1);
+
+  // 6. Concatenate in block order: edge vertices, then loop-centre vertices (numbered after all edge vertices).
+  uint32_t centreBase = total;
+  std::vector<uint32_t> centreBases(blockCount, 0);
+  for (size_t b = 0; b < blockCount; ++b) {
+    centreBases[b] = centreBase;
+    if (st.blocks[b].hasSurface) centreBase += uint32_t(st.blocks[b].centrePositions.size() / 3);
+  }
+  out.positions.reserve(size_t(centreBase) * 3);
+  for (const BlockResult& r : st.blocks) {
+    if (!r.hasSurface) continue;
+    out.positions.insert(out.positions.end(), r.positions.begin(), r.positions.end());
+    out.normals.insert(out.normals.end(), r.normals.begin(), r.normals.end());
+    out.colors.insert(out.colors.end(), r.colors.begin(), r.colors.end());
+  }
+  for (size_t b = 0; b < blockCount; ++b) {
+    const BlockResult& r = st.blocks[b];
+    if (!r.hasSurface) continue;
+    out.positions.insert(out.positions.end(), r.centrePositions.begin(), r.centrePositions.end());
+    out.normals.insert(out.normals.end(), r.centreNormals.begin(), r.centreNormals.end());
+    out.colors.insert(out.colors.end(), r.centreColors.begin(), r.centreColors.end());
+    for (uint32_t v : r.triangles) out.indices.push_back(v & kProvisional ? centreBases[b] + (v & ~kProvisional) : v);
+  }
+
+  if (stats) {
+    stats->cells = g.cells;
+    stats->cellSize = g.cell;
+    stats->origin = g.origin;
+    stats->blocks = blockCount;
+    stats->blocksSampled = stats->blocksWithSurface = 0;
+    for (const BlockResult& r : st.blocks) {
+      stats->blocksSampled += r.sampled;
+      stats->blocksWithSurface += r.hasSurface;
+    }
+    stats->thinFeatureVertices = snaps.size();
+    stats->milliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  }
+}
+
+}  // namespace imps

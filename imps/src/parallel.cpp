@@ -1,0 +1,32 @@
+// parallelFor on oneTBB, with an arena per thread count so callers can pin 1 vs N threads.
+#include "imps/parallel.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <thread>
+
+namespace imps {
+
+int resolveThreads(int requested) {
+  if (requested > 0) return requested;
+  const unsigned hw = std::thread::hardware_concurrency();
+  return hw > 0 ? static_cast<int>(hw) : 1;
+}
+
+void parallelFor(size_t n, int threads, const std::function<void(size_t)>& body, size_t grain) {
+  const int t = resolveThreads(threads);
+  if (t == 1 || n <= 1) {
+    for (size_t i = 0; i < n; ++i) body(i);
+    return;
+  }
+  tbb::task_arena arena(t);
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, grain), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i != r.end(); ++i) body(i);
+    });
+  });
+}
+
+}  // namespace imps

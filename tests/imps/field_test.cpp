@@ -1,0 +1,150 @@
+// Field: blend functions, the exponential approximations, batched vs point evaluation, gradients, colours.
+#include "imps/field.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace imps {
+namespace {
+
+Field makeField(std::vector<Primitive> prims, BlendFunction blend, BlendSets sets = {}) {
+  const size_t n = prims.size();
+  std::vector<float> params(n, blend.defaultParam);
+  std::vector<glm::vec3> colors(n);
+  for (size_t i = 0; i < n; ++i) colors[i] = glm::vec3(float(i % 2), float((i + 1) % 2), 0.5f);
+  if (sets.count() == 0) sets = BlendSets::all(n);
+  return Field(std::move(prims), std::move(params), std::move(colors), blend, std::move(sets));
+}
+
+TEST(Field, ExpAccurateIsWithinTwoUlpOfStdExp) {
+  for (float x = -80.0f; x < 80.0f; x += 0.0137f) {
+    const float exact = std::exp(x), approx = expAccurate(x);
+    EXPECT_NEAR(approx, exact, 2.5e-7f * exact) << x;
+  }
+}
+
+TEST(Field, SchraudolphExpIsWithinFourPercent) {
+  for (float x = -20.0f; x < 20.0f; x += 0.01f) EXPECT_NEAR(expFast(x) / std::exp(x), 1.0f, 0.04f) << x;
+}
+
+TEST(Field, LoneMetaballSurfaceIsItsRadiusForEveryBlend) {
+  for (BlendKind kind : {BlendKind::Exponential, BlendKind::BlancSchlick, BlendKind::Elliptical}) {
+    BlendFunction blend;
+    blend.kind = kind;
+    blend.defaultParam = kind == BlendKind::Exponential ? -2.0f : 0.7f;
+    const Field f = makeField({Primitive::metaball({0, 0, 0}, 0.5f)}, blend);
+    EXPECT_NEAR(f.value({0.5f, 0, 0}), 1.0f, 1e-5f);
+    EXPECT_GT(f.value({0.45f, 0, 0}), 1.0f);
+    EXPECT_LT(f.value({0.55f, 0, 0}), 1.0f);
+    EXPECT_EQ(f.value({5.0f, 0, 0}), 0.0f) << "finite support";
+  }
+}
+
+TEST(Field, ExponentialBlendAddsContributions) {
+  BlendFunction blend;  // Exponential, B = -1
+  const Field two = makeField({Primitive::metaball({-0.5f, 0, 0}, 0.6f), Primitive::metaball({0.5f, 0, 0}, 0.6f)}, blend);
+  const Field one = makeField({Primitive::metaball({-0.5f, 0, 0}, 0.6f)}, blend);
+  const glm::vec3 mid(0, 0, 0);
+  EXPECT_NEAR(two.value(mid), 2.0f * one.value(mid), 1e-6f);
+  EXPECT_GT(two.value(mid), 1.0f) << "the two balls are joined by a blend";
+}
+
+TEST(Field, HardnessReducesBlancSchlickBlending) {
+  BlendFunction soft, hard;
+  soft.kind = hard.kind = BlendKind::BlancSchlick;
+  soft.defaultParam = 0.3f;
+  hard.defaultParam = 3.0f;
+  const std::vector<Primitive> prims = {Primitive::metaball({-0.55f, 0, 0}, 0.5f), Primitive::metaball({0.55f, 0, 0}, 0.5f)};
+  EXPECT_GT(makeField(prims, soft).value({0, 0, 0}), 1.0f);
+  EXPECT_LT(makeField(prims, hard).value({0, 0, 0}), 1.0f);
+}
+
+TEST(Field, EllipticalBlendIsAUnionAwayFromTheJoin) {
+  BlendFunction blend;
+  blend.kind = BlendKind::Elliptical;
+  blend.defaultParam = 0.5f;
+  const Field f = makeField({Primitive::metaball({-1, 0, 0}, 0.5f), Primitive::metaball({1, 0, 0}, 0.5f)}, blend);
+  EXPECT_NEAR(f.value({-1.5f, 0, 0}), 1.0f, 1e-5f);  // far side of the left ball: its own surface
+  EXPECT_NEAR(f.value({1, 0.5f, 0}), 1.0f, 1e-5f);
+  // Close together, the rounded union fills the crease.
+  const Field close = makeField({Primitive::metaball({-0.45f, 0, 0}, 0.5f), Primitive::metaball({0.45f, 0, 0}, 0.5f)}, blend);
+  EXPECT_GT(close.value({0, 0.25f, 0}), 1.0f);
+}
+
+TEST(Field, BatchedValuesAreBitIdenticalToPointValues) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-1.5f, 1.5f), r(0.1f, 0.3f);
+  std::vector<Primitive> prims;
+  for (int i = 0; i < 40; ++i) prims.push_back(Primitive::metaball({u(rng), u(rng), u(rng)}, r(rng)));
+  for (int i = 0; i < 10; ++i) prims.push_back(Primitive::lineSeg({u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, r(rng), r(rng)));
+  BlendFunction blend;
+  blend.defaultParam = -3.0f;
+  const Field f = makeField(prims, blend);
+  FieldScratch scratch;
+  for (int n = 0; n < 50; ++n) {
+    Box region;
+    region.extend({u(rng), u(rng), u(rng)});
+    region.extend(region.lo + glm::vec3(0.4f));
+    f.prepare(region, scratch);
+    std::vector<glm::vec3> points;
+    for (int k = 0; k < 64; ++k)
+      points.push_back(region.lo + region.size() * glm::vec3(float(k % 4) / 3, float((k / 4) % 4) / 3, float(k / 16) / 3));
+    std::vector<float> batched(points.size());
+    f.values(points, batched, scratch);
+    for (size_t k = 0; k < points.size(); ++k) EXPECT_EQ(batched[k], f.value(points[k]));
+  }
+}
+
+TEST(Field, GradientMatchesFiniteDifferencesAndColoursBlend) {
+  BlendFunction blend;
+  blend.defaultParam = -2.0f;
+  const Field f = makeField({Primitive::metaball({-0.4f, 0, 0}, 0.5f), Primitive::lineSeg({0.3f, 0, 0}, {1, 0.4f, 0}, 0.3f, 0.2f)}, blend);
+  const glm::vec3 x(0.05f, 0.3f, 0.1f);
+  const FieldSample s = f.sample(x);
+  const float h = 1e-3f;
+  for (int a = 0; a < 3; ++a) {
+    glm::vec3 xp = x, xm = x;
+    xp[a] += h;
+    xm[a] -= h;
+    EXPECT_NEAR(s.gradient[a], (f.value(xp) - f.value(xm)) / (2 * h), 2e-2f);
+  }
+  // Colour is a convex combination of the two materials (0,1,.5) and (1,0,.5), nearer the bigger contribution.
+  EXPECT_NEAR(s.color.r + s.color.g, 1.0f, 1e-5f);
+  EXPECT_GT(s.color.r, 0.0f);
+  EXPECT_GT(s.color.g, 0.0f);
+}
+
+// With blend sets, a primitive is unioned (max) with primitives it does not blend with.
+TEST(Field, BlendSetsPreventUnwantedBlending) {
+  BlendFunction blend;
+  blend.defaultParam = -1.0f;
+  const std::vector<Primitive> prims = {Primitive::metaball({-0.6f, 0, 0}, 0.5f), Primitive::metaball({0.6f, 0, 0}, 0.5f)};
+  BlendSets separate;
+  separate.add(std::vector<uint32_t>{0});
+  separate.add(std::vector<uint32_t>{1});
+  const Field blended = makeField(prims, blend), apart = makeField(prims, blend, separate);
+  EXPECT_GT(blended.value({0, 0, 0}), 1.0f);
+  EXPECT_LT(apart.value({0, 0, 0}), 1.0f);
+  EXPECT_NEAR(apart.value({-1.1f, 0, 0}), 1.0f, 0.02f);
+}
+
+TEST(Field, SurfaceBoundsEncloseTheSurface) {
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> u(-1, 1), r(0.1f, 0.3f);
+  std::vector<Primitive> prims;
+  for (int i = 0; i < 30; ++i) prims.push_back(Primitive::metaball({u(rng), u(rng), u(rng)}, r(rng)));
+  BlendFunction blend;
+  blend.defaultParam = -0.8f;  // very blobby: the surface reaches well beyond the radii
+  const Field f = makeField(prims, blend);
+  const Box sb = f.surfaceBounds();
+  std::uniform_real_distribution<float> w(-4, 4);
+  for (int n = 0; n < 20000; ++n) {
+    const glm::vec3 x(w(rng), w(rng), w(rng));
+    if (f.value(x) >= 1.0f) EXPECT_TRUE(sb.contains(x));
+  }
+  EXPECT_LT(sb.size().x, f.bounds().size().x) << "tighter than the supports";
+}
+
+}  // namespace
+}  // namespace imps
