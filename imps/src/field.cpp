@@ -61,22 +61,40 @@ Box Field::bounds() const {
 }
 
 Box Field::surfaceBounds() const {
-  // Keep the cells of a coarse grid over the supports where F might reach iso.
+  // Keep the cells of a coarse grid over the supports where F might reach iso: bin the primitives into the cells
+  // their supports overlap, then bound F in each cell by the sum of every candidate's largest term there (an upper
+  // bound for any blend set).
   const Box all = bounds();
   if (all.empty()) return all;
-  constexpr int kCells = 24;
+  constexpr int kCells = 20;
   const glm::vec3 cell = all.size() / float(kCells);
+  std::vector<float> upper(kCells * kCells * kCells, 0.0f);
+  std::vector<uint8_t> unbounded(upper.size(), 0);
+  for (size_t i = 0; i < primitives_.size(); ++i) {
+    const glm::ivec3 lo = glm::clamp(glm::ivec3(glm::floor((supportBoxes_[i].lo - all.lo) / cell)), glm::ivec3(0), glm::ivec3(kCells - 1));
+    const glm::ivec3 hi = glm::clamp(glm::ivec3(glm::floor((supportBoxes_[i].hi - all.lo) / cell)), glm::ivec3(0), glm::ivec3(kCells - 1));
+    for (int k = lo.z; k <= hi.z; ++k)
+      for (int j = lo.y; j <= hi.y; ++j)
+        for (int c = lo.x; c <= hi.x; ++c) {
+          Box b;
+          b.lo = all.lo + cell * glm::vec3(c, j, k);
+          b.hi = b.lo + cell;
+          const float d = primitives_[i].minDistance(b);
+          const size_t index = size_t(c) + kCells * (size_t(j) + kCells * size_t(k));
+          if (blend_.additive()) upper[index] += blend_.term(d, params_[i]);
+          else if (d < support_[i]) unbounded[index] = 1;
+        }
+  }
   Box result;
-  FieldScratch scratch;
   for (int k = 0; k < kCells; ++k)
     for (int j = 0; j < kCells; ++j)
-      for (int i = 0; i < kCells; ++i) {
-        Box c;
-        c.lo = all.lo + cell * glm::vec3(i, j, k);
-        c.hi = c.lo + cell;
-        prepare(c, scratch);
-        if (scratch.candidates.empty()) continue;
-        if (upperBound(c, scratch) >= iso_) result.extend(c);
+      for (int c = 0; c < kCells; ++c) {
+        const size_t index = size_t(c) + kCells * (size_t(j) + kCells * size_t(k));
+        if (upper[index] < iso_ && !unbounded[index]) continue;
+        Box b;
+        b.lo = all.lo + cell * glm::vec3(c, j, k);
+        b.hi = b.lo + cell;
+        result.extend(b);
       }
   return result;
 }
@@ -93,115 +111,271 @@ void Field::prepare(std::span<const uint32_t> candidates, FieldScratch& scratch)
   prepareSets(scratch);
 }
 
-void Field::prepareSets(FieldScratch& scratch) const {
-  const auto& cand = scratch.candidates;
-  scratch.localSetOffsets.assign(1, 0);
-  scratch.localSetMembers.clear();
-  scratch.singleSet = sets_.count() == 1 && sets_.members.size() == primitives_.size();
-  if (scratch.singleSet) {
-    for (size_t k = 0; k < cand.size(); ++k) scratch.localSetMembers.push_back(static_cast<uint32_t>(k));
-    scratch.localSetOffsets.push_back(static_cast<uint32_t>(cand.size()));
-    return;
-  }
-  scratch.globalToLocal.resize(primitives_.size(), -1);
-  for (size_t k = 0; k < cand.size(); ++k) scratch.globalToLocal[cand[k]] = static_cast<int32_t>(k);
-  for (size_t s = 0; s < sets_.count(); ++s) {
-    const size_t before = scratch.localSetMembers.size();
-    for (uint32_t m : sets_.set(s))
-      if (scratch.globalToLocal[m] >= 0) scratch.localSetMembers.push_back(static_cast<uint32_t>(scratch.globalToLocal[m]));
-    if (scratch.localSetMembers.size() > before)
-      scratch.localSetOffsets.push_back(static_cast<uint32_t>(scratch.localSetMembers.size()));
-  }
-  for (uint32_t c : cand) scratch.globalToLocal[c] = -1;
-}
-
-float Field::combine(const float* terms, size_t stride, size_t point, const FieldScratch& scratch,
-                     int* winningSet) const {
-  float best = 0.0f;
-  const size_t setCount = scratch.localSetOffsets.size() - 1;
-  for (size_t s = 0; s < setCount; ++s) {
-    float v;
-    if (blend_.additive()) {
-      float sum = 0.0f;
-      for (uint32_t m = scratch.localSetOffsets[s]; m < scratch.localSetOffsets[s + 1]; ++m)
-        sum += terms[scratch.localSetMembers[m] * stride + point];
-      v = sum;
-    } else {
-      bool present = false;
-      float g = 0.0f;
-      for (uint32_t m = scratch.localSetOffsets[s]; m < scratch.localSetOffsets[s + 1]; ++m) {
-        const float x = terms[scratch.localSetMembers[m] * stride + point];
-        if (x <= -1.0f) continue;
-        g = present ? BlendFunction::roundedUnion(g, x) : x;
-        present = true;
-      }
-      v = present ? std::fmax(1.0f + g, 0.0f) : 0.0f;
-    }
-    if (v > best) {
-      best = v;
-      if (winningSet) *winningSet = static_cast<int>(s);
-    }
-  }
-  return best;
-}
-
 namespace {
-// Terms of one primitive at many points. Kind and blend are hoisted out of the loop so it vectorises.
-void primitiveTerms(const Primitive& p, const BlendFunction& blend, float param, std::span<const glm::vec3> points,
-                    float* out) {
-  const size_t n = points.size();
-  switch (p.kind) {
-    case PrimitiveKind::Metaball: {
-      const float inv = 1.0f / (p.radius * p.radius);
-      for (size_t i = 0; i < n; ++i) {
-        const glm::vec3 v = points[i] - p.center;
-        out[i] = (v.x * v.x + v.y * v.y + v.z * v.z) * inv;
-      }
-      break;
-    }
-    default:
-      for (size_t i = 0; i < n; ++i) out[i] = p.distance(points[i]);
-      break;
-  }
-  for (size_t i = 0; i < n; ++i) out[i] = blend.term(out[i], param);
+bool isSubset(std::span<const uint32_t> small, std::span<const uint32_t> big) {
+  return std::includes(big.begin(), big.end(), small.begin(), small.end());
 }
 }  // namespace
 
+// Restricts the blend sets to the candidates. Duplicate sets are dropped (they give equal values), and for the
+// additive blends so are subsets of other sets: float addition of non-negative terms is monotone, so a subset never
+// exceeds its superset and dropping it leaves every value bit-identical. (The rounded union is not monotone to the
+// last bit, so elliptical sets keep their subsets.)
+void Field::prepareSets(FieldScratch& scratch) const {
+  const auto& cand = scratch.candidates;
+  scratch.setOffsets.assign(1, 0);
+  scratch.setMembers.clear();
+  const bool singleSet = sets_.count() == 1 && sets_.members.size() == primitives_.size();
+  if (singleSet) {
+    if (!cand.empty()) {
+      for (size_t k = 0; k < cand.size(); ++k) scratch.setMembers.push_back(static_cast<uint32_t>(k));
+      scratch.setOffsets.push_back(static_cast<uint32_t>(cand.size()));
+    }
+  } else {
+    // Restrict every set to the candidates (as positions in the candidate list, still ascending).
+    thread_local std::vector<uint32_t> offsets, members;
+    offsets.assign(1, 0);
+    members.clear();
+    scratch.globalToLocal.resize(primitives_.size(), -1);
+    for (size_t k = 0; k < cand.size(); ++k) scratch.globalToLocal[cand[k]] = static_cast<int32_t>(k);
+    for (size_t s = 0; s < sets_.count(); ++s) {
+      const size_t before = members.size();
+      for (uint32_t m : sets_.set(s))
+        if (scratch.globalToLocal[m] >= 0) members.push_back(static_cast<uint32_t>(scratch.globalToLocal[m]));
+      if (members.size() > before) offsets.push_back(static_cast<uint32_t>(members.size()));
+    }
+    for (uint32_t c : cand) scratch.globalToLocal[c] = -1;
+    // Keep a set unless another is equal (and earlier) or, for additive blends, a strict superset.
+    const size_t n = offsets.size() - 1;
+    auto set = [&](size_t s) { return std::span<const uint32_t>(members).subspan(offsets[s], offsets[s + 1] - offsets[s]); };
+    for (size_t a = 0; a < n; ++a) {
+      const auto sa = set(a);
+      bool drop = false;
+      for (size_t b = 0; b < n && !drop; ++b) {
+        if (a == b) continue;
+        const auto sb = set(b);
+        const bool equal = std::equal(sa.begin(), sa.end(), sb.begin(), sb.end());
+        drop = equal ? b < a : (blend_.additive() && sb.size() > sa.size() && isSubset(sa, sb));
+      }
+      if (drop) continue;
+      scratch.setMembers.insert(scratch.setMembers.end(), sa.begin(), sa.end());
+      scratch.setOffsets.push_back(static_cast<uint32_t>(scratch.setMembers.size()));
+    }
+  }
+  // Candidate -> the local sets holding it.
+  scratch.memberOffsets.assign(cand.size() + 1, 0);
+  for (uint32_t m : scratch.setMembers) ++scratch.memberOffsets[m + 1];
+  for (size_t k = 0; k < cand.size(); ++k) scratch.memberOffsets[k + 1] += scratch.memberOffsets[k];
+  scratch.memberSets.resize(scratch.setMembers.size());
+  thread_local std::vector<uint32_t> fill;
+  fill.assign(scratch.memberOffsets.begin(), scratch.memberOffsets.end() - 1);
+  for (size_t s = 0; s < scratch.setCount(); ++s)
+    for (uint32_t m = scratch.setOffsets[s]; m < scratch.setOffsets[s + 1]; ++m)
+      scratch.memberSets[fill[scratch.setMembers[m]]++] = static_cast<uint32_t>(s);
+}
+
+namespace {
+
+// Normalised squared distance kernels, one per kind: branch-free (selects), no calls, so that loops over them
+// vectorise and the scalar point path, which calls the very same functions, gives bit-identical values.
+inline float metaballDistance(const Primitive& p, float x, float y, float z) {
+  const float vx = x - p.center.x, vy = y - p.center.y, vz = z - p.center.z;
+  return (vx * vx + vy * vy + vz * vz) / (p.radius * p.radius);
+}
+
+inline float ellipsoidDistance(const Primitive& p, float x, float y, float z) {
+  const glm::mat3& w = p.worldToLocal;
+  const float vx = x - p.center.x, vy = y - p.center.y, vz = z - p.center.z;
+  const float qx = w[0][0] * vx + w[1][0] * vy + w[2][0] * vz;
+  const float qy = w[0][1] * vx + w[1][1] * vy + w[2][1] * vz;
+  const float qz = w[0][2] * vx + w[1][2] * vy + w[2][2] * vz;
+  return qx * qx + qy * qy + qz * qz;
+}
+
+// The arithmetic of lineSegParameter() in primitives.cpp, with selects for its branches.
+inline float lineSegDistance(const Primitive& p, float x, float y, float z) {
+  const float vx = x - p.p1.x, vy = y - p.p1.y, vz = z - p.p1.z;
+  const float vv = vx * vx + vy * vy + vz * vz;
+  const float t = vx * p.axis.x + vy * p.axis.y + vz * p.axis.z;
+  const float rho2 = std::max(0.0f, vv - t * t);
+  const float a = p.r1 + p.slope * t;
+  const float safeA = a > 0.0f ? a : 1.0f;
+  const float sInside = std::min(std::max(t + p.slope * rho2 / safeA, 0.0f), p.length);
+  const float wx = x - p.p2.x, wy = y - p.p2.y, wz = z - p.p2.z;
+  const float sApex = vv / (p.r1 * p.r1) <= (wx * wx + wy * wy + wz * wz) / (p.r2 * p.r2) ? 0.0f : p.length;
+  const float s = a > 0.0f ? sInside : sApex;
+  const float ux = x - (p.p1.x + s * p.axis.x), uy = y - (p.p1.y + s * p.axis.y), uz = z - (p.p1.z + s * p.axis.z);
+  const float r = p.r1 + p.slope * s;
+  return (ux * ux + uy * uy + uz * uz) / (r * r);
+}
+
+inline float kernelDistance(const Primitive& p, float x, float y, float z) {
+  switch (p.kind) {
+    case PrimitiveKind::Metaball: return metaballDistance(p, x, y, z);
+    case PrimitiveKind::Ellipsoid: return ellipsoidDistance(p, x, y, z);
+    case PrimitiveKind::LineSeg: return lineSegDistance(p, x, y, z);
+  }
+  return 0.0f;
+}
+
+// Blend term kernels (blend.h's BlendFunction::term, written for vectorisation).
+inline float exponentialTerm(float param, float d) {
+  const float c = expAccurate(param * (d - 1.0f));
+  return c >= kExponentialCutoff ? c : 0.0f;
+}
+inline float fastExponentialTerm(float param, float d) {
+  const float c = expFast(param * (d - 1.0f));
+  return c >= kExponentialCutoff ? c : 0.0f;
+}
+inline float blancSchlickTerm(float param, float d) {
+  const float u = std::max(1.0f + 1.0f / param - d, 0.0f) * param;
+  return u * u;
+}
+inline float ellipticalTerm(float param, float d) { return std::max((1.0f - d) / param, -1.0f); }
+
+inline float kernelTerm(const BlendFunction& blend, float param, float d) {
+  switch (blend.kind) {
+    case BlendKind::Exponential: return blend.fastExp ? fastExponentialTerm(param, d) : exponentialTerm(param, d);
+    case BlendKind::BlancSchlick: return blancSchlickTerm(param, d);
+    case BlendKind::Elliptical: return ellipticalTerm(param, d);
+  }
+  return 0.0f;
+}
+
+inline float foldElliptical(float g, float x) {
+  return g <= -1.0f ? x : (x <= -1.0f ? g : BlendFunction::roundedUnion(g, x));
+}
+
+template <float (*Distance)(const Primitive&, float, float, float)>
+void distanceLoop(const Primitive& p, const float* xs, const float* ys, const float* zs, size_t n, float* d) {
+  for (size_t i = 0; i < n; ++i) d[i] = Distance(p, xs[i], ys[i], zs[i]);
+}
+
+template <float (*Term)(float, float)>
+void termLoop(float param, size_t n, float* t) {
+  for (size_t i = 0; i < n; ++i) t[i] = Term(param, t[i]);
+}
+
+}  // namespace
+
+void Field::terms(size_t i, size_t n, FieldScratch& scratch) const {
+  float* t = scratch.term.data();
+  const Primitive& p = primitives_[i];
+  const float *xs = scratch.xs.data(), *ys = scratch.ys.data(), *zs = scratch.zs.data();
+  switch (p.kind) {
+    case PrimitiveKind::Metaball: distanceLoop<metaballDistance>(p, xs, ys, zs, n, t); break;
+    case PrimitiveKind::Ellipsoid: distanceLoop<ellipsoidDistance>(p, xs, ys, zs, n, t); break;
+    case PrimitiveKind::LineSeg: distanceLoop<lineSegDistance>(p, xs, ys, zs, n, t); break;
+  }
+  const float param = params_[i];
+  switch (blend_.kind) {
+    case BlendKind::Exponential:
+      if (blend_.fastExp) termLoop<fastExponentialTerm>(param, n, t);
+      else termLoop<exponentialTerm>(param, n, t);
+      break;
+    case BlendKind::BlancSchlick: termLoop<blancSchlickTerm>(param, n, t); break;
+    case BlendKind::Elliptical: termLoop<ellipticalTerm>(param, n, t); break;
+  }
+}
+
 void Field::values(std::span<const glm::vec3> points, std::span<float> out, FieldScratch& scratch) const {
   IMPS_CHECK_EQ(points.size(), out.size());
-  const auto& cand = scratch.candidates;
   const size_t n = points.size();
-  scratch.terms.resize(cand.size() * n);
-  for (size_t k = 0; k < cand.size(); ++k)
-    primitiveTerms(primitives_[cand[k]], blend_, params_[cand[k]], points, scratch.terms.data() + k * n);
-  for (size_t i = 0; i < n; ++i) out[i] = combine(scratch.terms.data(), n, i, scratch, nullptr);
+  scratch.xs.resize(n);
+  scratch.ys.resize(n);
+  scratch.zs.resize(n);
+  scratch.term.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    scratch.xs[i] = points[i].x;
+    scratch.ys[i] = points[i].y;
+    scratch.zs[i] = points[i].z;
+  }
+  const size_t sets = scratch.setCount();
+  const bool additive = blend_.additive();
+  scratch.acc.assign(sets * n, additive ? 0.0f : -1.0f);
+  // Accumulate each candidate's terms into every local set holding it, candidates in ascending order (the order
+  // every region and the point evaluation share).
+  for (size_t k = 0; k < scratch.candidates.size(); ++k) {
+    if (scratch.memberOffsets[k] == scratch.memberOffsets[k + 1]) continue;
+    terms(scratch.candidates[k], n, scratch);
+    const float* t = scratch.term.data();
+    for (uint32_t m = scratch.memberOffsets[k]; m < scratch.memberOffsets[k + 1]; ++m) {
+      float* acc = scratch.acc.data() + size_t(scratch.memberSets[m]) * n;
+      if (additive) {
+        for (size_t i = 0; i < n; ++i) acc[i] += t[i];
+      } else {
+        for (size_t i = 0; i < n; ++i) acc[i] = foldElliptical(acc[i], t[i]);
+      }
+    }
+  }
+  for (size_t i = 0; i < n; ++i) out[i] = 0.0f;
+  for (size_t s = 0; s < sets; ++s) {
+    const float* acc = scratch.acc.data() + s * n;
+    if (additive) {
+      for (size_t i = 0; i < n; ++i) out[i] = std::max(out[i], acc[i]);
+    } else {
+      for (size_t i = 0; i < n; ++i) out[i] = std::max(out[i], acc[i] > -1.0f ? std::max(1.0f + acc[i], 0.0f) : 0.0f);
+    }
+  }
 }
 
 float Field::value(const glm::vec3& x, FieldScratch& scratch) const {
-  float v = 0.0f;
-  values(std::span<const glm::vec3>(&x, 1), std::span<float>(&v, 1), scratch);
-  return v;
+  // The scalar twin of values(): same kernels, same order of operations, so the same bits.
+  const size_t sets = scratch.setCount();
+  const bool additive = blend_.additive();
+  float* acc = scratch.acc.size() >= sets ? scratch.acc.data() : (scratch.acc.resize(sets), scratch.acc.data());
+  for (size_t s = 0; s < sets; ++s) acc[s] = additive ? 0.0f : -1.0f;
+  for (size_t k = 0; k < scratch.candidates.size(); ++k) {
+    const uint32_t first = scratch.memberOffsets[k], last = scratch.memberOffsets[k + 1];
+    if (first == last) continue;
+    const uint32_t i = scratch.candidates[k];
+    const float t = kernelTerm(blend_, params_[i], kernelDistance(primitives_[i], x.x, x.y, x.z));
+    for (uint32_t m = first; m < last; ++m) {
+      float& a = acc[scratch.memberSets[m]];
+      a = additive ? a + t : foldElliptical(a, t);
+    }
+  }
+  float out = 0.0f;
+  for (size_t s = 0; s < sets; ++s)
+    out = std::max(out, additive ? acc[s] : (acc[s] > -1.0f ? std::max(1.0f + acc[s], 0.0f) : 0.0f));
+  return out;
 }
 
 FieldSample Field::sample(const glm::vec3& x, FieldScratch& scratch) const {
   FieldSample out;
   const auto& cand = scratch.candidates;
-  scratch.terms.resize(cand.size());
+  const size_t sets = scratch.setCount();
+  if (sets == 0) return out;
+  out.value = value(x, scratch);  // exactly the value the batched path gives
+  // Per-candidate terms at x, then each set's value in member order, to find the winning set.
+  thread_local std::vector<float> t;
+  t.resize(cand.size());
   for (size_t k = 0; k < cand.size(); ++k)
-    primitiveTerms(primitives_[cand[k]], blend_, params_[cand[k]], std::span<const glm::vec3>(&x, 1),
-                   scratch.terms.data() + k);
-  int set = -1;
-  out.value = combine(scratch.terms.data(), 1, 0, scratch, &set);
-  if (set < 0) return out;
-
+    t[k] = kernelTerm(blend_, params_[cand[k]], kernelDistance(primitives_[cand[k]], x.x, x.y, x.z));
+  int best = 0;
+  float bestValue = -1.0f;
+  for (size_t s = 0; s < sets; ++s) {
+    float v;
+    if (blend_.additive()) {
+      v = 0.0f;
+      for (uint32_t m = scratch.setOffsets[s]; m < scratch.setOffsets[s + 1]; ++m) v += t[scratch.setMembers[m]];
+    } else {
+      float g = -1.0f;
+      for (uint32_t m = scratch.setOffsets[s]; m < scratch.setOffsets[s + 1]; ++m) g = foldElliptical(g, t[scratch.setMembers[m]]);
+      v = g > -1.0f ? std::max(1.0f + g, 0.0f) : 0.0f;
+    }
+    if (v > bestValue) {
+      bestValue = v;
+      best = static_cast<int>(s);
+    }
+  }
   // Gradient, colour and owner from the winning set.
   glm::vec3 color(0.0f);
   float weightSum = 0.0f, bestWeight = -1.0f;
-  for (uint32_t m = scratch.localSetOffsets[set]; m < scratch.localSetOffsets[set + 1]; ++m) {
-    const uint32_t k = scratch.localSetMembers[m];
+  for (uint32_t m = scratch.setOffsets[best]; m < scratch.setOffsets[best + 1]; ++m) {
+    const uint32_t k = scratch.setMembers[m];
     const uint32_t i = cand[k];
-    const float t = scratch.terms[k];
-    const float w = blend_.additive() ? t : t + 1.0f;
+    const float w = blend_.additive() ? t[k] : t[k] + 1.0f;
     if (w <= 0.0f) continue;
     if (blend_.additive()) {
       glm::vec3 gd;
@@ -216,8 +390,8 @@ FieldSample Field::sample(const glm::vec3& x, FieldScratch& scratch) const {
     }
   }
   if (weightSum > 0.0f) out.color = color / weightSum;
-  if (!blend_.additive()) {
-    // The folded rounded union has no convenient closed-form gradient: central differences on the same set.
+  if (!blend_.additive() && out.owner >= 0) {
+    // The folded rounded union has no convenient closed-form gradient: central differences.
     const float h = 1e-3f * primitives_[static_cast<size_t>(out.owner)].minRadius();
     for (int a = 0; a < 3; ++a) {
       glm::vec3 xp = x, xm = x;
@@ -230,19 +404,27 @@ FieldSample Field::sample(const glm::vec3& x, FieldScratch& scratch) const {
 }
 
 float Field::upperBound(const Box& box, const FieldScratch& scratch) const {
+  const auto& cand = scratch.candidates;
   if (!blend_.additive()) {
-    for (uint32_t i : scratch.candidates)
+    for (uint32_t i : cand)
       if (primitives_[i].minDistance(box) < support_[i]) return INFINITY;
     return 0.0f;
   }
-  // Every set's sum is at most the sum over all candidates of each one's largest term in the box.
-  float sum = 0.0f;
-  for (uint32_t i : scratch.candidates) sum += blend_.term(primitives_[i].minDistance(box), params_[i]);
-  return sum;
+  // Each set's sum is at most the sum of its members' largest terms in the box.
+  thread_local std::vector<float> t;
+  t.resize(cand.size());
+  for (size_t k = 0; k < cand.size(); ++k) t[k] = blend_.term(primitives_[cand[k]].minDistance(box), params_[cand[k]]);
+  float best = 0.0f;
+  for (size_t s = 0; s < scratch.setCount(); ++s) {
+    float sum = 0.0f;
+    for (uint32_t m = scratch.setOffsets[s]; m < scratch.setOffsets[s + 1]; ++m) sum += t[scratch.setMembers[m]];
+    best = std::max(best, sum);
+  }
+  return best;
 }
 
 float Field::lowerBound(const Box& box, const FieldScratch& scratch) const {
-  // Every primitive is in some set, and a set is at least as large as any one member's term (the rounded union is
+  // Every candidate is in some set, and a set is at least as large as any one member's term (the rounded union is
   // at least the larger of its arguments).
   float best = 0.0f;
   for (uint32_t i : scratch.candidates) {

@@ -313,12 +313,7 @@ std::vector<Snap> thinFeatureSnaps(const Field& field, const Grid& g) {
   std::vector<glm::vec3> points;
   FieldScratch scratch;
   auto nearest = [&](const glm::vec3& p) { return glm::ivec3(glm::round((p - g.origin) / g.cell)); };
-  auto valueAt = [&](const glm::vec3& x) {
-    Box b;
-    b.extend(x);
-    field.prepare(b, scratch);
-    return field.value(x, scratch);
-  };
+  auto valueAt = [&](const glm::vec3& x) { return field.value(x, scratch); };
   auto consider = [&](const glm::ivec3& v, const glm::vec3& p, float fp) {
     if (glm::any(glm::lessThan(v, glm::ivec3(1))) || glm::any(glm::greaterThan(v, g.cells - 1))) return;
     const glm::vec3 gv = g.vertex(v.x, v.y, v.z);
@@ -327,6 +322,12 @@ std::vector<Snap> thinFeatureSnaps(const Field& field, const Grid& g) {
   };
   for (size_t i = 0; i < field.size(); ++i) {
     skeletonPoints(field.primitive(i), step, points);
+    // One candidate list for the skeleton and the grid vertices around it (values do not depend on the region).
+    Box region;
+    for (const glm::vec3& p : points) region.extend(p);
+    region.lo -= 2.0f * g.cell;
+    region.hi += 2.0f * g.cell;
+    field.prepare(region, scratch);
     glm::ivec3 previous(-1);
     glm::vec3 previousPoint(0.0f);
     float previousValue = 0.0f;
@@ -424,6 +425,9 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
 
   // 3. Per block: bound test, samples, owned edge vertices.
   const int threads = options.threads;
+  const bool logSpace = field.blend().kind == BlendKind::Exponential;
+  const float logIso = std::log(iso);
+  const float tolerance = logSpace ? 1e-5f : 1e-5f * iso;  // |ln F - ln iso| or |F - iso|
   parallelFor(blockCount, threads, [&](size_t b) {
     thread_local FieldScratch scratch;
     thread_local std::vector<glm::vec3> points;
@@ -480,14 +484,17 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
             const int s1 = s0 + (axis == 0 ? 1 : axis == 1 ? kBlockVerts : kBlockVerts * kBlockVerts);
             const float f1 = r.samples[s1];
             if ((f0 >= iso) == (f1 >= iso)) continue;
-            // Illinois root finding on the true field between the two (possibly moved) sample positions.
+            // Illinois root finding on the true field between the two (possibly moved) sample positions. For the
+            // exponential blend it runs on ln F, which is close to linear along an edge (F is a sum of
+            // exponentials of squared distances), so the first interpolation is already near the root.
             const glm::vec3 pa = points[s0], pb = points[s1];
-            float ta = 0.0f, tb = 1.0f, ga = f0 - iso, gb = f1 - iso;
+            auto transform = [&](float v) { return logSpace ? std::log(std::max(v, 1e-30f)) - logIso : v - iso; };
+            float ta = 0.0f, tb = 1.0f, ga = transform(f0), gb = transform(f1);
             float t = ga / (ga - gb);
             int side = 0;
             for (int it = 0; it < options.rootIterations; ++it) {
-              const float gt = field.value(pa + t * (pb - pa), scratch) - iso;
-              if (std::abs(gt) <= 1e-6f * iso) break;
+              const float gt = transform(field.value(pa + t * (pb - pa), scratch));
+              if (std::abs(gt) <= tolerance) break;
               if ((gt > 0.0f) == (ga > 0.0f)) {
                 ta = t;
                 ga = gt;

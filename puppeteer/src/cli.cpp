@@ -10,6 +10,7 @@
 #include "imps/character.h"
 #include "imps/marching_cubes.h"
 #include "imps/mesh_io.h"
+#include "imps/parallel.h"
 #include "imps/scene_reader.h"
 #include "imps/skeleton_cache.h"
 

@@ -20,6 +20,7 @@
 //               and is dropped (support d < 1 + range). Only exact for pairs: larger groups fold in primitive order.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -33,8 +34,9 @@ inline constexpr float kExponentialCutoff = 1e-4f;
 // exp(x) to within 2 ulp of std::exp for x in [-87, 88], as a branch-free polynomial so that loops over it
 // vectorise and every code path (vector lane, scalar tail, block, thread) gives bit-identical values.
 inline float expAccurate(float x) {
-  x = std::fmin(std::fmax(x, -87.0f), 88.0f);
-  const float n = std::nearbyint(x * 1.44269504088896341f);  // x / ln 2
+  x = std::min(std::max(x, -87.0f), 88.0f);
+  // Round x / ln 2 to the nearest integer with the 1.5 * 2^23 trick (exact for |x| < 2^22; no libm call).
+  const float n = (x * 1.44269504088896341f + 12582912.0f) - 12582912.0f;
   // Cody-Waite reduction: r = x - n ln2 with ln2 split in two for accuracy.
   float r = x - n * 0.693145751953125f;
   r = r - n * 1.42860682030941723212e-6f;
@@ -56,7 +58,7 @@ inline float expAccurate(float x) {
 // Schraudolph's approximation: writes a*x + b straight into a float's exponent and mantissa bits. About 4% maximum
 // relative error; the thesis's fast exponential.
 inline float expFast(float x) {
-  x = std::fmin(std::fmax(x, -87.0f), 88.0f);
+  x = std::min(std::max(x, -87.0f), 88.0f);
   const int32_t bits = static_cast<int32_t>(12102203.0f * x) + 1064866808;  // 2^23/ln2; 127*2^23 - 486408 (Schraudolph's c)
   float y;
   std::memcpy(&y, &bits, sizeof y);
@@ -94,10 +96,10 @@ struct BlendFunction {
       }
       case BlendKind::BlancSchlick: {
         const float dMax = 1.0f + 1.0f / param;
-        const float u = std::fmax(dMax - d, 0.0f) * param;  // (D - d) / (D - 1)
+        const float u = std::max(dMax - d, 0.0f) * param;  // (D - d) / (D - 1)
         return u * u;
       }
-      case BlendKind::Elliptical: return std::fmax((1.0f - d) / param, -1.0f);
+      case BlendKind::Elliptical: return std::max((1.0f - d) / param, -1.0f);
     }
     return 0.0f;
   }
@@ -109,7 +111,7 @@ struct BlendFunction {
       }
       case BlendKind::BlancSchlick: {
         const float dMax = 1.0f + 1.0f / param;
-        const float u = std::fmax(dMax - d, 0.0f) * param;
+        const float u = std::max(dMax - d, 0.0f) * param;
         return -2.0f * u * param;
       }
       case BlendKind::Elliptical: return d < 1.0f + param ? -1.0f / param : 0.0f;
@@ -119,8 +121,8 @@ struct BlendFunction {
 
   // Elliptical: the rounded union of two scaled functions (positive inside, blend width 1).
   static float roundedUnion(float x, float y) {
-    const float ux = std::fmax(1.0f + x, 0.0f), uy = std::fmax(1.0f + y, 0.0f);
-    return std::sqrt(ux * ux + uy * uy) - std::fmax(1.0f, -std::fmax(x, y));
+    const float ux = std::max(1.0f + x, 0.0f), uy = std::max(1.0f + y, 0.0f);
+    return std::sqrt(ux * ux + uy * uy) - std::max(1.0f, -std::max(x, y));
   }
 };
 

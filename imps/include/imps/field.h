@@ -40,11 +40,12 @@ struct FieldSample {
 // Reusable per-thread scratch for batched evaluation: the candidate primitives of a region and the blend sets
 // restricted to them (Field::prepare). No allocation on the hot path once warmed up.
 struct FieldScratch {
-  std::vector<uint32_t> candidates;                          // ascending primitive indices
-  std::vector<uint32_t> localSetOffsets, localSetMembers;  // sets as indices into candidates
-  bool singleSet = false;                                    // every candidate is in the one set
-  std::vector<float> terms;                                  // candidates x points
+  std::vector<uint32_t> candidates;             // ascending primitive indices
+  std::vector<uint32_t> setOffsets, setMembers;  // local sets (CSR over candidate positions), deduplicated
+  std::vector<uint32_t> memberOffsets, memberSets;  // for each candidate, the local sets holding it (CSR)
+  std::vector<float> xs, ys, zs, term, acc;      // points (SoA), one primitive's terms, per-set accumulators
   std::vector<int32_t> globalToLocal;
+  size_t setCount() const { return setOffsets.size() - 1; }
 };
 
 class Field {
@@ -93,8 +94,8 @@ class Field {
 
  private:
   void prepareSets(FieldScratch& scratch) const;
-  float combine(const float* terms, size_t stride, size_t point, const FieldScratch& scratch,
-                int* winningSet) const;
+  // Terms of primitive i at scratch.xs/ys/zs[0, n) into scratch.term.
+  void terms(size_t i, size_t n, FieldScratch& scratch) const;
 
   std::vector<Primitive> primitives_;
   std::vector<float> params_;

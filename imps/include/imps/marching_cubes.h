@@ -42,9 +42,9 @@ struct MarchingCubesOptions {
   int resolution = 64;
   // Worker threads (0: all cores).
   int threads = 0;
-  // Most root-finding iterations per vertex after the initial linear interpolation (0: plain linear
-  // interpolation); stops early once |F - iso| <= 1e-6 iso.
-  int rootIterations = 16;
+  // Most root-finding iterations per vertex after the initial interpolation (0: interpolation only); stops early
+  // once |ln F - ln iso| <= 1e-5 (exponential blend) or |F - iso| <= 1e-5 iso (the others).
+  int rootIterations = 8;
   bool preserveThinFeatures = true;
   bool computeNormals = true;
   bool computeColors = true;

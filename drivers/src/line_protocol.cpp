@@ -1,0 +1,194 @@
+// The DIY line protocol decoder: banner, sample lines, timestamps, channel-count locking (docs/protocol.md).
+#include "drivers/line_protocol.h"
+
+#include <algorithm>
+#include <cstring>
+#include <limits>
+
+namespace imps::drivers {
+namespace {
+
+bool isBlank(char c) { return c == ' ' || c == '\t'; }
+bool isDigit(char c) { return c >= '0' && c <= '9'; }
+bool isTerminator(uint8_t c) { return c == '\n' || c == '\r'; }
+
+// Parses an unsigned decimal of at most `limit`; advances p past the digits. False on no digits or overflow.
+bool parseUnsigned(const char*& p, const char* end, uint64_t limit, uint64_t& value) {
+  if (p == end || !isDigit(*p)) return false;
+  uint64_t v = 0;
+  while (p != end && isDigit(*p)) {
+    const auto d = static_cast<uint64_t>(*p - '0');
+    if (v > (limit - d) / 10) return false;
+    v = v * 10 + d;
+    ++p;
+  }
+  value = v;
+  return true;
+}
+
+// Consumes a field separator: blanks, at most one comma, blanks. Returns false when none was present.
+bool skipSeparator(const char*& p, const char* end) {
+  const char* start = p;
+  while (p != end && isBlank(*p)) ++p;
+  if (p != end && *p == ',') {
+    ++p;
+    while (p != end && isBlank(*p)) ++p;
+  }
+  return p != start;
+}
+
+}  // namespace
+
+LineDecoder::LineDecoder(LineDecoderOptions options) : options_(options) {
+  if (options_.maxLineLength == 0) options_.maxLineLength = 1;
+  if (options_.expectedChannelCount < 0 || options_.expectedChannelCount > kMaxChannels)
+    options_.expectedChannelCount = 0;
+  channelCount_ = options_.expectedChannelCount;
+  buf_.reserve(options_.maxLineLength + 4096);
+}
+
+void LineDecoder::feed(std::span<const uint8_t> bytes, int64_t arrivalTimeNs) {
+  stats_.bytesReceived += bytes.size();
+  arrivalTimeNs_ = arrivalTimeNs;
+  // Compact: after next() ran dry at most one partial line (<= maxLineLength bytes) is left.
+  if (pos_ > 0) {
+    if (end_ > pos_) std::memmove(buf_.data(), buf_.data() + pos_, end_ - pos_);
+    end_ -= pos_;
+    pos_ = 0;
+  }
+  if (buf_.size() < end_ + bytes.size()) buf_.resize(end_ + bytes.size());
+  if (!bytes.empty()) std::memcpy(buf_.data() + end_, bytes.data(), bytes.size());
+  end_ += bytes.size();
+}
+
+void LineDecoder::skip(size_t n) {
+  pos_ += n;
+  stats_.bytesSkipped += n;
+}
+
+void LineDecoder::reset() {
+  skip(end_ - pos_);
+  pos_ = end_ = 0;
+  discarding_ = false;
+  channelCount_ = options_.expectedChannelCount;
+  seenSample_ = false;
+  candidateCount_ = candidateRun_ = 0;
+  nextSequence_ = 0;
+  banner_.clear();
+}
+
+bool LineDecoder::parseLine(const char* p, const char* end, Sample& out) const {
+  while (p != end && isBlank(*p)) ++p;
+  // Optional timestamp: `t=<digits>` with an optional unit, `us` (the default) or `ms`.
+  if (p != end && (*p == 't' || *p == 'T')) {
+    ++p;
+    if (p == end || *p != '=') return false;
+    ++p;
+    uint64_t value = 0;
+    if (!parseUnsigned(p, end, std::numeric_limits<uint64_t>::max(), value)) return false;
+    uint64_t nsPerUnit = 1000;
+    if (end - p >= 2 && p[0] == 'u' && p[1] == 's') {
+      p += 2;
+    } else if (end - p >= 2 && p[0] == 'm' && p[1] == 's') {
+      p += 2;
+      nsPerUnit = 1000000;
+    }
+    if (value > static_cast<uint64_t>(std::numeric_limits<int64_t>::max()) / nsPerUnit) return false;
+    out.deviceTimeNs = static_cast<int64_t>(value * nsPerUnit);
+    if (!skipSeparator(p, end)) return false;
+  }
+  int n = 0;
+  while (p != end) {
+    uint64_t value = 0;
+    if (n == kMaxChannels || !parseUnsigned(p, end, std::numeric_limits<uint32_t>::max(), value)) return false;
+    out.counts[n++] = static_cast<uint32_t>(value);
+    // A number ends at a separator or the line end ("12a" is junk); after the last field, trailing blanks and
+    // one trailing comma are allowed (Arduino sketches often print "v," in a loop).
+    if (p != end && !skipSeparator(p, end)) return false;
+  }
+  if (n == 0) return false;
+  out.channelCount = static_cast<uint16_t>(n);
+  return true;
+}
+
+std::optional<Sample> LineDecoder::acceptLine(const char* begin, const char* end) {
+  ++stats_.lines;
+  Sample s;
+  const bool wellFormed = parseLine(begin, end, s);
+  // Before the first sample, anything that is not an acceptable sample line is banner.
+  if (!seenSample_ &&
+      (!wellFormed || (channelCount_ != 0 && s.channelCount != channelCount_))) {
+    ++stats_.bannerLines;
+    if (banner_.size() < options_.maxBannerLines) banner_.emplace_back(begin, end);
+    return std::nullopt;
+  }
+  if (!wellFormed) {
+    ++stats_.malformedLines;
+    return std::nullopt;
+  }
+  if (channelCount_ == 0) channelCount_ = s.channelCount;
+  if (s.channelCount != channelCount_) {
+    ++stats_.channelCountMismatches;
+    if (options_.expectedChannelCount == 0 && options_.relockAfter > 0) {
+      if (s.channelCount == candidateCount_) {
+        ++candidateRun_;
+      } else {
+        candidateCount_ = s.channelCount;
+        candidateRun_ = 1;
+      }
+      if (candidateRun_ >= options_.relockAfter) {
+        channelCount_ = candidateCount_;
+        candidateRun_ = 0;
+        ++stats_.channelCountChanges;
+      }
+    }
+    return std::nullopt;
+  }
+  candidateRun_ = 0;
+  seenSample_ = true;
+  s.sequence = nextSequence_++;
+  s.arrivalTimeNs = arrivalTimeNs_;
+  ++stats_.samples;
+  return s;
+}
+
+std::optional<Sample> LineDecoder::next() {
+  for (;;) {
+    if (pos_ == end_) return std::nullopt;
+    const uint8_t* base = buf_.data();
+    if (discarding_) {
+      size_t i = pos_;
+      while (i != end_ && !isTerminator(base[i])) ++i;
+      if (i == end_) {
+        skip(end_ - pos_);
+        return std::nullopt;
+      }
+      skip(i + 1 - pos_);
+      discarding_ = false;
+      continue;
+    }
+    // Look for a terminator no further than one byte past the longest acceptable line.
+    const size_t window = std::min(end_ - pos_, options_.maxLineLength + 1);
+    size_t i = pos_;
+    while (i != pos_ + window && !isTerminator(base[i])) ++i;
+    if (i == pos_ + window) {
+      if (window <= options_.maxLineLength) return std::nullopt;  // a line still arriving
+      // Overlong: count it once and drop it up to its terminator, however many chunks that takes.
+      ++stats_.lines;
+      ++stats_.overlongLines;
+      discarding_ = true;
+      skip(window);
+      continue;
+    }
+    const char* begin = reinterpret_cast<const char*>(base + pos_);
+    const char* end = reinterpret_cast<const char*>(base + i);
+    stats_.bytesInLines += i + 1 - pos_;
+    pos_ = i + 1;
+    const char* q = begin;
+    while (q != end && isBlank(*q)) ++q;
+    if (q == end) continue;  // blank line, or the LF of a CRLF
+    if (auto s = acceptLine(begin, end)) return s;
+  }
+}
+
+}  // namespace imps::drivers

@@ -1,0 +1,182 @@
+// Topology checks, volume, bounds and merging of the shared triangle mesh.
+#include "imps/mesh.h"
+
+#include <algorithm>
+#include <numeric>
+
+#include <glm/common.hpp>
+
+#include "imps/check.h"
+
+namespace imps {
+namespace {
+
+// Union-find with path halving; sizes are small enough for uint32_t (indices are uint32_t too).
+class DisjointSets {
+ public:
+  explicit DisjointSets(size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), uint32_t{0}); }
+  uint32_t find(uint32_t x) {
+    while (parent_[x] != x) {
+      parent_[x] = parent_[parent_[x]];
+      x = parent_[x];
+    }
+    return x;
+  }
+  void unite(uint32_t a, uint32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent_[std::max(a, b)] = std::min(a, b);
+  }
+
+ private:
+  std::vector<uint32_t> parent_;
+};
+
+// One triangle side, from corner `corner` (3 * triangle + k) to the next corner of the same triangle.
+struct HalfEdge {
+  uint64_t key;      // (min vertex << 32) | max vertex: equal for both directions of an edge
+  uint32_t corner;   // corner the side starts at
+  bool increasing;   // true when it runs from the smaller to the larger vertex index
+};
+
+uint32_t nextCorner(uint32_t corner) { return corner % 3 == 2 ? corner - 2 : corner + 1; }
+
+}  // namespace
+
+MeshTopology analyzeTopology(const Mesh& mesh) {
+  MeshTopology topology;
+  const size_t vertexCount = mesh.vertexCount();
+  const size_t triangleCount = mesh.triangleCount();
+  IMPS_CHECK_EQ(mesh.indices.size() % 3, size_t{0});
+  IMPS_CHECK_LE(mesh.indices.size(), size_t{UINT32_MAX});
+  const std::vector<uint32_t>& idx = mesh.indices;
+
+  // Pass 1: usage, degenerate triangles and the sides of the others.
+  std::vector<bool> referenced(vertexCount, false);
+  std::vector<bool> usedByFace(vertexCount, false);
+  std::vector<bool> degenerate(triangleCount, false);
+  std::vector<HalfEdge> sides;
+  sides.reserve(mesh.indices.size());
+  for (size_t t = 0; t < triangleCount; ++t) {
+    const uint32_t a = idx[3 * t], b = idx[3 * t + 1], c = idx[3 * t + 2];
+    IMPS_CHECK_LT(a, vertexCount);
+    IMPS_CHECK_LT(b, vertexCount);
+    IMPS_CHECK_LT(c, vertexCount);
+    referenced[a] = referenced[b] = referenced[c] = true;
+    if (a == b || b == c || c == a) {
+      degenerate[t] = true;
+      ++topology.degenerateTriangles;
+      continue;
+    }
+    usedByFace[a] = usedByFace[b] = usedByFace[c] = true;
+    for (uint32_t k = 0; k < 3; ++k) {
+      const uint32_t corner = static_cast<uint32_t>(3 * t) + k;
+      const uint32_t from = idx[corner], to = idx[nextCorner(corner)];
+      const uint64_t lo = std::min(from, to), hi = std::max(from, to);
+      sides.push_back({(lo << 32) | hi, corner, from < to});
+    }
+  }
+  topology.unusedVertices = static_cast<size_t>(std::count(referenced.begin(), referenced.end(), false));
+
+  // Pass 2: group the sides by edge. Sorting by (key, corner) keeps the result independent of std::sort's order.
+  std::sort(sides.begin(), sides.end(), [](const HalfEdge& l, const HalfEdge& r) {
+    return l.key != r.key ? l.key < r.key : l.corner < r.corner;
+  });
+  DisjointSets triangles(triangleCount);      // joined across every shared edge -> components
+  DisjointSets corners(3 * triangleCount);    // joined around a vertex across manifold edges -> vertex fans
+  size_t edgeCount = 0;
+  for (size_t begin = 0; begin < sides.size();) {
+    size_t end = begin + 1;
+    while (end < sides.size() && sides[end].key == sides[begin].key) ++end;
+    const size_t uses = end - begin;
+    ++edgeCount;
+    for (size_t s = begin + 1; s < end; ++s) triangles.unite(sides[begin].corner / 3, sides[s].corner / 3);
+    if (uses == 1) {
+      ++topology.boundaryEdges;
+    } else if (uses >= 3) {
+      ++topology.nonManifoldEdges;
+    } else {
+      const HalfEdge& p = sides[begin];
+      const HalfEdge& q = sides[begin + 1];
+      if (p.increasing == q.increasing) ++topology.orientationConflicts;
+      // The two triangles' corners at each end of the edge belong to the same fan. With opposite directions,
+      // p's start meets q's end; with a conflict (same direction) p's start meets q's start.
+      const uint32_t pStart = p.corner, pEnd = nextCorner(p.corner);
+      const uint32_t qStart = q.corner, qEnd = nextCorner(q.corner);
+      if (p.increasing != q.increasing) {
+        corners.unite(pStart, qEnd);
+        corners.unite(pEnd, qStart);
+      } else {
+        corners.unite(pStart, qStart);
+        corners.unite(pEnd, qEnd);
+      }
+    }
+    begin = end;
+  }
+
+  // Pass 3: a vertex is manifold when all its corners form one fan; count fans per vertex by their root corners.
+  std::vector<uint32_t> fans(vertexCount, 0);
+  for (uint32_t corner = 0; corner < 3 * triangleCount; ++corner) {
+    if (degenerate[corner / 3]) continue;
+    if (corners.find(corner) == corner) ++fans[idx[corner]];
+  }
+  topology.nonManifoldVertices = static_cast<size_t>(std::count_if(fans.begin(), fans.end(), [](uint32_t f) { return f > 1; }));
+
+  for (uint32_t t = 0; t < triangleCount; ++t) {
+    if (!degenerate[t] && triangles.find(t) == t) ++topology.components;
+  }
+  const size_t faceCount = triangleCount - topology.degenerateTriangles;
+  const size_t usedVertices = static_cast<size_t>(std::count(usedByFace.begin(), usedByFace.end(), true));
+  topology.eulerCharacteristic =
+      static_cast<long>(usedVertices) - static_cast<long>(edgeCount) + static_cast<long>(faceCount);
+  return topology;
+}
+
+double signedVolume(const Mesh& mesh) {
+  // Divergence theorem: sum of the signed volumes of the tetrahedra (origin, a, b, c), in double to keep
+  // cancellation error small for meshes far from the origin.
+  double volume6 = 0.0;
+  for (size_t t = 0; t < mesh.triangleCount(); ++t) {
+    const glm::dvec3 a(mesh.position(mesh.indices[3 * t]));
+    const glm::dvec3 b(mesh.position(mesh.indices[3 * t + 1]));
+    const glm::dvec3 c(mesh.position(mesh.indices[3 * t + 2]));
+    volume6 += a.x * (b.y * c.z - b.z * c.y) + a.y * (b.z * c.x - b.x * c.z) + a.z * (b.x * c.y - b.y * c.x);
+  }
+  return volume6 / 6.0;
+}
+
+MeshBounds bounds(const Mesh& mesh) {
+  MeshBounds box;
+  for (size_t v = 0; v < mesh.vertexCount(); ++v) {
+    const glm::vec3 p = mesh.position(v);
+    box.min = glm::min(box.min, p);
+    box.max = glm::max(box.max, p);
+  }
+  return box;
+}
+
+void appendMesh(Mesh& target, const Mesh& source) {
+  if (target.positions.empty() && target.indices.empty()) {
+    target = source;
+    return;
+  }
+  const size_t offset = target.vertexCount();
+  IMPS_CHECK_LE(offset + source.vertexCount(), size_t{UINT32_MAX});
+  const bool keepNormals = !target.normals.empty() && !source.normals.empty();
+  const bool keepColors = !target.colors.empty() && !source.colors.empty();
+  target.positions.insert(target.positions.end(), source.positions.begin(), source.positions.end());
+  if (keepNormals) {
+    target.normals.insert(target.normals.end(), source.normals.begin(), source.normals.end());
+  } else {
+    target.normals.clear();
+  }
+  if (keepColors) {
+    target.colors.insert(target.colors.end(), source.colors.begin(), source.colors.end());
+  } else {
+    target.colors.clear();
+  }
+  target.indices.reserve(target.indices.size() + source.indices.size());
+  for (const uint32_t i : source.indices) target.indices.push_back(i + static_cast<uint32_t>(offset));
+}
+
+}  // namespace imps

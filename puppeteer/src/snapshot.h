@@ -1,0 +1,72 @@
+// Headless software rendering of a mesh to RGBA8 pixels or a PNG file, for docs, CLI snapshots and tests.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "imps/mesh.h"
+
+namespace imps::app {
+
+// A pinhole (perspective) camera in world space (metres). It looks from `eye` towards `target`; `up` only needs to
+// be non-parallel to the view direction. verticalFov is the full vertical opening angle in radians; the horizontal
+// one follows from the image's aspect ratio.
+struct Camera {
+  glm::vec3 eye{0.0f, 0.0f, 3.0f};
+  glm::vec3 target{0.0f, 0.0f, 0.0f};
+  glm::vec3 up{0.0f, 1.0f, 0.0f};
+  float verticalFov = 0.6f;
+};
+
+// Direction from the subject towards the camera for the front-three-quarter view: in front (+z), to the right
+// (+x) and a little above (+y), with y up. Need not be normalised.
+inline constexpr glm::vec3 kFrontThreeQuarter{0.65f, 0.4f, 1.0f};
+
+// A camera looking at the centre of `box` from `fromDirection` (world space, need not be normalised, not zero),
+// with y up (z up when looking straight along y), far enough that the box's bounding sphere fits in the view
+// with `margin` (>= 1) to spare, for an image of the given aspect ratio (width / height). An empty box frames
+// the unit cube around the origin.
+Camera frameBox(const MeshBounds& box, glm::vec3 fromDirection = kFrontThreeQuarter, float aspect = 1.0f,
+                float verticalFov = 0.6f, float margin = 1.08f);
+
+// frameBox(bounds(mesh), ...).
+Camera frameMesh(const Mesh& mesh, glm::vec3 fromDirection = kFrontThreeQuarter, float aspect = 1.0f);
+
+// How to render a snapshot. Colours are linear RGB in [0, 1] (like Mesh::colors); the image is sRGB-encoded.
+struct SnapshotOptions {
+  int width = 640;   // pixels, > 0
+  int height = 480;  // pixels, > 0
+  // nullopt: frameMesh(mesh, kFrontThreeQuarter, width / height).
+  std::optional<Camera> camera;
+  // Samples per pixel along each axis (2 = 2x2 supersampling), averaged in linear light. >= 1.
+  int supersampling = 2;
+  // Albedo of meshes without per-vertex colours.
+  glm::vec3 defaultColor{0.75f, 0.75f, 0.75f};
+  // Direction towards the light in camera space (x right, y up, z towards the viewer): upper left, in front.
+  glm::vec3 lightDirection{-0.4f, 0.6f, 0.7f};
+  // Lambert shading: albedo * (ambient + (1 - ambient) * max(n.l, 0)), plus a white rim light
+  // rim * (1 - n.v)^3 that brightens silhouettes.
+  float ambient = 0.15f;
+  float rim = 0.25f;
+  // Background: a vertical gradient from top to bottom.
+  glm::vec3 backgroundTop{0.80f, 0.80f, 0.82f};
+  glm::vec3 backgroundBottom{0.52f, 0.52f, 0.54f};
+};
+
+// Renders `mesh` and returns width * height RGBA8 pixels, rows from the top, alpha 255. Triangles are z-buffered,
+// drawn two-sided (back faces are lit as if they faced the camera), with perspective-correct interpolation of the
+// vertex normals and colours (face normals when the mesh has none). Triangles reaching behind the camera's near
+// plane are skipped, not clipped. An empty mesh gives just the background. Thread-safe (no shared state).
+// Returns an empty vector when width, height or supersampling are not positive.
+std::vector<uint8_t> renderMesh(const Mesh& mesh, const SnapshotOptions& options);
+
+// Renders as renderMesh() and saves an RGBA8 PNG (OpenImageIO) to `path`, which must end in ".png", atomically
+// (temporary file, fsync, rename). On failure returns false, leaves `path` untouched and sets *error (if non-null)
+// to "path: reason".
+bool renderMeshToPng(const Mesh& mesh, const SnapshotOptions& options, const std::string& path, std::string* error);
+
+}  // namespace imps::app

@@ -1,0 +1,205 @@
+// Tests for imps/mesh.h: topology checks, signed volume, bounds and appendMesh.
+#include "imps/mesh.h"
+
+#include <gtest/gtest.h>
+
+#include <utility>
+
+namespace imps {
+namespace {
+
+Mesh tetrahedron() {
+  Mesh mesh;
+  mesh.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+  mesh.indices = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
+  return mesh;
+}
+
+// Unit cube [0,1]^3 shifted by `offset`; vertex i sits at (i & 1, (i >> 1) & 1, (i >> 2) & 1) + offset.
+Mesh cube(glm::vec3 offset = glm::vec3(0.0f)) {
+  Mesh mesh;
+  for (int i = 0; i < 8; ++i) {
+    mesh.positions.push_back(static_cast<float>(i & 1) + offset.x);
+    mesh.positions.push_back(static_cast<float>((i >> 1) & 1) + offset.y);
+    mesh.positions.push_back(static_cast<float>((i >> 2) & 1) + offset.z);
+  }
+  const uint32_t quads[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
+  for (const auto& q : quads) mesh.indices.insert(mesh.indices.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
+  return mesh;
+}
+
+// n x n quads on the unit square in the z = 0 plane, facing +z.
+Mesh grid(uint32_t n) {
+  Mesh mesh;
+  for (uint32_t y = 0; y <= n; ++y) {
+    for (uint32_t x = 0; x <= n; ++x) {
+      mesh.positions.insert(mesh.positions.end(),
+                            {static_cast<float>(x) / static_cast<float>(n), static_cast<float>(y) / static_cast<float>(n), 0.0f});
+    }
+  }
+  for (uint32_t y = 0; y < n; ++y) {
+    for (uint32_t x = 0; x < n; ++x) {
+      const uint32_t a = y * (n + 1) + x, b = a + 1, c = a + n + 1, d = c + 1;
+      mesh.indices.insert(mesh.indices.end(), {a, b, d, a, d, c});
+    }
+  }
+  return mesh;
+}
+
+TEST(MeshTopology, TetrahedronIsClosedManifold) {
+  const Mesh mesh = tetrahedron();
+  const MeshTopology t = analyzeTopology(mesh);
+  EXPECT_TRUE(t.closedManifold());
+  EXPECT_EQ(t.boundaryEdges, 0u);
+  EXPECT_EQ(t.components, 1u);
+  EXPECT_EQ(t.unusedVertices, 0u);
+  EXPECT_EQ(t.eulerCharacteristic, 2);
+  EXPECT_NEAR(signedVolume(mesh), 1.0 / 6.0, 1e-12);
+}
+
+TEST(MeshTopology, CubeIsClosedManifoldWithUnitVolume) {
+  const Mesh mesh = cube();
+  const MeshTopology t = analyzeTopology(mesh);
+  EXPECT_TRUE(t.closedManifold());
+  EXPECT_EQ(t.components, 1u);
+  EXPECT_EQ(t.eulerCharacteristic, 2);  // 8 - 18 + 12
+  EXPECT_NEAR(signedVolume(mesh), 1.0, 1e-12);
+  // The volume does not depend on where the cube is.
+  EXPECT_NEAR(signedVolume(cube({100.0f, -50.0f, 7.0f})), 1.0, 1e-6);
+}
+
+TEST(MeshTopology, RemovedTriangleLeavesThreeBoundaryEdges) {
+  Mesh mesh = cube();
+  mesh.indices.erase(mesh.indices.begin() + 6, mesh.indices.begin() + 9);  // first triangle of the +x face
+  const MeshTopology t = analyzeTopology(mesh);
+  EXPECT_FALSE(t.closedManifold());
+  EXPECT_EQ(t.boundaryEdges, 3u);
+  EXPECT_EQ(t.nonManifoldEdges, 0u);
+  EXPECT_EQ(t.nonManifoldVertices, 0u);  // a hole's rim is a half-disk, which is manifold
+  EXPECT_EQ(t.orientationConflicts, 0u);
+  EXPECT_EQ(t.eulerCharacteristic, 1);  // 8 - 18 + 11
+}
+
+TEST(MeshTopology, OpenGridHasItsRimAsBoundary) {
+  const uint32_t n = 7;
+  const MeshTopology t = analyzeTopology(grid(n));
+  EXPECT_EQ(t.boundaryEdges, 4u * n);
+  EXPECT_EQ(t.eulerCharacteristic, 1);
+  EXPECT_EQ(t.components, 1u);
+  EXPECT_EQ(t.nonManifoldVertices, 0u);
+  EXPECT_EQ(t.orientationConflicts, 0u);
+}
+
+TEST(MeshTopology, FlippedTriangleGivesOrientationConflicts) {
+  Mesh mesh = cube();
+  std::swap(mesh.indices[7], mesh.indices[8]);  // triangle (1, 3, 7) on the +x face
+  const MeshTopology t = analyzeTopology(mesh);
+  EXPECT_FALSE(t.closedManifold());
+  EXPECT_EQ(t.orientationConflicts, 3u);
+  EXPECT_EQ(t.boundaryEdges, 0u);
+  EXPECT_EQ(t.nonManifoldEdges, 0u);
+  EXPECT_EQ(t.nonManifoldVertices, 0u);
+  EXPECT_LT(signedVolume(mesh), 1.0 - 1e-3);
+}
+
+TEST(MeshTopology, InsideOutCubeHasNegativeVolumeButNoConflicts) {
+  Mesh mesh = cube();
+  for (size_t t = 0; t < mesh.triangleCount(); ++t) std::swap(mesh.indices[3 * t + 1], mesh.indices[3 * t + 2]);
+  EXPECT_TRUE(analyzeTopology(mesh).closedManifold());
+  EXPECT_NEAR(signedVolume(mesh), -1.0, 1e-12);
+}
+
+TEST(MeshTopology, ThreeTrianglesOnAnEdgeAreNonManifold) {
+  Mesh mesh;
+  mesh.positions = {0, 0, 0, 1, 0, 0, 0.5f, 1, 0, 0.5f, -1, 0, 0.5f, 0, 1};
+  mesh.indices = {0, 1, 2, 1, 0, 3, 0, 1, 4};
+  const MeshTopology t = analyzeTopology(mesh);
+  EXPECT_EQ(t.nonManifoldEdges, 1u);
+  EXPECT_EQ(t.boundaryEdges, 6u);
+  EXPECT_EQ(t.nonManifoldVertices, 2u);  // both ends of the shared edge
+  EXPECT_EQ(t.components, 1u);
+  EXPECT_FALSE(t.closedManifold());
+}
+
+TEST(MeshTopology, CubesSharingOneVertexMakeANonManifoldVertex) {
+  // Cube B's corner 0 is moved onto cube A's corner 7 by index, leaving B's own vertex 0 (index 8) unused.
+  Mesh mesh = cube();
+  appendMesh(mesh, cube({1.0f, 1.0f, 1.0f}));
+  for (size_t i = 36; i < mesh.indices.size(); ++i) {
+    if (mesh.indices[i] == 8) mesh.indices[i] = 7;
+  }
+  const MeshTopology t = analyzeTopology(mesh);
+  EXPECT_EQ(t.nonManifoldVertices, 1u);
+  EXPECT_EQ(t.nonManifoldEdges, 0u);
+  EXPECT_EQ(t.boundaryEdges, 0u);
+  EXPECT_EQ(t.orientationConflicts, 0u);
+  EXPECT_EQ(t.components, 2u);  // components connect through edges, not single vertices
+  EXPECT_EQ(t.unusedVertices, 1u);
+  EXPECT_EQ(t.eulerCharacteristic, 15 - 36 + 24);
+  EXPECT_FALSE(t.closedManifold());
+}
+
+TEST(MeshTopology, DisjointCubesAreTwoComponents) {
+  Mesh mesh = cube();
+  appendMesh(mesh, cube({3.0f, 0.0f, 0.0f}));
+  const MeshTopology t = analyzeTopology(mesh);
+  EXPECT_TRUE(t.closedManifold());
+  EXPECT_EQ(t.components, 2u);
+  EXPECT_EQ(t.eulerCharacteristic, 4);
+  EXPECT_NEAR(signedVolume(mesh), 2.0, 1e-12);
+}
+
+TEST(MeshTopology, DegenerateTrianglesAndUnusedVerticesAreCounted) {
+  Mesh mesh = cube();
+  mesh.positions.insert(mesh.positions.end(), {5, 5, 5, 6, 6, 6});  // vertices 8 and 9, unused
+  mesh.indices.insert(mesh.indices.end(), {0, 0, 1, 2, 3, 2});     // two degenerate triangles
+  const MeshTopology t = analyzeTopology(mesh);
+  EXPECT_EQ(t.degenerateTriangles, 2u);
+  EXPECT_EQ(t.unusedVertices, 2u);
+  EXPECT_FALSE(t.closedManifold());
+  // Degenerate triangles add no edges or faces: the rest is still a closed sphere.
+  EXPECT_EQ(t.boundaryEdges, 0u);
+  EXPECT_EQ(t.nonManifoldEdges, 0u);
+  EXPECT_EQ(t.eulerCharacteristic, 2);
+  EXPECT_EQ(t.components, 1u);
+}
+
+TEST(MeshTopology, EmptyMeshHasNothing) {
+  const MeshTopology t = analyzeTopology(Mesh{});
+  EXPECT_EQ(t.components, 0u);
+  EXPECT_EQ(t.eulerCharacteristic, 0);
+  EXPECT_EQ(signedVolume(Mesh{}), 0.0);
+}
+
+TEST(MeshBounds, CoversAllVertices) {
+  Mesh mesh = cube({-2.0f, 1.0f, 0.5f});
+  mesh.positions.insert(mesh.positions.end(), {10, -10, 0});  // unused vertices count too
+  const MeshBounds box = bounds(mesh);
+  EXPECT_FALSE(box.empty());
+  EXPECT_EQ(box.min, glm::vec3(-2.0f, -10.0f, 0.0f));
+  EXPECT_EQ(box.max, glm::vec3(10.0f, 2.0f, 1.5f));
+  EXPECT_TRUE(bounds(Mesh{}).empty());
+}
+
+TEST(AppendMesh, OffsetsIndicesAndDropsAttributesOnlyOneSideHas) {
+  Mesh a = tetrahedron();
+  a.normals.assign(a.positions.size(), 0.5f);
+  a.colors.assign(a.positions.size(), 0.25f);
+  Mesh b = cube();
+  b.colors.assign(b.positions.size(), 1.0f);
+  Mesh merged = a;
+  appendMesh(merged, b);
+  EXPECT_EQ(merged.vertexCount(), 12u);
+  EXPECT_EQ(merged.triangleCount(), 16u);
+  EXPECT_EQ(merged.indices[12], b.indices[0] + 4);
+  EXPECT_TRUE(merged.normals.empty());
+  ASSERT_EQ(merged.colors.size(), merged.positions.size());
+  EXPECT_EQ(merged.colors.front(), 0.25f);
+  EXPECT_EQ(merged.colors.back(), 1.0f);
+  Mesh fromEmpty;
+  appendMesh(fromEmpty, a);
+  EXPECT_EQ(fromEmpty, a);
+}
+
+}  // namespace
+}  // namespace imps
