@@ -1,0 +1,66 @@
+// Biovision Hierarchy (BVH) motion files: a lenient reader for files found in the wild, a canonical writer and an
+// atomic save.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <expected>
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace imps::sim {
+
+// One channel of a BVH joint. Positions are in the file's length unit, rotations in degrees.
+enum class BvhChannel : uint8_t { Xposition, Yposition, Zposition, Xrotation, Yrotation, Zrotation };
+
+// "Xposition" ... "Zrotation", as written in files.
+std::string_view bvhChannelName(BvhChannel channel);
+inline bool isRotation(BvhChannel c) { return c >= BvhChannel::Xrotation; }
+
+// A ROOT or JOINT. An `End Site` is not a joint: it is stored on the joint that contains it.
+struct BvhJoint {
+  std::string name;                         // as in the file; may contain ':' ("mixamorig:Hips") or be "End"
+  int parent = -1;                          // index into BvhClip::joints, -1 for a ROOT; always < own index
+  std::array<double, 3> offset{};           // from the parent joint, in the file's length unit
+  std::vector<BvhChannel> channels;         // in file order (e.g. Zrotation Xrotation Yrotation); 0..6 entries
+  bool hasEndSite = false;                  // the joint contains an `End Site { OFFSET ... }` block
+  std::array<double, 3> endSiteOffset{};    // meaningful when hasEndSite
+  bool operator==(const BvhJoint&) const = default;
+};
+
+// A whole clip. Joints are in file order (depth first, parents before children; several ROOTs allowed).
+struct BvhClip {
+  std::vector<BvhJoint> joints;
+  double frameTime = 0;                     // seconds per frame
+  std::vector<std::vector<float>> frames;   // frames[f] has channelCount() values, joints' channels in file order
+  bool operator==(const BvhClip&) const = default;
+
+  // Total number of channels (the length of every frame).
+  size_t channelCount() const;
+  // Index of joint j's first channel within a frame.
+  size_t firstChannel(size_t joint) const;
+};
+
+// Reads a BVH file. Accepts CRLF, LF, CR and mixed line endings, tabs, blank lines anywhere, a UTF-8 BOM, per-joint
+// channel orders, joint names with ':' or spaces, a joint named `End`, keywords in any letter case, and a `Frames:`
+// count that disagrees with the data (the data wins; a warning says so). A last frame line cut short is dropped
+// with a warning. Anything else wrong is an error "file:line:column: error: ..." naming what was expected.
+// Warnings, if `warnings` is given, are appended there as "file:line:column: warning: ...".
+std::expected<BvhClip, std::string> readBvh(const std::filesystem::path& path,
+                                            std::vector<std::string>* warnings = nullptr);
+// The same from text; `name` stands for the file in messages.
+std::expected<BvhClip, std::string> readBvhText(std::string_view text, std::string_view name = "<text>",
+                                                std::vector<std::string>* warnings = nullptr);
+
+// Writes a clip in a canonical form: LF line endings, tab indentation, numbers in the shortest form that reads
+// back to the same value, so readBvhText(writeBvh(c)) == c. The clip must be well formed (parents before children,
+// every frame channelCount() long); violations throw std::invalid_argument (they are bugs, not bad input).
+std::string writeBvh(const BvhClip& clip);
+
+// Writes writeBvh(clip) to `path` without ever leaving a half-written file: a temporary file beside it is written,
+// flushed to disk and renamed over the target. Errors: "path: error: ...".
+std::expected<void, std::string> saveBvh(const std::filesystem::path& path, const BvhClip& clip);
+
+}  // namespace imps::sim

@@ -1,0 +1,259 @@
+// Recorded sessions: an append-only, crash-safe file of raw Samples (format in docs/session-format.md), its
+// reader with a recovery report, and a replayer that plays a recorded session against an injectable clock.
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <expected>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "drivers/sample.h"
+
+namespace imps::sim {
+
+using drivers::DeviceInfo;
+using drivers::Sample;
+
+// ---------------------------------------------------------------------------------------------------------------
+// Clocks
+
+// A source of time in nanoseconds on a monotonic timeline, and a way to wait for a point on it. Replays and the
+// writer's periodic flush read time only through this interface, so tests can run them deterministically.
+class Clock {
+ public:
+  virtual ~Clock() = default;
+  // Current time in nanoseconds. Must never decrease.
+  virtual int64_t nowNs() = 0;
+  // Returns once nowNs() >= timeNs (at once if that time has passed).
+  virtual void sleepUntilNs(int64_t timeNs) = 0;
+};
+
+// std::chrono::steady_clock; the same timeline the drivers stamp arrivalTimeNs on. Thread-safe.
+class SteadyClock final : public Clock {
+ public:
+  int64_t nowNs() override;
+  void sleepUntilNs(int64_t timeNs) override;
+};
+
+// A clock that moves only when told to: sleepUntilNs() jumps straight to the requested time (never backwards),
+// advance() moves it by hand. Every sleep is recorded so tests can check the schedule. Not thread-safe.
+class ManualClock final : public Clock {
+ public:
+  explicit ManualClock(int64_t startNs = 0) : now_(startNs) {}
+  int64_t nowNs() override { return now_; }
+  void sleepUntilNs(int64_t timeNs) override;
+  void advance(int64_t ns) { now_ += ns; }
+  const std::vector<int64_t>& sleeps() const { return sleeps_; }  // every target passed to sleepUntilNs
+
+ private:
+  int64_t now_;
+  std::vector<int64_t> sleeps_;
+};
+
+// ---------------------------------------------------------------------------------------------------------------
+// The in-memory session
+
+// A calibration JSON blob as recorded, and the index (into Session::samples) of the first sample it applies to.
+struct SessionCalibration {
+  uint64_t firstSample = 0;
+  std::string json;
+  bool operator==(const SessionCalibration&) const = default;
+};
+
+// A timestamped label the operator dropped during recording ("take 3", "clap").
+struct SessionMarker {
+  uint64_t firstSample = 0;  // number of samples recorded before the marker
+  int64_t timeNs = 0;        // on the host's steady clock (the arrivalTimeNs timeline)
+  std::string label;
+  bool operator==(const SessionMarker&) const = default;
+};
+
+// How a session's channels map onto a BVH skeleton (written when a BVH clip is converted to a session).
+struct SessionSkeleton {
+  std::string bvh;                    // a complete BVH file with zero frames: HIERARCHY + MOTION header
+  double positionUnitsPerCount = 0;   // BVH length units per encoder count for position channels
+  bool operator==(const SessionSkeleton&) const = default;
+};
+
+// What the reader could and could not use. A file cut off by a crash is not an error: it reads back up to its last
+// whole record, and this report says what was lost.
+struct SessionRecovery {
+  bool closedCleanly = false;  // an END record was found (the writer was closed, not killed)
+  bool truncated = false;      // the file ends inside a record
+  bool corrupt = false;        // a record failed its CRC or its contents are invalid
+  uint64_t fileBytes = 0;      // size of the input
+  uint64_t bytesUsed = 0;      // bytes up to the end of the last good record (or the END record)
+  uint64_t bytesIgnored = 0;   // fileBytes - bytesUsed
+  uint64_t recordsRead = 0;    // good records, header excluded
+  uint64_t unknownRecords = 0; // good records of types this reader does not know (skipped, see versioning rules)
+  std::string message;         // "file: warning: ..." with the byte offset; empty when the file is whole
+};
+
+// A whole recorded session. samples[i] came from devices[sampleDevice[i]].
+struct Session {
+  uint16_t formatVersion = 0;
+  std::vector<DeviceInfo> devices;            // index = device number in SAMPLE records
+  std::vector<Sample> samples;                // in recording order; counts/flags beyond channelCount are zero
+  std::vector<uint16_t> sampleDevice;         // same length as samples
+  std::vector<SessionCalibration> calibrations;
+  std::vector<SessionMarker> markers;
+  std::vector<std::string> notes;
+  std::optional<SessionSkeleton> skeleton;
+  SessionRecovery recovery;
+};
+
+// ---------------------------------------------------------------------------------------------------------------
+// Writing
+
+struct SessionWriterOptions {
+  // append() flushes by itself once this many samples are buffered (0: never by count).
+  size_t flushEverySamples = 256;
+  // ...or once this long has passed since the last flush, checked at each append() (0: never by time).
+  int64_t flushEveryNs = 100'000'000;
+  // Call fdatasync() after every flush, so a power cut (not only a crash of this process) keeps the data.
+  bool syncOnFlush = false;
+  // Clock for flushEveryNs; nullptr means a SteadyClock. Not owned; must outlive the writer.
+  Clock* clock = nullptr;
+};
+
+// Appends a session to a new file. The file is created (an existing file is an error, never overwritten), the
+// header and DEVICE_INFO records are written and flushed at once; afterwards bytes are only ever appended. Records
+// are buffered and written with one write() per flush, so after a crash the file reads back up to the last flush.
+// Not thread-safe: one recording thread owns the writer. Movable, not copyable.
+class SessionWriter {
+ public:
+  // Creates `path` for a session of one or more devices (several when an armature has more than kMaxChannels
+  // channels, or a rig combines armatures). Errors: "path: error: ..." (exists, not writable, bad DeviceInfo).
+  static std::expected<SessionWriter, std::string> create(const std::filesystem::path& path,
+                                                          std::span<const DeviceInfo> devices,
+                                                          SessionWriterOptions options = {});
+  static std::expected<SessionWriter, std::string> create(const std::filesystem::path& path, const DeviceInfo& device,
+                                                          SessionWriterOptions options = {});
+
+  SessionWriter(SessionWriter&& other) noexcept;
+  SessionWriter& operator=(SessionWriter&& other) noexcept;
+  SessionWriter(const SessionWriter&) = delete;
+  SessionWriter& operator=(const SessionWriter&) = delete;
+  // Flushes and writes the END record; errors are lost (call close() to see them).
+  ~SessionWriter();
+
+  // Buffers one sample of device `device`. The sample's channelCount must equal that device's channelCount and be
+  // <= kMaxChannels. May flush (see SessionWriterOptions); flush errors are returned.
+  std::expected<void, std::string> append(const Sample& sample, uint16_t device = 0);
+  // Buffers a calibration JSON blob (stored verbatim); it applies from the next appended sample on.
+  std::expected<void, std::string> appendCalibration(std::string_view json);
+  // Buffers a marker at `timeNs` (host steady clock).
+  std::expected<void, std::string> appendMarker(int64_t timeNs, std::string_view label);
+  // Buffers a free-text note.
+  std::expected<void, std::string> appendNote(std::string_view text);
+  // Buffers the BVH skeleton the channels map onto (see SessionSkeleton).
+  std::expected<void, std::string> appendSkeleton(const SessionSkeleton& skeleton);
+  // Writes everything buffered with one write() (and fdatasync() if syncOnFlush).
+  std::expected<void, std::string> flush();
+  // Flushes, appends the END record, syncs and closes. Further calls are errors.
+  std::expected<void, std::string> close();
+
+  uint64_t samplesWritten() const { return samples_; }  // appended so far, flushed or not
+  uint64_t bytesFlushed() const { return flushed_; }
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  SessionWriter() = default;
+  std::expected<void, std::string> appendRecord(uint16_t type, std::span<const uint8_t> payload);
+  std::expected<void, std::string> writeAll(std::span<const uint8_t> bytes);
+  std::expected<void, std::string> usable() const;
+  Clock& clock() const;
+
+  std::filesystem::path path_;
+  int fd_ = -1;
+  SessionWriterOptions options_;
+  std::vector<DeviceInfo> devices_;
+  std::vector<uint8_t> buffer_;   // records not yet written
+  std::vector<uint8_t> scratch_;  // one record's payload, reused
+  size_t bufferedSamples_ = 0;
+  uint64_t samples_ = 0;
+  uint64_t flushed_ = 0;
+  int64_t lastFlushNs_ = 0;
+  bool closed_ = false;
+};
+
+// ---------------------------------------------------------------------------------------------------------------
+// Reading
+
+// Reads a whole session file. Errors ("path: error: ...") only when nothing can be trusted: unreadable file, bad
+// magic, unsupported version, header cut short. Truncated or corrupt records end the read cleanly; see
+// Session::recovery.
+std::expected<Session, std::string> readSession(const std::filesystem::path& path);
+// The same from bytes in memory; `name` stands for the file in messages. Never reads outside `bytes`.
+std::expected<Session, std::string> readSessionBytes(std::span<const uint8_t> bytes, std::string_view name = "<memory>");
+
+// Writes an in-memory session (devices, skeleton, notes, then samples interleaved with calibrations and markers at
+// their recorded sample indices, then END) to `path` atomically: a temporary file beside it is written and synced,
+// then renamed over the target. Used to save converted sessions. Errors: "path: error: ...".
+std::expected<void, std::string> saveSession(const std::filesystem::path& path, const Session& session);
+
+// CRC-32C (Castagnoli, reflected, init and final xor 0xFFFFFFFF), as used by the record headers.
+// crc32c("123456789") == 0xE3069283.
+uint32_t crc32c(std::span<const uint8_t> bytes, uint32_t crc = 0);
+
+// ---------------------------------------------------------------------------------------------------------------
+// Replaying
+
+// Receives replayed samples, as it would receive them from a live device session.
+class SampleConsumer {
+ public:
+  virtual ~SampleConsumer() = default;
+  // Called once per sample in recording order. Return false to stop the replay.
+  virtual bool consume(uint16_t device, const Sample& sample) = 0;
+};
+
+struct ReplayOptions {
+  // Playback rate: 1 real time, 2 twice as fast, 0.5 half speed; 0 (or less) as fast as possible.
+  double speed = 1.0;
+  // Which recorded timestamps set the schedule. Device time falls back to arrival time for devices without one.
+  enum class Timebase { Arrival, Device } timebase = Timebase::Arrival;
+  // When true, each delivered sample's arrivalTimeNs is set to the replay clock's time at delivery, as a live
+  // device session would stamp it; the recorded value stays in the Session. When false (default) the samples
+  // delivered are bit-identical to the samples recorded.
+  bool rewriteArrivalTime = false;
+  // Longest single sleep; between sleeps stop() is noticed. Keeps a paused-looking replay responsive.
+  int64_t maxSleepNs = 50'000'000;
+};
+
+// Plays a Session's samples to a consumer with their recorded timing (VRPN's file connection is the model): the
+// sample at position p is due at start + (t[p] - t[first]) / speed, where start is the clock's time when run()
+// begins and first is the position run() begins at. Samples whose timestamps go backwards are delivered at once.
+// The Session and Clock are not owned and must outlive the replay. run() is for one thread; stop() may be called
+// from any thread.
+class SessionReplay {
+ public:
+  SessionReplay(const Session& session, Clock& clock, ReplayOptions options = {});
+
+  // Delivers samples from position() to the end (or until the consumer returns false or stop() is called);
+  // returns the number delivered. position() afterwards is the first sample not delivered.
+  size_t run(SampleConsumer& consumer);
+  size_t run(const std::function<bool(uint16_t device, const Sample& sample)>& consume);
+  void stop() { stopRequested_.store(true, std::memory_order_relaxed); }
+
+  // Moves to sample `index` (clamped to the end); the next run() starts its schedule there.
+  void seek(size_t index);
+  size_t position() const { return position_; }
+  // Recorded timestamp (per the timebase) of sample `index`.
+  int64_t recordedTimeNs(size_t index) const;
+
+ private:
+  const Session& session_;
+  Clock& clock_;
+  ReplayOptions options_;
+  size_t position_ = 0;
+  std::atomic<bool> stopRequested_{false};
+};
+
+}  // namespace imps::sim

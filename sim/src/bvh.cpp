@@ -1,0 +1,478 @@
+// BVH reading (lenient about what real exporters write, precise about what is wrong) and canonical writing.
+#include "sim/bvh.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <optional>
+#include <stdexcept>
+#include <vector>
+
+namespace imps::sim {
+
+namespace {
+
+constexpr std::array<std::string_view, 6> kChannelNames = {"Xposition", "Yposition", "Zposition",
+                                                           "Xrotation", "Yrotation", "Zrotation"};
+
+bool iequals(std::string_view a, std::string_view b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i) {
+    char x = a[i], y = b[i];
+    if (x >= 'A' && x <= 'Z') x = static_cast<char>(x - 'A' + 'a');
+    if (y >= 'A' && y <= 'Z') y = static_cast<char>(y - 'A' + 'a');
+    if (x != y) return false;
+  }
+  return true;
+}
+
+bool isBlank(char c) { return c == ' ' || c == '\t' || c == '\f' || c == '\v'; }
+bool isNewline(char c) { return c == '\n' || c == '\r'; }
+
+struct Token {
+  std::string_view text;  // empty at end of input
+  int line = 0;
+  int column = 0;
+};
+
+// Splits the text into whitespace-separated tokens ('{' and '}' are tokens of their own), tracking line and
+// column (1-based, in bytes). "\r\n", "\n" and a lone "\r" each end a line.
+class Lexer {
+ public:
+  explicit Lexer(std::string_view text) : text_(text) {
+    if (text_.starts_with("\xEF\xBB\xBF")) pos_ = 3;  // UTF-8 byte order mark
+  }
+
+  // Skips blanks on the current line only; true if the line (or the input) ends there.
+  bool atLineEnd() {
+    while (pos_ < text_.size() && isBlank(text_[pos_])) advance();
+    return pos_ >= text_.size() || isNewline(text_[pos_]);
+  }
+  bool atEnd() {
+    skipSpace();
+    return pos_ >= text_.size();
+  }
+  // Moves past the end of the current line.
+  void skipLineEnd() {
+    while (pos_ < text_.size() && !isNewline(text_[pos_])) advance();
+    if (pos_ < text_.size()) advance();
+  }
+  // Position of the next non-blank character (or the line end) on the current line.
+  Token here() {
+    atLineEnd();
+    return {{}, line_, column_};
+  }
+  Token next() {
+    skipSpace();
+    Token t{{}, line_, column_};
+    const size_t start = pos_;
+    if (pos_ < text_.size() && (text_[pos_] == '{' || text_[pos_] == '}')) {
+      advance();
+    } else {
+      while (pos_ < text_.size() && !isBlank(text_[pos_]) && !isNewline(text_[pos_]) && text_[pos_] != '{' &&
+             text_[pos_] != '}')
+        advance();
+    }
+    t.text = text_.substr(start, pos_ - start);
+    return t;
+  }
+  Token peek() {
+    Lexer copy = *this;
+    return copy.next();
+  }
+  // True if the next character on this line is '{' (after blanks).
+  bool braceNextOnLine() { return !atLineEnd() && text_[pos_] == '{'; }
+
+ private:
+  void skipSpace() {
+    while (pos_ < text_.size() && (isBlank(text_[pos_]) || isNewline(text_[pos_]))) advance();
+  }
+  void advance() {
+    const char c = text_[pos_++];
+    if (c == '\n' || (c == '\r' && (pos_ >= text_.size() || text_[pos_] != '\n'))) {
+      ++line_;
+      column_ = 1;
+    } else if (c != '\r') {
+      ++column_;
+    }
+  }
+
+  std::string_view text_;
+  size_t pos_ = 0;
+  int line_ = 1;
+  int column_ = 1;
+};
+
+template <typename T>
+std::optional<T> parseNumber(std::string_view s) {
+  if (s.starts_with('+')) s.remove_prefix(1);
+  if (s.empty()) return std::nullopt;
+  T v{};
+  auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (ec != std::errc() || end != s.data() + s.size()) return std::nullopt;
+  if constexpr (std::is_floating_point_v<T>) {
+    if (!std::isfinite(v)) return std::nullopt;
+  }
+  return v;
+}
+
+std::string quoted(std::string_view s) {
+  if (s.empty()) return "end of file";
+  return "'" + std::string(s) + "'";
+}
+
+class Parser {
+ public:
+  Parser(std::string_view text, std::string_view name, std::vector<std::string>* warnings)
+      : lex_(text), name_(name), warnings_(warnings) {}
+
+  std::expected<BvhClip, std::string> parse() {
+    Token t = lex_.next();
+    if (!iequals(t.text, "HIERARCHY")) return fail(t, "expected 'HIERARCHY' at the start of the file, found " + quoted(t.text));
+    for (;;) {
+      t = lex_.next();
+      if (iequals(t.text, "ROOT")) {
+        if (auto r = parseJoint(t, -1); !r) return std::unexpected(r.error());
+      } else if (iequals(t.text, "MOTION") && !clip_.joints.empty()) {
+        break;
+      } else {
+        return fail(t, clip_.joints.empty() ? "expected 'ROOT', found " + quoted(t.text)
+                                            : "expected 'ROOT' or 'MOTION', found " + quoted(t.text));
+      }
+    }
+    if (auto r = parseMotion(); !r) return std::unexpected(r.error());
+    return std::move(clip_);
+  }
+
+ private:
+  std::unexpected<std::string> fail(const Token& at, const std::string& what) const {
+    return std::unexpected(location(at) + ": error: " + what);
+  }
+  std::string location(const Token& at) const {
+    return name_ + ":" + std::to_string(at.line) + ":" + std::to_string(at.column);
+  }
+  void warn(const Token& at, const std::string& what) {
+    if (warnings_) warnings_->push_back(location(at) + ": warning: " + what);
+  }
+
+  // Reads `count` numbers after keyword `what`.
+  std::expected<void, std::string> numbers(double* out, int count, std::string_view what) {
+    for (int i = 0; i < count; ++i) {
+      Token t = lex_.next();
+      auto v = parseNumber<double>(t.text);
+      if (!v)
+        return fail(t, "expected " + std::to_string(count) + " numbers after '" + std::string(what) + "', found " +
+                           quoted(t.text));
+      out[i] = *v;
+    }
+    return {};
+  }
+
+  std::expected<void, std::string> parseJoint(const Token& keyword, int parent) {
+    // The name is the rest of the line up to a '{' (names with spaces are joined with one space).
+    std::string name;
+    while (!lex_.atLineEnd() && !lex_.braceNextOnLine()) {
+      const Token part = lex_.next();
+      if (part.text == "}") return fail(part, "expected '{' after joint name '" + name + "', found '}'");
+      if (!name.empty()) name += ' ';
+      name += part.text;
+    }
+    if (name.empty()) return fail(lex_.here(), "expected a joint name after " + quoted(keyword.text));
+    Token brace = lex_.next();
+    if (brace.text != "{") return fail(brace, "expected '{' after joint name '" + name + "', found " + quoted(brace.text));
+
+    if (depth_ >= kMaxDepth) return fail(brace, "joints nested more than " + std::to_string(kMaxDepth) + " deep");
+    const int index = static_cast<int>(clip_.joints.size());
+    clip_.joints.push_back({});
+    clip_.joints.back().name = name;
+    clip_.joints.back().parent = parent;
+    bool hasOffset = false, hasChannels = false;
+    for (;;) {
+      Token t = lex_.next();
+      BvhJoint& joint = clip_.joints[static_cast<size_t>(index)];
+      if (iequals(t.text, "OFFSET")) {
+        if (hasOffset) return fail(t, "joint '" + name + "' has a second OFFSET");
+        hasOffset = true;
+        if (auto r = numbers(joint.offset.data(), 3, "OFFSET"); !r) return r;
+      } else if (iequals(t.text, "CHANNELS")) {
+        if (hasChannels) return fail(t, "joint '" + name + "' has a second CHANNELS");
+        hasChannels = true;
+        Token c = lex_.next();
+        auto n = parseNumber<int>(c.text);
+        if (!n || *n < 0 || *n > 6) return fail(c, "expected a channel count 0..6 after 'CHANNELS', found " + quoted(c.text));
+        for (int i = 0; i < *n; ++i) {
+          Token ch = lex_.next();
+          std::optional<BvhChannel> found;
+          for (size_t k = 0; k < kChannelNames.size(); ++k)
+            if (iequals(ch.text, kChannelNames[k])) found = static_cast<BvhChannel>(k);
+          if (!found)
+            return fail(ch, "expected a channel name (Xposition ... Zrotation) for joint '" + name + "', found " +
+                                quoted(ch.text));
+          for (BvhChannel prev : joint.channels)
+            if (prev == *found) return fail(ch, "channel " + quoted(ch.text) + " repeated in joint '" + name + "'");
+          joint.channels.push_back(*found);
+        }
+      } else if (iequals(t.text, "JOINT")) {
+        ++depth_;
+        auto r = parseJoint(t, index);
+        --depth_;
+        if (!r) return r;
+      } else if (iequals(t.text, "End")) {
+        Token site = lex_.next();
+        if (!iequals(site.text, "Site")) return fail(site, "expected 'Site' after 'End', found " + quoted(site.text));
+        if (joint.hasEndSite) return fail(t, "joint '" + name + "' has a second End Site");
+        Token open = lex_.next();
+        if (open.text != "{") return fail(open, "expected '{' after 'End Site', found " + quoted(open.text));
+        Token off = lex_.next();
+        if (!iequals(off.text, "OFFSET")) return fail(off, "expected 'OFFSET' in End Site, found " + quoted(off.text));
+        double v[3];
+        if (auto r = numbers(v, 3, "OFFSET"); !r) return r;
+        Token close = lex_.next();
+        if (close.text != "}") return fail(close, "expected '}' to close End Site, found " + quoted(close.text));
+        BvhJoint& j = clip_.joints[static_cast<size_t>(index)];
+        j.hasEndSite = true;
+        j.endSiteOffset = {v[0], v[1], v[2]};
+      } else if (t.text == "}") {
+        if (!hasOffset) return fail(t, "joint '" + name + "' has no OFFSET");
+        return {};
+      } else if (t.text.empty()) {
+        return fail(t, "unexpected end of file: expected '}' to close joint '" + name + "'");
+      } else {
+        return fail(t, "expected 'OFFSET', 'CHANNELS', 'JOINT', 'End Site' or '}' in joint '" + name + "', found " +
+                           quoted(t.text));
+      }
+    }
+  }
+
+  // Consumes a label such as "Frames:" or "Frame Time:" given as words; the colon may be glued or separate, and
+  // the value may be glued to the colon ("Frames:2"). Returns the value token.
+  std::expected<Token, std::string> labelledValue(std::initializer_list<std::string_view> words, std::string_view shown) {
+    size_t i = 0;
+    for (std::string_view w : words) {
+      Token t = lex_.next();
+      const bool last = ++i == words.size();
+      const size_t colon = last ? t.text.find(':') : std::string_view::npos;
+      if (!iequals(t.text.substr(0, colon), w))
+        return fail(t, "expected '" + std::string(shown) + "', found " + quoted(t.text));
+      if (!last) continue;
+      if (colon == std::string_view::npos) {
+        Token c = lex_.next();
+        if (!c.text.starts_with(':'))
+          return fail(c, "expected ':' after '" + std::string(w) + "', found " + quoted(c.text));
+        if (c.text.size() > 1) return Token{c.text.substr(1), c.line, c.column + 1};
+      } else if (colon + 1 < t.text.size()) {
+        return Token{t.text.substr(colon + 1), t.line, t.column + static_cast<int>(colon) + 1};
+      }
+    }
+    return lex_.next();
+  }
+
+  std::expected<void, std::string> parseMotion() {
+    const Token framesAt = lex_.peek();
+    auto frames = labelledValue({"Frames"}, "Frames:");
+    if (!frames) return std::unexpected(frames.error());
+    const Token n = *frames;
+    auto declared = parseNumber<long long>(n.text);
+    if (!declared || *declared < 0) return fail(n, "expected a frame count after 'Frames:', found " + quoted(n.text));
+    auto time = labelledValue({"Frame", "Time"}, "Frame Time:");
+    if (!time) return std::unexpected(time.error());
+    const Token ft = *time;
+    auto frameTime = parseNumber<double>(ft.text);
+    if (!frameTime || *frameTime < 0)
+      return fail(ft, "expected a frame time in seconds after 'Frame Time:', found " + quoted(ft.text));
+    clip_.frameTime = *frameTime;
+    if (!lex_.atLineEnd()) {
+      Token extra = lex_.next();
+      return fail(extra, "unexpected " + quoted(extra.text) + " after the frame time");
+    }
+    lex_.skipLineEnd();
+
+    // One frame per non-blank line.
+    const size_t channels = clip_.channelCount();
+    std::vector<float> row;
+    while (!lex_.atEnd()) {
+      row.clear();
+      Token first = lex_.here();
+      Token t;
+      while (!lex_.atLineEnd()) {
+        t = lex_.next();
+        auto v = parseNumber<float>(t.text);
+        if (!v)
+          return fail(t, "expected a number in frame " + std::to_string(clip_.frames.size() + 1) + ", found " +
+                             quoted(t.text));
+        if (row.size() == channels)
+          return fail(t, "frame " + std::to_string(clip_.frames.size() + 1) + " has more than the " +
+                             std::to_string(channels) + " values the hierarchy's channels need");
+        row.push_back(*v);
+      }
+      Token lineEnd = lex_.here();
+      lex_.skipLineEnd();
+      if (row.size() < channels) {
+        if (lex_.atEnd()) {
+          warn(first, "last frame has " + std::to_string(row.size()) + " of " + std::to_string(channels) +
+                          " values (file cut short?); dropped");
+          break;
+        }
+        return fail(lineEnd, "frame " + std::to_string(clip_.frames.size() + 1) + " has " + std::to_string(row.size()) +
+                                 " values, expected " + std::to_string(channels));
+      }
+      clip_.frames.push_back(row);
+    }
+    if (static_cast<unsigned long long>(*declared) != clip_.frames.size())
+      warn(framesAt, "'Frames:' says " + std::to_string(*declared) + " but " + std::to_string(clip_.frames.size()) +
+                         " frames of data follow; using the data");
+    return {};
+  }
+
+  static constexpr int kMaxDepth = 256;   // deeper nesting is not a skeleton; also bounds the recursion
+  Lexer lex_;
+  int depth_ = 0;
+  std::string name_;
+  std::vector<std::string>* warnings_;
+  BvhClip clip_;
+};
+
+void appendNumber(std::string& out, double v) {
+  char buf[64];
+  auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
+  out.append(buf, end);
+}
+void appendNumber(std::string& out, float v) {
+  char buf[64];
+  auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
+  out.append(buf, end);
+}
+
+void appendOffset(std::string& out, const std::array<double, 3>& o) {
+  out += "OFFSET";
+  for (double v : o) {
+    out += ' ';
+    appendNumber(out, v);
+  }
+  out += '\n';
+}
+
+}  // namespace
+
+std::string_view bvhChannelName(BvhChannel channel) { return kChannelNames[static_cast<size_t>(channel)]; }
+
+size_t BvhClip::channelCount() const {
+  size_t n = 0;
+  for (const auto& j : joints) n += j.channels.size();
+  return n;
+}
+
+size_t BvhClip::firstChannel(size_t joint) const {
+  size_t n = 0;
+  for (size_t j = 0; j < joint && j < joints.size(); ++j) n += joints[j].channels.size();
+  return n;
+}
+
+std::expected<BvhClip, std::string> readBvhText(std::string_view text, std::string_view name,
+                                                std::vector<std::string>* warnings) {
+  return Parser(text, name, warnings).parse();
+}
+
+std::expected<BvhClip, std::string> readBvh(const std::filesystem::path& path, std::vector<std::string>* warnings) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::unexpected(path.string() + ": error: cannot open BVH file: " + std::strerror(errno));
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) return std::unexpected(path.string() + ": error: read failed");
+  return readBvhText(text, path.string(), warnings);
+}
+
+std::string writeBvh(const BvhClip& clip) {
+  std::string out = "HIERARCHY\n";
+  std::vector<size_t> open;  // joints whose '}' is not written yet
+  auto indent = [&](size_t depth) { out.append(depth, '\t'); };
+  auto closeJoint = [&]() {
+    const BvhJoint& j = clip.joints[open.back()];
+    open.pop_back();
+    const size_t d = open.size();
+    if (j.hasEndSite) {
+      indent(d + 1), out += "End Site\n";
+      indent(d + 1), out += "{\n";
+      indent(d + 2), appendOffset(out, j.endSiteOffset);
+      indent(d + 1), out += "}\n";
+    }
+    indent(d), out += "}\n";
+  };
+  for (size_t i = 0; i < clip.joints.size(); ++i) {
+    const BvhJoint& j = clip.joints[i];
+    if (j.parent < -1 || j.parent >= static_cast<int>(i))
+      throw std::invalid_argument("writeBvh: joint '" + j.name + "' has a bad parent index");
+    while (!open.empty() && static_cast<int>(open.back()) != j.parent) closeJoint();
+    if (j.parent >= 0 && open.empty())
+      throw std::invalid_argument("writeBvh: joints are not in depth-first order at '" + j.name + "'");
+    if (j.name.empty() || j.name.find_first_of("{}\r\n") != std::string::npos)
+      throw std::invalid_argument("writeBvh: joint name '" + j.name + "' cannot be written");
+    const size_t d = open.size();
+    indent(d), out += (j.parent < 0 ? "ROOT " : "JOINT "), out += j.name, out += '\n';
+    indent(d), out += "{\n";
+    indent(d + 1), appendOffset(out, j.offset);
+    indent(d + 1), out += "CHANNELS " + std::to_string(j.channels.size());
+    for (BvhChannel c : j.channels) out += ' ', out += bvhChannelName(c);
+    out += '\n';
+    open.push_back(i);
+  }
+  while (!open.empty()) closeJoint();
+
+  const size_t channels = clip.channelCount();
+  out += "MOTION\nFrames: " + std::to_string(clip.frames.size()) + "\nFrame Time: ";
+  appendNumber(out, clip.frameTime);
+  out += '\n';
+  for (const auto& frame : clip.frames) {
+    if (frame.size() != channels) throw std::invalid_argument("writeBvh: a frame's length differs from the channel count");
+    for (size_t i = 0; i < frame.size(); ++i) {
+      if (i) out += ' ';
+      appendNumber(out, frame[i]);
+    }
+    out += '\n';
+  }
+  return out;
+}
+
+std::expected<void, std::string> saveBvh(const std::filesystem::path& path, const BvhClip& clip) {
+  const std::string text = writeBvh(clip);
+  const std::string target = path.string();
+  const std::filesystem::path tmp = path.string() + ".tmp" + std::to_string(::getpid());
+  auto fail = [&](const std::string& what) -> std::expected<void, std::string> {
+    const int err = errno;
+    std::error_code ignored;
+    std::filesystem::remove(tmp, ignored);
+    return std::unexpected(target + ": error: " + what + ": " + std::strerror(err));
+  };
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) return fail("cannot create temporary file " + tmp.string());
+  size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      ::close(fd);
+      return fail("write failed");
+    }
+    done += static_cast<size_t>(n);
+  }
+  if (::fsync(fd) != 0) {
+    ::close(fd);
+    return fail("fsync failed");
+  }
+  if (::close(fd) != 0) return fail("close failed");
+  if (::rename(tmp.c_str(), path.c_str()) != 0) return fail("rename failed");
+  // Make the rename itself durable.
+  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
+  if (const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); dfd >= 0) {
+    (void)::fsync(dfd);
+    ::close(dfd);
+  }
+  return {};
+}
+
+}  // namespace imps::sim

@@ -1,0 +1,244 @@
+// Tests for sim/bvh: the quirks of real BVH files, exact error messages, canonical writing and atomic saving.
+#include "sim/bvh.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+namespace imps::sim {
+namespace {
+
+namespace fs = std::filesystem;
+using C = BvhChannel;
+
+fs::path data(const std::string& name) { return fs::path(IMPS_SOURCE_DIR) / "tests/data/bvh" / name; }
+
+std::string fileText(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+BvhClip read(const std::string& name, std::vector<std::string>* warnings = nullptr) {
+  auto clip = readBvh(data(name), warnings);
+  EXPECT_TRUE(clip) << clip.error();
+  return clip ? *clip : BvhClip{};
+}
+
+const std::vector<std::string> kQuirkFiles = {"line_endings.bvh",          "channel_orders.bvh",
+                                              "colon_names.bvh",           "end_joint.bvh",
+                                              "frames_more_than_data.bvh", "frames_fewer_than_data.bvh",
+                                              "truncated_last_frame.bvh"};
+
+TEST(BvhRead, MixedLineEndingsTabsAndTrailingWhitespace) {
+  const std::string text = fileText(data("line_endings.bvh"));
+  ASSERT_NE(text.find("\r\n"), std::string::npos);  // the file really has all three kinds
+  ASSERT_NE(text.find("Chest\r\t"), std::string::npos);
+  std::vector<std::string> warnings;
+  const BvhClip clip = read("line_endings.bvh", &warnings);
+  EXPECT_TRUE(warnings.empty());
+  ASSERT_EQ(clip.joints.size(), 2u);
+  EXPECT_EQ(clip.joints[0].name, "Hips");
+  EXPECT_EQ(clip.joints[0].offset, (std::array<double, 3>{0, 1.5, -2.25}));
+  EXPECT_EQ(clip.joints[1].name, "Chest");
+  EXPECT_EQ(clip.joints[1].parent, 0);
+  EXPECT_TRUE(clip.joints[1].hasEndSite);
+  EXPECT_EQ(clip.joints[1].endSiteOffset, (std::array<double, 3>{0, 3.87, 0}));
+  EXPECT_DOUBLE_EQ(clip.frameTime, 0.033333);
+  ASSERT_EQ(clip.frames.size(), 2u);
+  EXPECT_EQ(clip.frames[0], (std::vector<float>{1.5f, 2.5f, -3.5f, 10, 20, 30, -40, 50, -60}));
+  EXPECT_EQ(clip.frames[1], (std::vector<float>{-1, -2, -3, 179.5f, -179.5f, 0.25f, 45, 90, -90}));
+
+  // The same file with plain LF reads identically.
+  std::string lf;
+  for (size_t i = 0; i < text.size(); ++i) {
+    if (text[i] == '\r') {
+      lf += '\n';
+      if (i + 1 < text.size() && text[i + 1] == '\n') ++i;
+    } else {
+      lf += text[i];
+    }
+  }
+  auto again = readBvhText(lf, "lf");
+  ASSERT_TRUE(again) << again.error();
+  EXPECT_EQ(*again, clip);
+}
+
+TEST(BvhRead, PerJointChannelOrdersSixChannelsEverywhereBlankLines) {
+  const BvhClip clip = read("channel_orders.bvh");
+  ASSERT_EQ(clip.joints.size(), 4u);
+  EXPECT_EQ(clip.joints[0].channels, (std::vector<C>{C::Xposition, C::Yposition, C::Zposition, C::Zrotation,
+                                                     C::Yrotation, C::Xrotation}));  // ZYX
+  EXPECT_EQ(clip.joints[1].channels, (std::vector<C>{C::Xposition, C::Yposition, C::Zposition, C::Zrotation,
+                                                     C::Xrotation, C::Yrotation}));  // ZXY
+  EXPECT_EQ(clip.joints[2].channels, (std::vector<C>{C::Xposition, C::Yposition, C::Zposition, C::Xrotation,
+                                                     C::Yrotation, C::Zrotation}));  // XYZ
+  EXPECT_EQ(clip.joints[3].channels, (std::vector<C>{C::Yposition, C::Xposition, C::Zposition, C::Yrotation,
+                                                     C::Xrotation, C::Zrotation}));  // YXZ
+  EXPECT_EQ(clip.joints[2].parent, 1);
+  EXPECT_EQ(clip.joints[3].parent, 0);  // back out of Spine/Neck to the root
+  EXPECT_EQ(clip.channelCount(), 24u);
+  EXPECT_EQ(clip.firstChannel(3), 18u);
+  ASSERT_EQ(clip.frames.size(), 3u);
+  EXPECT_FLOAT_EQ(clip.frames[2][23], 58.75f);  // (2*24+23)*1.25-30
+}
+
+TEST(BvhRead, JointNamesWithColons) {
+  const BvhClip clip = read("colon_names.bvh");
+  ASSERT_EQ(clip.joints.size(), 3u);
+  EXPECT_EQ(clip.joints[0].name, "mixamorig:Hips");
+  EXPECT_EQ(clip.joints[1].name, "mixamorig:Spine");
+  EXPECT_EQ(clip.joints[2].name, "mixamorig:LeftArm");
+  EXPECT_EQ(clip.joints[2].parent, 1);
+  EXPECT_EQ(clip.frames.size(), 2u);
+}
+
+TEST(BvhRead, EndSiteVersusAJointNamedEnd) {
+  const BvhClip clip = read("end_joint.bvh");
+  ASSERT_EQ(clip.joints.size(), 3u);
+  EXPECT_EQ(clip.joints[0].name, "Base");
+  EXPECT_FALSE(clip.joints[0].hasEndSite);
+  EXPECT_EQ(clip.joints[1].name, "End");
+  EXPECT_EQ(clip.joints[1].parent, 0);
+  EXPECT_EQ(clip.joints[1].channels, (std::vector<C>{C::Zrotation, C::Xrotation, C::Yrotation}));
+  EXPECT_TRUE(clip.joints[1].hasEndSite);
+  EXPECT_EQ(clip.joints[1].endSiteOffset, (std::array<double, 3>{0, 0, 30}));
+  EXPECT_EQ(clip.joints[2].name, "End Effector");
+  EXPECT_EQ(clip.joints[2].parent, 0);
+  EXPECT_EQ(clip.frames.size(), 2u);
+}
+
+TEST(BvhRead, FrameCountDisagreeingWithDataUsesTheDataAndWarns) {
+  std::vector<std::string> warnings;
+  BvhClip more = read("frames_more_than_data.bvh", &warnings);
+  EXPECT_EQ(more.frames.size(), 3u);
+  EXPECT_EQ(warnings, std::vector<std::string>{data("frames_more_than_data.bvh").string() +
+                                               ":12:1: warning: 'Frames:' says 5 but 3 frames of data follow; using the data"});
+  warnings.clear();
+  BvhClip fewer = read("frames_fewer_than_data.bvh", &warnings);
+  EXPECT_EQ(fewer.frames.size(), 3u);
+  EXPECT_EQ(fewer.frames[2], (std::vector<float>{7, 8, 9}));
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("'Frames:' says 1 but 3"), std::string::npos);
+
+  warnings.clear();
+  BvhClip cut = read("truncated_last_frame.bvh", &warnings);
+  EXPECT_EQ(cut.frames.size(), 2u);
+  ASSERT_EQ(warnings.size(), 2u);
+  EXPECT_EQ(warnings[0], data("truncated_last_frame.bvh").string() +
+                             ":16:1: warning: last frame has 2 of 3 values (file cut short?); dropped");
+}
+
+TEST(BvhRead, ErrorFilesSayWhatIsWrongAndWhere) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"missing_brace.bvh", ":3:2: error: expected '{' after joint name 'Hips', found 'OFFSET'"},
+      {"bad_channel.bvh",
+       ":5:23: error: expected a channel name (Xposition ... Zrotation) for joint 'Hips', found 'Wrotation'"},
+      {"bad_number.bvh", ":15:3: error: expected a number in frame 2, found 'x5'"},
+      {"short_frame.bvh", ":15:4: error: frame 2 has 2 values, expected 3"},
+      {"long_frame.bvh", ":15:7: error: frame 2 has more than the 3 values the hierarchy's channels need"},
+      {"end_without_site.bvh", ":6:2: error: expected 'Site' after 'End', found '{'"},
+      {"unclosed_joint.bvh", ":9:1: error: unexpected end of file: expected '}' to close joint 'Hips'"},
+      {"missing_frame_time.bvh", ":13:1: error: expected 'Frame Time:', found '1'"},
+  };
+  for (const auto& [file, message] : cases) {
+    const fs::path path = data("errors/" + file);
+    auto clip = readBvh(path);
+    ASSERT_FALSE(clip) << file;
+    EXPECT_EQ(clip.error(), path.string() + message);
+  }
+  auto missing = readBvh(data("no_such_file.bvh"));
+  ASSERT_FALSE(missing);
+  EXPECT_EQ(missing.error(), data("no_such_file.bvh").string() + ": error: cannot open BVH file: No such file or directory");
+}
+
+TEST(BvhRead, InlineErrors) {
+  auto expectError = [](std::string_view text, const std::string& message) {
+    auto clip = readBvhText(text, "t.bvh");
+    ASSERT_FALSE(clip) << text;
+    EXPECT_EQ(clip.error(), message);
+  };
+  expectError("", "t.bvh:1:1: error: expected 'HIERARCHY' at the start of the file, found end of file");
+  expectError("HIERARCHY\nMOTION\n", "t.bvh:2:1: error: expected 'ROOT', found 'MOTION'");
+  expectError("HIERARCHY\nROOT\n{\n", "t.bvh:2:5: error: expected a joint name after 'ROOT'");
+  expectError("HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\nCHANNELS 7\n", "t.bvh:5:10: error: expected a channel count 0..6 after 'CHANNELS', found '7'");
+  expectError("HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\nCHANNELS 2 Xrotation Xrotation\n",
+              "t.bvh:5:22: error: channel 'Xrotation' repeated in joint 'A'");
+  expectError("HIERARCHY\nROOT A\n{\nOFFSET 0 zero 0\n", "t.bvh:4:10: error: expected 3 numbers after 'OFFSET', found 'zero'");
+  expectError("HIERARCHY\nROOT A\n{\nCHANNELS 0\n}\n", "t.bvh:5:1: error: joint 'A' has no OFFSET");
+  expectError("HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\n}\nMOTION\nFrames: 1\nFrame Time: 0.1 x\n",
+              "t.bvh:8:17: error: unexpected 'x' after the frame time");
+  expectError("HIERARCHY\nROOT A}B\n{\n", "t.bvh:2:7: error: expected '{' after joint name 'A', found '}'");
+  std::string deep = "HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\n";
+  for (int i = 0; i < 300; ++i) deep += "JOINT J\n{\nOFFSET 0 0 0\n";
+  auto tooDeep = readBvhText(deep, "deep.bvh");
+  ASSERT_FALSE(tooDeep);
+  EXPECT_NE(tooDeep.error().find("error: joints nested more than 256 deep"), std::string::npos);
+}
+
+TEST(BvhRead, LenientAboutCaseColonsBomAndJointNamesWithSpaces) {
+  const std::string text =
+      "\xEF\xBB\xBFhierarchy\nroot My Hips {\n offset 1 2 3\n channels 3 ZROTATION xrotation Yrotation\n}\n"
+      "motion\nFrames:2\nFrame Time : +0.5\n1 2 3\n\n4 5 6";
+  auto clip = readBvhText(text);
+  ASSERT_TRUE(clip) << clip.error();
+  EXPECT_EQ(clip->joints[0].name, "My Hips");
+  EXPECT_EQ(clip->joints[0].channels, (std::vector<C>{C::Zrotation, C::Xrotation, C::Yrotation}));
+  EXPECT_EQ(clip->frameTime, 0.5);
+  EXPECT_EQ(clip->frames.size(), 2u);
+}
+
+TEST(BvhWrite, WriteThenReadReproducesEveryQuirkFile) {
+  for (const auto& file : kQuirkFiles) {
+    SCOPED_TRACE(file);
+    const BvhClip clip = read(file);
+    const std::string text = writeBvh(clip);
+    auto back = readBvhText(text, "written");
+    ASSERT_TRUE(back) << back.error();
+    EXPECT_EQ(*back, clip);
+    EXPECT_EQ(writeBvh(*back), text);  // canonical: a fixed point
+    EXPECT_EQ(text.find('\r'), std::string::npos);
+  }
+}
+
+TEST(BvhWrite, CanonicalText) {
+  BvhClip clip;
+  clip.joints.push_back({"Root", -1, {0, 1.5, 0}, {C::Xposition, C::Yposition, C::Zposition, C::Zrotation}, false, {}});
+  clip.joints.push_back({"A", 0, {0.1, 0, 0}, {C::Zrotation}, true, {0, 2, 0}});
+  clip.joints.push_back({"B", 0, {-0.1, 0, 0}, {}, true, {0, -2, 0}});
+  clip.frameTime = 1.0 / 30;
+  clip.frames = {{0.1f, 2, -3, 45.5f, -0.25f}};
+  EXPECT_EQ(writeBvh(clip),
+            "HIERARCHY\nROOT Root\n{\n\tOFFSET 0 1.5 0\n\tCHANNELS 4 Xposition Yposition Zposition Zrotation\n"
+            "\tJOINT A\n\t{\n\t\tOFFSET 0.1 0 0\n\t\tCHANNELS 1 Zrotation\n\t\tEnd Site\n\t\t{\n\t\t\tOFFSET 0 2 0\n"
+            "\t\t}\n\t}\n\tJOINT B\n\t{\n\t\tOFFSET -0.1 0 0\n\t\tCHANNELS 0\n\t\tEnd Site\n\t\t{\n\t\t\tOFFSET 0 -2 0\n"
+            "\t\t}\n\t}\n}\nMOTION\nFrames: 1\nFrame Time: 0.03333333333333333\n0.1 2 -3 45.5 -0.25\n");
+  BvhClip badOrder = clip;
+  badOrder.joints[2].parent = 2;
+  EXPECT_THROW(writeBvh(badOrder), std::invalid_argument);
+  BvhClip badFrame = clip;
+  badFrame.frames[0].pop_back();
+  EXPECT_THROW(writeBvh(badFrame), std::invalid_argument);
+}
+
+TEST(BvhWrite, SaveIsAtomicAndReplaces) {
+  const fs::path dir = fs::temp_directory_path() / ("imps_bvh_save_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const BvhClip clip = read("channel_orders.bvh");
+  std::ofstream(dir / "out.bvh") << "old contents";
+  ASSERT_TRUE(saveBvh(dir / "out.bvh", clip));
+  auto back = readBvh(dir / "out.bvh");
+  ASSERT_TRUE(back) << back.error();
+  EXPECT_EQ(*back, clip);
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
+  auto nowhere = saveBvh(dir / "missing_dir" / "x.bvh", clip);
+  ASSERT_FALSE(nowhere);
+  EXPECT_TRUE(nowhere.error().starts_with((dir / "missing_dir" / "x.bvh").string() + ": error: cannot create temporary file"));
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace imps::sim
