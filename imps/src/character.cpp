@@ -127,7 +127,8 @@ class CharacterBuilder {
             nb[b].insert(static_cast<uint32_t>(a));
           }
         }
-    } else {
+    } else if (!scene_.blendGroups.empty()) {
+      // A flat scene blends everything with everything; only BlendGroups need the pairs spelled out.
       for (size_t a = 0; a < n; ++a)
         for (size_t b = 0; b < n; ++b)
           if (a != b) nb[a].insert(static_cast<uint32_t>(b));

@@ -320,7 +320,13 @@ std::vector<Snap> thinFeatureSnaps(const Field& field, const Grid& g) {
     if (valueAt(gv) >= iso) return;  // already inside: nothing to preserve
     snaps.push_back({g.vertexKey(v.x, v.y, v.z), p, fp});
   };
+  // A primitive thicker than half a cell diagonal cannot be missed: for the additive blends with iso <= 1 every
+  // point within its own radius of its skeleton is inside (F >= its own term >= 1 >= iso), and the grid vertex
+  // nearest any skeleton point is within half a diagonal.
+  const float halfDiagonal = 0.5f * glm::length(g.cell);
+  const bool ownRadiusInside = field.blend().additive() && iso <= 1.0f;
   for (size_t i = 0; i < field.size(); ++i) {
+    if (ownRadiusInside && field.primitive(i).minRadius() > halfDiagonal) continue;
     skeletonPoints(field.primitive(i), step, points);
     // One candidate list for the skeleton and the grid vertices around it (values do not depend on the region).
     Box region;
@@ -371,6 +377,13 @@ std::vector<Snap> thinFeatureSnaps(const Field& field, const Grid& g) {
 void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& options, Mesh& out,
                                MarchingCubesStats* stats) {
   const auto start = std::chrono::steady_clock::now();
+  auto lap = [last = start]() mutable {
+    const auto now = std::chrono::steady_clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - last).count();
+    last = now;
+    return ms;
+  };
+  double phaseMs[5] = {};
   out.clear();
   const CaseTable& table = caseTable();
   const Grid g = makeGrid(field, options);
@@ -405,6 +418,7 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
     }
   }
 
+  phaseMs[0] = lap();
   // 2. Thin features: grid vertices moved onto skeleton points. Blocks holding one must be sampled.
   const std::vector<Snap> snaps = options.preserveThinFeatures && blockCount > 0 ? thinFeatureSnaps(field, g)
                                                                                  : std::vector<Snap>{};
@@ -423,11 +437,11 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
         }
   }
 
+  phaseMs[1] = lap();
   // 3. Per block: bound test, samples, owned edge vertices.
   const int threads = options.threads;
   const bool logSpace = field.blend().kind == BlendKind::Exponential;
   const float logIso = std::log(iso);
-  const float tolerance = logSpace ? 1e-5f : 1e-5f * iso;  // |ln F - ln iso| or |F - iso|
   parallelFor(blockCount, threads, [&](size_t b) {
     thread_local FieldScratch scratch;
     thread_local std::vector<glm::vec3> points;
@@ -488,11 +502,21 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
             // exponential blend it runs on ln F, which is close to linear along an edge (F is a sum of
             // exponentials of squared distances), so the first interpolation is already near the root.
             const glm::vec3 pa = points[s0], pb = points[s1];
-            auto transform = [&](float v) { return logSpace ? std::log(std::max(v, 1e-30f)) - logIso : v - iso; };
+            // F is exactly 0 beyond every support; clamping at the smallest non-zero term keeps ln F finite and the
+            // interpolation sensible.
+            auto transform = [&](float v) { return logSpace ? std::log(std::max(v, kExponentialCutoff)) - logIso : v - iso; };
             float ta = 0.0f, tb = 1.0f, ga = transform(f0), gb = transform(f1);
             float t = ga / (ga - gb);
+            // Scale-free stopping rule: |g| below 5e-4 of its change along the edge puts the vertex within about
+            // 5e-4 of an edge of the root where g is near linear, which the transform makes it.
+            const float tolerance = 5e-4f * std::abs(ga - gb);
             int side = 0;
-            for (int it = 0; it < options.rootIterations; ++it) {
+            // Edges from a vertex moved onto a thin limb span a much steeper field: give them more steps.
+            const bool moved = !r.moved.empty() && std::any_of(r.moved.begin(), r.moved.end(), [&](const auto& m) {
+              return m.first == s0 || m.first == s1;
+            });
+            const int iterations = moved ? std::max(options.rootIterations, 10) : options.rootIterations;
+            for (int it = 0; it < iterations; ++it) {
               const float gt = transform(field.value(pa + t * (pb - pa), scratch));
               if (std::abs(gt) <= tolerance) break;
               if ((gt > 0.0f) == (ga > 0.0f)) {
@@ -522,6 +546,7 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
         }
   }, 1);
 
+  phaseMs[2] = lap();
   // 4. Global vertex numbering in block order.
   uint32_t total = 0;
   for (BlockResult& r : st.blocks) {
@@ -624,6 +649,7 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
         }
   }, 1);
 
+  phaseMs[3] = lap();
   // 6. Concatenate in block order: edge vertices, then loop-centre vertices (numbered after all edge vertices).
   uint32_t centreBase = total;
   std::vector<uint32_t> centreBases(blockCount, 0);
@@ -647,7 +673,13 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
     for (uint32_t v : r.triangles) out.indices.push_back(v & kProvisional ? centreBases[b] + (v & ~kProvisional) : v);
   }
 
+  phaseMs[4] = lap();
   if (stats) {
+    stats->setupMs = phaseMs[0];
+    stats->thinFeaturesMs = phaseMs[1];
+    stats->sampleMs = phaseMs[2];
+    stats->triangulateMs = phaseMs[3];
+    stats->gatherMs = phaseMs[4];
     stats->cells = g.cells;
     stats->cellSize = g.cell;
     stats->origin = g.origin;

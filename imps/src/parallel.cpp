@@ -5,6 +5,9 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <map>
+#include <memory>
+#include <mutex>
 #include <thread>
 
 namespace imps {
@@ -21,8 +24,17 @@ void parallelFor(size_t n, int threads, const std::function<void(size_t)>& body,
     for (size_t i = 0; i < n; ++i) body(i);
     return;
   }
-  tbb::task_arena arena(t);
-  arena.execute([&] {
+  // One arena per thread count, created once (creating one costs more than meshing a small character).
+  static std::mutex mutex;
+  static std::map<int, std::unique_ptr<tbb::task_arena>> arenas;
+  tbb::task_arena* arena;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    auto& slot = arenas[t];
+    if (!slot) slot = std::make_unique<tbb::task_arena>(t);
+    arena = slot.get();
+  }
+  arena->execute([&] {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, grain), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t i = r.begin(); i != r.end(); ++i) body(i);
     });

@@ -1,163 +1,16 @@
-// The command line: `puppeteer <command> …`, one function per command.
+// The command line: `puppeteer <command> …`. Commands live in cli_<topic>.cpp and register themselves here.
 #include "cli.h"
 
 #include <CLI/CLI.hpp>
 
-#include <chrono>
-#include <cstdio>
-#include <string>
-
-#include "imps/character.h"
-#include "imps/marching_cubes.h"
-#include "imps/mesh_io.h"
-#include "imps/parallel.h"
-#include "imps/scene_reader.h"
-#include "imps/skeleton_cache.h"
-
 namespace imps::app {
-namespace {
-
-// Reads and compiles a scene, printing diagnostics to stderr. Returns false when it has errors.
-bool loadCharacter(const std::string& path, Scene& scene, std::optional<Character>& character) {
-  Diagnostics warnings;
-  auto read = readSceneFile(path, &warnings);
-  std::fputs(warnings.str().c_str(), stderr);
-  if (!read) {
-    std::fputs(read.error().str().c_str(), stderr);
-    return false;
-  }
-  scene = std::move(*read);
-  auto compiled = Character::fromScene(scene);
-  if (!compiled) {
-    std::fputs(compiled.error().str().c_str(), stderr);
-    return false;
-  }
-  character = std::move(*compiled);
-  return true;
-}
-
-struct MeshArgs {
-  std::string scene, output;
-  float cell = 0.0f;
-  int res = 0;
-  int threads = 0;
-  bool noThin = false;
-};
-
-int runMesh(const MeshArgs& a) {
-  Scene scene;
-  std::optional<Character> character;
-  if (!loadCharacter(a.scene, scene, character)) return kExitInvalidInput;
-
-  // Resolution: the command line, else the scene's MarchingCubes node, else 64 cells along the longest side.
-  MarchingCubesOptions options;
-  options.threads = a.threads;
-  options.preserveThinFeatures = !a.noThin;
-  if (const auto* mc = std::get_if<MarchingCubesNode>(&scene.polygonizer)) {
-    options.cellSize = mc->cellSize;
-    options.gridResolution = {mc->xResolution, mc->yResolution, mc->zResolution};
-    if (a.threads == 0) options.threads = mc->numThreads;
-  }
-  if (a.cell > 0.0f || a.res > 0) {
-    options.cellSize = a.cell;
-    options.gridResolution = glm::ivec3(0);
-    if (a.res > 0) options.resolution = a.res;
-  }
-
-  SkeletonCache skeleton(*character);
-  MarchingCubesStats stats;
-  const Mesh mesh = polygonize(skeleton.field(), options, &stats);
-  const MeshTopology topo = analyzeTopology(mesh);
-
-  std::string error;
-  const auto writeStart = std::chrono::steady_clock::now();
-  if (!writeMesh(mesh, a.output, &error)) {
-    std::fprintf(stderr, "puppeteer mesh: error: %s\n", error.c_str());
-    return kExitIoError;
-  }
-  const double writeMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - writeStart).count();
-  std::printf("%s: %zu vertices, %zu triangles, %s, polygonized in %.2f ms (grid %dx%dx%d, cell %.4g m, %d threads), "
-              "written in %.1f ms to %s\n",
-              a.scene.c_str(), mesh.vertexCount(), mesh.triangleCount(),
-              topo.closedManifold() ? "closed manifold" : "NOT closed", stats.milliseconds, stats.cells.x,
-              stats.cells.y, stats.cells.z, double(stats.cellSize.x), resolveThreads(options.threads), writeMs,
-              a.output.c_str());
-  if (stats.thinFeatureVertices > 0)
-    std::printf("note: %zu grid vertices moved onto thin limbs to keep them (cell larger than the limb)\n",
-                stats.thinFeatureVertices);
-  return kExitOk;
-}
-
-const char* kindName(PrimitiveKind k) {
-  switch (k) {
-    case PrimitiveKind::Metaball: return "Metaball";
-    case PrimitiveKind::Ellipsoid: return "Ellipsoid";
-    case PrimitiveKind::LineSeg: return "LineSeg";
-  }
-  return "?";
-}
-
-const char* blendName(BlendKind k) {
-  switch (k) {
-    case BlendKind::Exponential: return "ExponentialBlend";
-    case BlendKind::BlancSchlick: return "BlancSchlickBlend";
-    case BlendKind::Elliptical: return "EllipticalBlend";
-  }
-  return "?";
-}
-
-int runCheck(const std::string& path) {
-  Scene scene;
-  std::optional<Character> character;
-  if (!loadCharacter(path, scene, character)) return kExitInvalidInput;
-  const Character& c = *character;
-  std::printf("%s: valid, %s scene, %s, iso-value %g\n", path.c_str(), c.hierarchical() ? "hierarchical" : "flat",
-              blendName(c.blend().kind), double(c.isoValue()));
-
-  std::printf("joints (%zu):\n", c.joints().size());
-  std::vector<int> depth(c.joints().size(), 0);
-  for (size_t j = 0; j < c.joints().size(); ++j) {
-    const Joint& joint = c.joints()[j];
-    if (joint.parent >= 0) depth[j] = depth[size_t(joint.parent)] + 1;
-    std::printf("  %*s%s\n", 2 * depth[j], "", joint.name.c_str());
-  }
-  std::printf("primitives (%zu):\n", c.primitives().size());
-  for (const CharacterPrimitive& p : c.primitives()) {
-    std::printf("  %-14s %-9s joint %-14s blendParam %-7g colour %.2f %.2f %.2f\n", p.name.c_str(),
-                kindName(p.local.kind), p.joint >= 0 ? c.joints()[size_t(p.joint)].name.c_str() : "-",
-                double(p.blendParam), double(p.color.r), double(p.color.g), double(p.color.b));
-  }
-  std::printf("blend groups (%zu sets: each primitive blends only within a set; the field is the maximum):\n",
-              c.blendSets().count());
-  for (size_t s = 0; s < c.blendSets().count(); ++s) {
-    std::string line;
-    for (uint32_t m : c.blendSets().set(s)) line += (line.empty() ? "" : " ") + c.primitives()[m].name;
-    std::printf("  { %s }\n", line.c_str());
-  }
-  return kExitOk;
-}
-
-}  // namespace
 
 int runCli(int argc, char** argv) {
   CLI::App app{"IMPS Puppeteer: implicit-surface characters driven by joint-encoder armatures"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "puppeteer 0.1.0");
-
-  MeshArgs mesh;
-  CLI::App* meshCmd = app.add_subcommand("mesh", "Polygonize a scene with Marching Cubes and write OBJ, PLY or GLB");
-  meshCmd->add_option("scene", mesh.scene, "Scene file (.wrl)")->required()->check(CLI::ExistingFile);
-  meshCmd->add_option("-o,--output", mesh.output, "Output mesh: .obj, .ply or .glb")->required();
-  auto* cellOpt = meshCmd->add_option("--cell", mesh.cell, "Cell size in metres")->check(CLI::PositiveNumber);
-  meshCmd->add_option("--res", mesh.res, "Cells along the longest side of the surface's bounds")
-      ->check(CLI::Range(1, 4096))
-      ->excludes(cellOpt);
-  meshCmd->add_option("--threads", mesh.threads, "Worker threads (0: all cores)")->check(CLI::Range(0, 1024));
-  meshCmd->add_flag("--no-thin-features", mesh.noThin, "Do not move grid vertices onto limbs thinner than a cell");
-
-  std::string checkPath;
-  CLI::App* checkCmd = app.add_subcommand("check", "Validate a scene; list joints, primitives and blend groups");
-  checkCmd->add_option("scene", checkPath, "Scene file (.wrl)")->required();
+  Commands commands;
+  addSceneCommands(app, commands);
 
   try {
     app.parse(argc, argv);
@@ -171,8 +24,8 @@ int runCli(int argc, char** argv) {
     app.exit(e);
     return kExitUsage;
   }
-  if (meshCmd->parsed()) return runMesh(mesh);
-  if (checkCmd->parsed()) return runCheck(checkPath);
+  for (const Command& c : commands)
+    if (c.app->parsed()) return c.run();
   return kExitUsage;
 }
 

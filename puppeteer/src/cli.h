@@ -1,15 +1,32 @@
-// The command line: parses arguments and runs one command. Exit codes are documented in docs/cli.md.
+// The command line: every `puppeteer` command registers itself here. Exit codes are documented in docs/cli.md.
 #pragma once
+
+#include <functional>
+#include <vector>
+
+namespace CLI {
+class App;
+}
 
 namespace imps::app {
 
 // Exit codes of every command.
 enum ExitCode : int {
   kExitOk = 0,
-  kExitInvalidInput = 1,  // a scene (or other input file) has errors; they were printed as file:line:column
+  kExitInvalidInput = 1,  // an input file (scene, session, rig map …) has errors; printed as file:line:column
   kExitUsage = 2,         // bad command line
-  kExitIoError = 3,       // an output could not be written (nothing was overwritten)
+  kExitIoError = 3,       // an output could not be written (nothing was overwritten), or a device failed
 };
+
+// A registered subcommand and what runs it once its arguments are parsed.
+struct Command {
+  CLI::App* app = nullptr;
+  std::function<int()> run;
+};
+using Commands = std::vector<Command>;
+
+// Each command file adds its subcommands to `app` (cli_<topic>.cpp).
+void addSceneCommands(CLI::App& app, Commands& commands);  // mesh, check
 
 int runCli(int argc, char** argv);
 

@@ -66,7 +66,8 @@ class Character {
   bool hierarchical() const { return hierarchical_; }
   // Index of the joint with this name, or -1.
   int findJoint(std::string_view name) const;
-  // Primitives that primitive i blends with (ascending, excluding i).
+  // Primitives that primitive i blends with (ascending, excluding i). Empty for a flat scene without BlendGroups,
+  // where every primitive blends with every other (see hierarchical()).
   const std::vector<uint32_t>& blendNeighbours(size_t i) const { return neighbours_[i]; }
   // The sets the field takes its maximum over (field.h): {i} + neighbours(i) per primitive, with duplicates and
   // subsets removed; one set of everything for a flat scene.

@@ -101,6 +101,7 @@ class Field {
   std::vector<float> params_;
   std::vector<glm::vec3> colors_;
   std::vector<float> support_;
+  std::vector<float> supportSkip_;  // d beyond which a term is certainly nothing (support plus a rounding margin)
   std::vector<Box> supportBoxes_;
   BlendFunction blend_;
   BlendSets sets_;

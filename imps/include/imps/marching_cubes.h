@@ -42,9 +42,10 @@ struct MarchingCubesOptions {
   int resolution = 64;
   // Worker threads (0: all cores).
   int threads = 0;
-  // Most root-finding iterations per vertex after the initial interpolation (0: interpolation only); stops early
-  // once |ln F - ln iso| <= 1e-5 (exponential blend) or |F - iso| <= 1e-5 iso (the others).
-  int rootIterations = 8;
+  // Most root-finding iterations per vertex after the initial interpolation (0: interpolation only). They run on
+  // ln F for the exponential blend (F - iso for the others) and stop once that is within 5e-4 of its change
+  // along the edge.
+  int rootIterations = 6;
   bool preserveThinFeatures = true;
   bool computeNormals = true;
   bool computeColors = true;
@@ -56,7 +57,12 @@ struct MarchingCubesStats {
   glm::vec3 origin{0.0f};    // the grid's lowest corner
   size_t blocks = 0, blocksSampled = 0, blocksWithSurface = 0;
   size_t thinFeatureVertices = 0;  // grid vertices moved onto a skeleton
-  double milliseconds = 0.0;
+  double milliseconds = 0.0;       // the whole call; then its phases:
+  double setupMs = 0.0;            // surface bounds, grid, binning primitives into blocks
+  double thinFeaturesMs = 0.0;     // skeleton sampling and vertex moves
+  double sampleMs = 0.0;           // block bounds, samples, edge vertices (parallel)
+  double triangulateMs = 0.0;      // cell cases and triangles (parallel)
+  double gatherMs = 0.0;           // concatenation into the output mesh
 };
 
 // Polygonizes field's iso-surface. Reuses nothing between calls; see MarchingCubes for repeated use.

@@ -1,0 +1,76 @@
+#!/usr/bin/env bash
+# The command line as a user meets it: exit codes, messages, files written (and not clobbered on failure).
+# Usage: cli_test.sh PUPPETEER SOURCE_DIR
+set -u
+puppeteer=$1
+src=$2
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+passed=0
+failed=0
+
+expect() {  # expect NAME EXPECTED_EXIT COMMAND...
+  local name=$1 want=$2
+  shift 2
+  "$@" >"$work/out" 2>"$work/err"
+  local got=$?
+  if [ "$got" -eq "$want" ]; then
+    passed=$((passed + 1))
+  else
+    failed=$((failed + 1))
+    echo "FAIL: $name: exit $got, expected $want"
+    sed 's/^/  stdout: /' "$work/out" | head -5
+    sed 's/^/  stderr: /' "$work/err" | head -5
+  fi
+}
+check() {  # check NAME CONDITION...
+  local name=$1
+  shift
+  if "$@"; then passed=$((passed + 1)); else failed=$((failed + 1)); echo "FAIL: $name"; fi
+}
+
+expect "help" 0 "$puppeteer" --help
+expect "no command" 2 "$puppeteer"
+expect "unknown option" 2 "$puppeteer" mesh "$src/examples/flubber.wrl" -o "$work/x.ply" --bogus
+expect "cell and res together" 2 "$puppeteer" mesh "$src/examples/flubber.wrl" -o "$work/x.ply" --cell 0.1 --res 10
+
+# check: every example is valid and its listing names its joints.
+for f in "$src"/examples/*.wrl; do expect "check $(basename "$f")" 0 "$puppeteer" check "$f"; done
+"$puppeteer" check "$src/examples/simple_biped.wrl" >"$work/out"
+check "check lists the biped's joints" grep -q "L_Forearm" "$work/out"
+check "check lists 18 primitives" grep -q "primitives (18)" "$work/out"
+
+# check: a broken scene gives file:line:column errors and exit 1.
+printf '#VRML V2.0 utf8\nMetaball {\n  radius -2\n  centre 0 0 0\n}\n' >"$work/bad.wrl"
+expect "check bad scene" 1 "$puppeteer" check "$work/bad.wrl"
+check "error has file:line:column" grep -q "bad.wrl:3:[0-9]*: error:" "$work/err"
+check "misspelt field gets a suggestion" grep -q "did you mean 'center'" "$work/err"
+
+# mesh: each format is written, the mesh is reported closed.
+for ext in obj ply glb; do
+  expect "mesh to $ext" 0 "$puppeteer" mesh "$src/examples/flubber.wrl" --res 32 -o "$work/flubber.$ext"
+  check "mesh reports a closed manifold ($ext)" grep -q "closed manifold" "$work/out"
+  check "$ext file is not empty" test -s "$work/flubber.$ext"
+done
+check "glb magic" test "$(head -c 4 "$work/flubber.glb")" = "glTF"
+check "ply header" test "$(head -c 3 "$work/flubber.ply")" = "ply"
+
+# mesh: 1 thread and 2 threads write identical files.
+"$puppeteer" mesh "$src/examples/simple_biped.wrl" --cell 0.03 --threads 1 -o "$work/one.ply" >/dev/null
+"$puppeteer" mesh "$src/examples/simple_biped.wrl" --cell 0.03 --threads 2 -o "$work/two.ply" >/dev/null
+check "1 and 2 threads give identical files" cmp -s "$work/one.ply" "$work/two.ply"
+
+# mesh: a bad output is refused with exit 3 and the existing file is left alone.
+echo "precious" >"$work/keep.txt"
+expect "unknown output extension" 3 "$puppeteer" mesh "$src/examples/flubber.wrl" -o "$work/keep.txt"
+check "existing file untouched" grep -q "precious" "$work/keep.txt"
+expect "unwritable output directory" 3 "$puppeteer" mesh "$src/examples/flubber.wrl" -o "$work/no/such/dir/x.ply"
+expect "mesh of a bad scene" 1 "$puppeteer" mesh "$work/bad.wrl" -o "$work/bad.ply"
+check "no output for a bad scene" test ! -e "$work/bad.ply"
+
+# render: a PNG.
+expect "render" 0 "$puppeteer" render "$src/examples/beanito.wrl" --res 32 --width 64 --height 64 -o "$work/b.png"
+check "png magic" test "$(head -c 4 "$work/b.png" | tail -c 3)" = "PNG"
+
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]
