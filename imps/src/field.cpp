@@ -419,6 +419,80 @@ FieldSample Field::sample(const glm::vec3& x, FieldScratch& scratch) const {
   return out;
 }
 
+void Field::samples(std::span<const glm::vec3> points, std::span<FieldSample> out, FieldScratch& scratch) const {
+  IMPS_CHECK_EQ(points.size(), out.size());
+  const size_t n = points.size();
+  if (!blend_.additive()) {
+    for (size_t i = 0; i < n; ++i) out[i] = sample(points[i], scratch);
+    return;
+  }
+  const auto& cand = scratch.candidates;
+  const size_t sets = scratch.setCount();
+  scratch.xs.resize(n);
+  scratch.ys.resize(n);
+  scratch.zs.resize(n);
+  scratch.term.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    scratch.xs[i] = points[i].x;
+    scratch.ys[i] = points[i].y;
+    scratch.zs[i] = points[i].z;
+    out[i] = FieldSample{};
+  }
+  if (sets == 0) return;
+  // Pass 1: every candidate's distances and terms, accumulated per set as values() does.
+  scratch.dist.resize(cand.size() * n);
+  scratch.terms.resize(cand.size() * n);
+  scratch.acc.assign(sets * n, 0.0f);
+  for (size_t k = 0; k < cand.size(); ++k) {
+    if (scratch.memberOffsets[k] == scratch.memberOffsets[k + 1]) continue;
+    terms(cand[k], n, scratch);
+    std::copy(scratch.term.begin(), scratch.term.begin() + long(n), scratch.terms.begin() + long(k * n));
+    for (uint32_t m = scratch.memberOffsets[k]; m < scratch.memberOffsets[k + 1]; ++m) {
+      float* acc = scratch.acc.data() + size_t(scratch.memberSets[m]) * n;
+      for (size_t i = 0; i < n; ++i) acc[i] += scratch.term[i];
+    }
+  }
+  // The winning set of each point (the first maximum, as sample() picks it) and the value.
+  scratch.winner.assign(n, 0);
+  for (size_t i = 0; i < n; ++i) {
+    float best = -1.0f;
+    for (size_t s = 0; s < sets; ++s)
+      if (scratch.acc[s * n + i] > best) {
+        best = scratch.acc[s * n + i];
+        scratch.winner[i] = uint32_t(s);
+      }
+    out[i].value = std::max(best, 0.0f);
+    out[i].color = glm::vec3(0.0f);
+  }
+  // Pass 2: gradient, colour and owner from the members of each point's winning set.
+  std::vector<float>& weightSum = scratch.term;  // reused: per-point total weight
+  std::fill(weightSum.begin(), weightSum.begin() + long(n), 0.0f);
+  thread_local std::vector<float> bestWeight;
+  bestWeight.assign(n, -1.0f);
+  for (size_t k = 0; k < cand.size(); ++k) {
+    const uint32_t first = scratch.memberOffsets[k], last = scratch.memberOffsets[k + 1];
+    if (first == last) continue;
+    const uint32_t p = cand[k];
+    const float* t = scratch.terms.data() + k * n;
+    for (size_t i = 0; i < n; ++i) {
+      if (t[i] <= 0.0f) continue;
+      bool member = false;
+      for (uint32_t m = first; m < last && !member; ++m) member = scratch.memberSets[m] == scratch.winner[i];
+      if (!member) continue;
+      glm::vec3 gd;
+      const float d = primitives_[p].distance(points[i], gd);
+      out[i].gradient += blend_.termDerivative(d, params_[p]) * gd;
+      out[i].color += t[i] * colors_[p];
+      weightSum[i] += t[i];
+      if (t[i] > bestWeight[i]) {
+        bestWeight[i] = t[i];
+        out[i].owner = int(p);
+      }
+    }
+  }
+  for (size_t i = 0; i < n; ++i) out[i].color = weightSum[i] > 0.0f ? out[i].color / weightSum[i] : glm::vec3(0.8f);
+}
+
 float Field::upperBound(const Box& box, const FieldScratch& scratch) const {
   const auto& cand = scratch.candidates;
   if (!blend_.additive()) {

@@ -264,6 +264,13 @@ struct BlockResult {
   uint32_t base = 0;
 };
 
+// Root finding state of one crossing edge: the bracket [ta, tb] along pa -> pb with transformed values ga, gb.
+struct EdgeRoot {
+  glm::vec3 pa, pb;
+  float ta = 0.0f, tb = 1.0f, ga = 0.0f, gb = 0.0f, t = 0.0f, tolerance = 0.0f;
+  int side = 0, iterations = 0;
+};
+
 inline int sampleIndex(int i, int j, int k) { return i + kBlockVerts * (j + kBlockVerts * k); }
 inline int ownedEdgeIndex(int axis, int i, int j, int k) { return axis * kBlock * kBlock * kBlock + i + kBlock * (j + kBlock * k); }
 
@@ -442,6 +449,10 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
   const int threads = options.threads;
   const bool logSpace = field.blend().kind == BlendKind::Exponential;
   const float logIso = std::log(iso);
+  // Root finding runs on ln F for the exponential blend: close to linear along an edge (F is a sum of exponentials
+  // of squared distances), so the first interpolation is already near the root. F is exactly 0 beyond every
+  // support; clamping at the smallest non-zero term keeps ln F finite.
+  auto transform = [&](float v) { return logSpace ? std::log(std::max(v, kExponentialCutoff)) - logIso : v - iso; };
   parallelFor(blockCount, threads, [&](size_t b) {
     thread_local FieldScratch scratch;
     thread_local std::vector<glm::vec3> points;
@@ -488,6 +499,9 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
     r.hasSurface = anyIn && anyOut;
     if (!r.hasSurface) return;
 
+    // Crossing edges owned by this block, in the order that numbers their vertices.
+    thread_local std::vector<EdgeRoot> edges;
+    edges.clear();
     r.edgeVertex.assign(kBlockEdges, -1);
     for (int k = 0; k < kBlock; ++k)
       for (int j = 0; j < kBlock; ++j)
@@ -498,52 +512,93 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
             const int s1 = s0 + (axis == 0 ? 1 : axis == 1 ? kBlockVerts : kBlockVerts * kBlockVerts);
             const float f1 = r.samples[s1];
             if ((f0 >= iso) == (f1 >= iso)) continue;
-            // Illinois root finding on the true field between the two (possibly moved) sample positions. For the
-            // exponential blend it runs on ln F, which is close to linear along an edge (F is a sum of
-            // exponentials of squared distances), so the first interpolation is already near the root.
-            const glm::vec3 pa = points[s0], pb = points[s1];
-            // F is exactly 0 beyond every support; clamping at the smallest non-zero term keeps ln F finite and the
-            // interpolation sensible.
-            auto transform = [&](float v) { return logSpace ? std::log(std::max(v, kExponentialCutoff)) - logIso : v - iso; };
-            float ta = 0.0f, tb = 1.0f, ga = transform(f0), gb = transform(f1);
-            float t = ga / (ga - gb);
+            r.edgeVertex[ownedEdgeIndex(axis, i, j, k)] = int32_t(edges.size());
+            EdgeRoot e;
+            e.pa = points[s0];
+            e.pb = points[s1];
+            e.ga = transform(f0);
+            e.gb = transform(f1);
+            e.t = e.ga / (e.ga - e.gb);
             // Scale-free stopping rule: |g| below 5e-4 of its change along the edge puts the vertex within about
             // 5e-4 of an edge of the root where g is near linear, which the transform makes it.
-            const float tolerance = 5e-4f * std::abs(ga - gb);
-            int side = 0;
+            e.tolerance = 5e-4f * std::abs(e.ga - e.gb);
             // Edges from a vertex moved onto a thin limb span a much steeper field: give them more steps.
             const bool moved = !r.moved.empty() && std::any_of(r.moved.begin(), r.moved.end(), [&](const auto& m) {
               return m.first == s0 || m.first == s1;
             });
-            const int iterations = moved ? std::max(options.rootIterations, 10) : options.rootIterations;
-            for (int it = 0; it < iterations; ++it) {
-              const float gt = transform(field.value(pa + t * (pb - pa), scratch));
-              if (std::abs(gt) <= tolerance) break;
-              if ((gt > 0.0f) == (ga > 0.0f)) {
-                ta = t;
-                ga = gt;
-                if (side == -1) gb *= 0.5f;
-                side = -1;
-              } else {
-                tb = t;
-                gb = gt;
-                if (side == 1) ga *= 0.5f;
-                side = 1;
-              }
-              t = ta + (tb - ta) * ga / (ga - gb);
-            }
-            const glm::vec3 x = pa + t * (pb - pa);
-            r.edgeVertex[ownedEdgeIndex(axis, i, j, k)] = int32_t(r.positions.size() / 3);
-            r.positions.insert(r.positions.end(), {x.x, x.y, x.z});
-            if (options.computeNormals || options.computeColors) {
-              const FieldSample fs = field.sample(x, scratch);
-              const float len = glm::length(fs.gradient);
-              const glm::vec3 n = len > 0.0f ? -fs.gradient / len : glm::normalize(pb - pa) * (f0 >= iso ? 1.0f : -1.0f);
-              if (options.computeNormals) r.normals.insert(r.normals.end(), {n.x, n.y, n.z});
-              if (options.computeColors) r.colors.insert(r.colors.end(), {fs.color.x, fs.color.y, fs.color.z});
-            }
+            e.iterations = moved ? std::max(options.rootIterations, 10) : options.rootIterations;
+            edges.push_back(e);
           }
         }
+
+    // Illinois root finding on the true field, every unfinished edge of the block evaluated in one batch per step.
+    thread_local std::vector<uint32_t> active, stillActive;
+    thread_local std::vector<glm::vec3> at;
+    thread_local std::vector<float> values;
+    active.clear();
+    for (uint32_t e = 0; e < edges.size(); ++e)
+      if (edges[e].iterations > 0) active.push_back(e);
+    for (int it = 0; !active.empty(); ++it) {
+      at.resize(active.size());
+      values.resize(active.size());
+      for (size_t q = 0; q < active.size(); ++q) {
+        const EdgeRoot& e = edges[active[q]];
+        at[q] = e.pa + e.t * (e.pb - e.pa);
+      }
+      field.values(at, values, scratch);
+      stillActive.clear();
+      for (size_t q = 0; q < active.size(); ++q) {
+        EdgeRoot& e = edges[active[q]];
+        const float gt = transform(values[q]);
+        if (std::abs(gt) <= e.tolerance) continue;
+        if ((gt > 0.0f) == (e.ga > 0.0f)) {
+          e.ta = e.t;
+          e.ga = gt;
+          if (e.side == -1) e.gb *= 0.5f;
+          e.side = -1;
+        } else {
+          e.tb = e.t;
+          e.gb = gt;
+          if (e.side == 1) e.ga *= 0.5f;
+          e.side = 1;
+        }
+        e.t = e.ta + (e.tb - e.ta) * e.ga / (e.ga - e.gb);
+        if (it + 1 < e.iterations) stillActive.push_back(active[q]);
+      }
+      active.swap(stillActive);
+    }
+
+    // Vertices, with normals and colours from one batched evaluation.
+    at.resize(edges.size());
+    for (size_t q = 0; q < edges.size(); ++q) at[q] = edges[q].pa + edges[q].t * (edges[q].pb - edges[q].pa);
+    r.positions.resize(3 * edges.size());
+    for (size_t q = 0; q < edges.size(); ++q) {
+      r.positions[3 * q] = at[q].x;
+      r.positions[3 * q + 1] = at[q].y;
+      r.positions[3 * q + 2] = at[q].z;
+    }
+    if (options.computeNormals || options.computeColors) {
+      thread_local std::vector<FieldSample> fs;
+      fs.resize(edges.size());
+      field.samples(at, fs, scratch);
+      if (options.computeNormals) r.normals.resize(3 * edges.size());
+      if (options.computeColors) r.colors.resize(3 * edges.size());
+      for (size_t q = 0; q < edges.size(); ++q) {
+        const float len = glm::length(fs[q].gradient);
+        const glm::vec3 n = len > 0.0f ? -fs[q].gradient / len
+                                       : glm::normalize(edges[q].pb - edges[q].pa) * (edges[q].ga >= 0.0f ? 1.0f : -1.0f);
+        if (options.computeNormals) {
+          r.normals[3 * q] = n.x;
+          r.normals[3 * q + 1] = n.y;
+          r.normals[3 * q + 2] = n.z;
+        }
+        if (options.computeColors) {
+          r.colors[3 * q] = fs[q].color.x;
+          r.colors[3 * q + 1] = fs[q].color.y;
+          r.colors[3 * q + 2] = fs[q].color.z;
+        }
+      }
+    }
   }, 1);
 
   phaseMs[2] = lap();

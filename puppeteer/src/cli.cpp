@@ -11,6 +11,8 @@ int runCli(int argc, char** argv) {
   app.set_version_flag("--version", "puppeteer 0.1.0");
   Commands commands;
   addSceneCommands(app, commands);
+  addDeviceCommands(app, commands);
+  addTesselatorCommands(app, commands);
 
   try {
     app.parse(argc, argv);

@@ -27,6 +27,8 @@ using Commands = std::vector<Command>;
 
 // Each command file adds its subcommands to `app` (cli_<topic>.cpp).
 void addSceneCommands(CLI::App& app, Commands& commands);  // mesh, check
+void addDeviceCommands(CLI::App& app, Commands& commands);  // devices, sim, record
+void addTesselatorCommands(CLI::App& app, Commands& commands);  // bench
 
 int runCli(int argc, char** argv);
 

@@ -14,6 +14,7 @@
 #include "imps/parallel.h"
 #include "imps/scene_reader.h"
 #include "imps/skeleton_cache.h"
+#include "imps/tesselator.h"
 #include "snapshot.h"
 
 namespace imps::app {
@@ -44,7 +45,45 @@ struct MeshArgs {
   int res = 0;
   int threads = 0;
   bool noThin = false;
+  std::string polygonizer = "mc";
+  int updates = 0;  // particles: 0 = until settled
+  bool check = false;
 };
+
+// With --check: the mesh's topology, one line, and whether it is a closed 2-manifold.
+bool reportTopology(const Mesh& mesh) {
+  const MeshTopology t = analyzeTopology(mesh);
+  std::printf("topology: %s: %zu boundary edges, %zu non-manifold edges, %zu non-manifold vertices, %zu orientation "
+              "conflicts, %zu components, Euler characteristic %ld\n",
+              t.closedManifold() ? "closed 2-manifold" : "NOT a closed 2-manifold", t.boundaryEdges,
+              t.nonManifoldEdges, t.nonManifoldVertices, t.orientationConflicts, t.components, t.eulerCharacteristic);
+  return t.closedManifold();
+}
+
+// --polygonizer particles: the tesselator run until settled (or --updates N), its triangulation written.
+int runParticleMesh(const MeshArgs& a, const Scene& scene, const SkeletonCache& skeleton) {
+  TesselatorOptions options;
+  if (const auto* node = std::get_if<Tesselator3MPNode>(&scene.polygonizer)) options = TesselatorOptions::fromNode(*node);
+  if (a.threads > 0) options.numThreads = a.threads;
+  Tesselator tess(options);
+  Mesh mesh;
+  int updates = a.updates;
+  if (updates > 0) {
+    for (int u = 0; u < updates; ++u) tess.update(skeleton);
+    tess.triangulate(mesh);
+  } else {
+    updates = tess.settle(skeleton, mesh);
+  }
+  std::string error;
+  if (!writeMesh(mesh, a.output, &error)) {
+    std::fprintf(stderr, "puppeteer mesh: error: %s\n", error.c_str());
+    return kExitIoError;
+  }
+  std::printf("%s: %zu particles, %zu triangles after %d updates, written to %s\n", a.scene.c_str(),
+              mesh.vertexCount(), mesh.triangleCount(), updates, a.output.c_str());
+  if (a.check) reportTopology(mesh);
+  return kExitOk;
+}
 
 int runMesh(const MeshArgs& a) {
   Scene scene;
@@ -67,9 +106,9 @@ int runMesh(const MeshArgs& a) {
   }
 
   SkeletonCache skeleton(*character);
+  if (a.polygonizer == "particles") return runParticleMesh(a, scene, skeleton);
   MarchingCubesStats stats;
   const Mesh mesh = polygonize(skeleton.field(), options, &stats);
-  const MeshTopology topo = analyzeTopology(mesh);
 
   std::string error;
   const auto writeStart = std::chrono::steady_clock::now();
@@ -78,15 +117,15 @@ int runMesh(const MeshArgs& a) {
     return kExitIoError;
   }
   const double writeMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - writeStart).count();
-  std::printf("%s: %zu vertices, %zu triangles, %s, polygonized in %.2f ms (grid %dx%dx%d, cell %.4g m, %d threads), "
+  std::printf("%s: %zu vertices, %zu triangles, polygonized in %.2f ms (grid %dx%dx%d, cell %.4g m, %d threads), "
               "written in %.1f ms to %s\n",
-              a.scene.c_str(), mesh.vertexCount(), mesh.triangleCount(),
-              topo.closedManifold() ? "closed manifold" : "NOT closed", stats.milliseconds, stats.cells.x,
+              a.scene.c_str(), mesh.vertexCount(), mesh.triangleCount(), stats.milliseconds, stats.cells.x,
               stats.cells.y, stats.cells.z, double(stats.cellSize.x), resolveThreads(options.threads), writeMs,
               a.output.c_str());
   if (stats.thinFeatureVertices > 0)
     std::printf("note: %zu grid vertices moved onto thin limbs to keep them (cell larger than the limb)\n",
                 stats.thinFeatureVertices);
+  if (a.check) reportTopology(mesh);
   return kExitOk;
 }
 
@@ -186,6 +225,11 @@ void addSceneCommands(CLI::App& app, Commands& commands) {
       ->excludes(cellOpt);
   meshCmd->add_option("--threads", mesh->threads, "Worker threads (0: all cores)")->check(CLI::Range(0, 1024));
   meshCmd->add_flag("--no-thin-features", mesh->noThin, "Do not move grid vertices onto limbs thinner than a cell");
+  meshCmd->add_flag("--check", mesh->check, "Also verify and print the mesh's topology (closed, manifold, components)");
+  meshCmd->add_option("--polygonizer", mesh->polygonizer, "mc (Marching Cubes, default) or particles (Tesselator3MP)")
+      ->check(CLI::IsMember({"mc", "particles"}));
+  meshCmd->add_option("--updates", mesh->updates, "particles: updates to run (default: until settled)")
+      ->check(CLI::Range(1, 1000000));
   commands.push_back({meshCmd, [mesh] { return runMesh(*mesh); }});
 
   auto checkPath = std::make_shared<std::string>();

@@ -48,8 +48,8 @@ check "misspelt field gets a suggestion" grep -q "did you mean 'center'" "$work/
 
 # mesh: each format is written, the mesh is reported closed.
 for ext in obj ply glb; do
-  expect "mesh to $ext" 0 "$puppeteer" mesh "$src/examples/flubber.wrl" --res 32 -o "$work/flubber.$ext"
-  check "mesh reports a closed manifold ($ext)" grep -q "closed manifold" "$work/out"
+  expect "mesh to $ext" 0 "$puppeteer" mesh "$src/examples/flubber.wrl" --res 32 --check -o "$work/flubber.$ext"
+  check "mesh reports a closed manifold ($ext)" grep -q "topology: closed 2-manifold" "$work/out"
   check "$ext file is not empty" test -s "$work/flubber.$ext"
 done
 check "glb magic" test "$(head -c 4 "$work/flubber.glb")" = "glTF"

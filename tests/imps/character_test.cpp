@@ -107,7 +107,9 @@ TEST(Character, BlendSetsHoldEachPrimitiveWithItsNeighboursWithoutSubsets) {
   // ... and no kept set is contained in another.
   for (size_t a = 0; a < sets.count(); ++a)
     for (size_t b = 0; b < sets.count(); ++b)
-      if (a != b) EXPECT_FALSE(std::includes(sets.set(b).begin(), sets.set(b).end(), sets.set(a).begin(), sets.set(a).end()));
+      if (a != b) {
+        EXPECT_FALSE(std::includes(sets.set(b).begin(), sets.set(b).end(), sets.set(a).begin(), sets.set(a).end()));
+      }
 }
 
 TEST(Character, FlatSceneBlendsEverything) {

@@ -141,7 +141,9 @@ TEST(Field, SurfaceBoundsEncloseTheSurface) {
   std::uniform_real_distribution<float> w(-4, 4);
   for (int n = 0; n < 20000; ++n) {
     const glm::vec3 x(w(rng), w(rng), w(rng));
-    if (f.value(x) >= 1.0f) EXPECT_TRUE(sb.contains(x));
+    if (f.value(x) >= 1.0f) {
+      EXPECT_TRUE(sb.contains(x));
+    }
   }
   EXPECT_LT(sb.size().x, f.bounds().size().x) << "tighter than the supports";
 }

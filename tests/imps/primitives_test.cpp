@@ -131,7 +131,9 @@ TEST(Primitives, BoundsEncloseTheRegionAndDistanceBoundsAreConservative) {
     const Box b = p.bounds(3.0f);
     for (int n = 0; n < 3000; ++n) {
       const glm::vec3 x = randomPoint(rng, 3.0f);
-      if (p.distance(x) <= 3.0f) EXPECT_TRUE(b.contains(x));
+      if (p.distance(x) <= 3.0f) {
+        EXPECT_TRUE(b.contains(x));
+      }
     }
     for (int n = 0; n < 200; ++n) {
       Box box;

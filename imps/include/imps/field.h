@@ -44,6 +44,8 @@ struct FieldScratch {
   std::vector<uint32_t> setOffsets, setMembers;  // local sets (CSR over candidate positions), deduplicated
   std::vector<uint32_t> memberOffsets, memberSets;  // for each candidate, the local sets holding it (CSR)
   std::vector<float> xs, ys, zs, term, acc;      // points (SoA), one primitive's terms, per-set accumulators
+  std::vector<float> dist, terms;                // samples(): every candidate's distances and terms
+  std::vector<uint32_t> winner;                  // samples(): each point's winning set
   std::vector<int32_t> globalToLocal;
   size_t setCount() const { return setOffsets.size() - 1; }
 };
@@ -87,6 +89,8 @@ class Field {
   void values(std::span<const glm::vec3> points, std::span<float> out, FieldScratch& scratch) const;
   float value(const glm::vec3& x, FieldScratch& scratch) const;
   FieldSample sample(const glm::vec3& x, FieldScratch& scratch) const;
+  // sample() at many points at once, vectorised; identical results.
+  void samples(std::span<const glm::vec3> points, std::span<FieldSample> out, FieldScratch& scratch) const;
 
   // Conservative bounds of F over a box inside the prepared region: lower <= F(x) <= upper for all x in box.
   float upperBound(const Box& box, const FieldScratch& scratch) const;

@@ -1,0 +1,142 @@
+// The particle polygonizer (Tesselator3MP, thesis 3.4-3.8 and appendix A): Witkin-Heckbert particles that follow a
+// character's surface from frame to frame, triangulated every render into a closed mesh.
+//
+// Based on: A. Witkin and P. Heckbert, "Using Particles to Sample and Control Implicit Surfaces", SIGGRAPH 1994;
+//           H. Pedersen's simplified radius update (as adopted in the thesis, 3.4);
+//           P. Heckbert, "Fast Surface Particle Repulsion", 1997 (uniform hash);
+//           K. Russell, "IMPS", MIT 1999, 3.4-3.8 (ownership, differential transforms, approximate triangulation,
+//           parallel compute / sequential update).
+//
+// One update (update()):
+//   1. differential transforms: every particle moves rigidly with its owner's joint since the last update;
+//   2. spatial sort and uniform hash rebuild (sequential);
+//   3. compute phase (parallel, fixed partition): field sample, neighbour cache, repulsion velocity constrained to
+//      the surface, radius rate (Pedersen), ownership transfer to blend neighbours only;
+//   4. integration (parallel, each particle writes only itself): clamped step, one Newton projection onto the surface;
+//   5. add/delete phase (sequential, particle order): strays killed, fusion, death, fission.
+// triangulate() builds the mesh: tangent-plane Delaunay fans (Voronoi cells of the projected neighbours) voted on by
+// all three corners, assembled without non-manifold edges, then the remaining boundary loops are filled.
+// docs/tesselator.md describes every choice and what differs from the thesis.
+//
+// Determinism: for a fixed seed and thread count (and in fact for any thread count) the same calls give the same
+// particles and meshes: randomness comes from per-particle streams (seed, particle id, update number), parallel passes
+// write per-particle outputs only, and every sequential pass runs in particle order.
+// Thread safety: one owner calls everything; the worker threads are internal.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "imps/mesh.h"
+#include "imps/scene.h"
+
+namespace imps {
+
+class Field;
+class SkeletonCache;
+class Character;
+
+struct TesselatorOptions {
+  // Figure A-1 fields (lengths in metres, deltaT in the simulation's time unit).
+  float deltaT = 0.045f;         // integration step
+  float desiredRadius = 0.3f;    // sigma-hat: target particle repulsion radius = target spacing (edge length)
+  float queryRadius = 0.8f;      // neighbour-cache radius (energies beyond it are ignored)
+  float energyCoeff = 10.0f;     // alpha: repulsion energy amplitude
+  float surfaceCoeff = 30.0f;    // phi: feedback pulling particles onto the surface
+  float fissioningFrac = 0.5f;   // nu: a large particle fissions once its energy exceeds nu * E-hat
+  float isoValue = 1.0f;         // informative: the field's own iso-value is used (they agree for scene files)
+  bool useSimpleRadii = true;    // Pedersen's radius rule (true) or Witkin-Heckbert's original (false)
+  int numThreads = 1;            // worker threads for the compute phase (0: all cores)
+  int updatesPerRender = 1;      // updates per frame() (the triangulation runs once per frame)
+  float colorWidth = 3.0f;       // > 0: colour blending width; larger blends primitive colours over a wider band
+  bool doDifferentialTransforms = true;
+  float cubeSize = 0.6f;         // UniformHash cubeSize
+  int bitsPerDim = 3;            // UniformHash bitsPerDim (clamped to [1, 7])
+  // Ours.
+  uint64_t seed = 1;             // random streams: same seed (and same calls) => same meshes
+  size_t maxParticles = 1u << 20;  // fission stops at this many particles
+  int maxHoleLoop = 40;          // boundary loops up to this many edges are filled by the hole repair
+
+  // From a scene's Tesselator3MP node (every figure A-1 field plus seed).
+  static TesselatorOptions fromNode(const Tesselator3MPNode& node);
+};
+
+// Milliseconds and counts, per call (the phases of thesis Table 3.1).
+struct TesselatorStats {
+  double simulateMs = 0.0;   // last update(): differential transforms, hash, compute and integration
+  double addDeleteMs = 0.0;  // last update(): sequential additions and deletions
+  double meshMs = 0.0;       // last triangulate()
+  size_t particles = 0;
+  size_t triangles = 0;      // last triangulate()
+  size_t boundaryEdges = 0;  // last triangulate(): edges with one triangle left after hole repair
+  size_t filledTriangles = 0;  // last triangulate(): triangles added by the hole repair
+  size_t unfilledLoops = 0;    // last triangulate(): boundary loops the repair could not close
+  uint64_t updates = 0;        // total update() calls since reset
+  // Totals since reset.
+  uint64_t fissions = 0, deaths = 0, fusions = 0, strays = 0, reseeds = 0;
+  uint64_t transfers = 0;         // ownership changes (always to the owner or one of its blend neighbours)
+  uint64_t blockedTransfers = 0;  // field owner was not a blend neighbour: ownership kept
+};
+
+// Read-only view of the particles, for display and tests (valid until the next non-const call).
+struct ParticleView {
+  std::span<const glm::vec3> positions;  // world space, metres
+  std::span<const glm::vec3> normals;    // unit, outward (down the field gradient) at the last compute phase
+  std::span<const float> radii;          // repulsion radius sigma, metres
+  std::span<const int32_t> owners;       // owning primitive (Field index), -1 if none
+  std::span<const uint64_t> ids;         // stable per-particle id (new ids for fissioned particles)
+  size_t size() const { return positions.size(); }
+};
+
+class Tesselator {
+ public:
+  explicit Tesselator(const TesselatorOptions& options = {});
+  ~Tesselator();
+  Tesselator(const Tesselator&) = delete;
+  Tesselator& operator=(const Tesselator&) = delete;
+
+  const TesselatorOptions& options() const { return options_; }
+
+  // Drops every particle; the next update() seeds from every primitive of the field.
+  void reset();
+
+  // One particle update against the cache's current field. If the skeleton was updated since the last call and
+  // differential transforms are on, particles first move with their owners' joints (call once per skeleton update;
+  // a skipped generation loses that frame's differential). The character must be the one the cache was built from.
+  void update(const SkeletonCache& skeleton);
+  // One update against a bare field (flat use; no hierarchy, no differential transforms, any owner may take over).
+  void update(const Field& field);
+
+  // Triangulates the current particles into `mesh` (replaced): one vertex per particle, in particle order, projected
+  // onto the surface with a Newton step; outward normals; colours blended over colorWidth. Uses the field of the last
+  // update (which must have happened).
+  void triangulate(Mesh& mesh);
+
+  // updatesPerRender updates then one triangulation.
+  void frame(const SkeletonCache& skeleton, Mesh& mesh);
+
+  // Runs updates until settled (particle count stable to 1% over 10 updates, and the mesh closed) or maxUpdates;
+  // returns the number of updates run. Leaves the last triangulation in `mesh`.
+  int settle(const SkeletonCache& skeleton, Mesh& mesh, int maxUpdates = 400);
+
+  ParticleView particles() const;
+  const TesselatorStats& stats() const { return stats_; }
+
+  struct State;  // opaque: defined in the implementation
+
+ private:
+  void step(const Field& field, const SkeletonCache* skeleton);
+  TesselatorOptions options_;
+  TesselatorStats stats_;
+  std::unique_ptr<State> s_;
+};
+
+// The worst distance from points to a triangle mesh (metres): for each point the distance to the nearest triangle,
+// searched within `searchRadius` (a point with no triangle that near counts as searchRadius). For accuracy reports.
+double worstDistanceToMesh(const Mesh& mesh, std::span<const glm::vec3> points, float searchRadius);
+
+}  // namespace imps

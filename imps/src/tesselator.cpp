@@ -1,0 +1,410 @@
+// The particle tesselator's simulation: differential transforms, compute phase, integration, additions/deletions.
+//
+// Based on: A. Witkin and P. Heckbert, "Using Particles to Sample and Control Implicit Surfaces", 1994;
+//           H. Pedersen's radius update and K. Russell, "IMPS", MIT 1999, 3.4-3.8.
+#include "imps/tesselator.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "imps/parallel.h"
+#include "imps/skeleton_cache.h"
+#include "tesselator_state.h"
+
+namespace imps {
+namespace {
+
+// Witkin-Heckbert constants, in units where desiredRadius = 1 (see docs/tesselator.md: the radius rule is scale
+// dependent in metres, so the simulation runs in units of desiredRadius).
+constexpr float kRho = 15.0f;          // energy feedback
+constexpr float kBeta = 10.0f;         // keeps the radius rate finite without neighbours
+constexpr float kSigmaMin = 0.25f;     // radius clamp
+constexpr float kSigmaMax = 1.5f;      // radius clamp; a particle this large always fissions
+constexpr float kSigmaFission = 1.25f; // a particle larger than this fissions when energised (energy > nu E-hat)
+constexpr float kSigmaDeath = 0.7f;    // a particle smaller than this may die
+constexpr float kDeathChance = 0.25f;  // per update
+constexpr float kFusionDistance = 0.35f;  // two particles closer than this fuse
+constexpr float kMaxStep = 0.3f;       // the most a particle moves per update
+constexpr float kMaxNewton = 0.5f;     // the longest Newton projection step
+constexpr float kStrayDistance = 1.0f; // |F - iso| / |grad F| beyond this: the particle left the surface
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+Box chunkBox(const std::vector<glm::vec3>& p, size_t begin, size_t end, float pad) {
+  Box b;
+  for (size_t i = begin; i < end; ++i)
+    if (finite3(p[i])) b.extend(p[i]);
+  if (!b.empty()) {
+    b.lo -= glm::vec3(pad);
+    b.hi += glm::vec3(pad);
+  }
+  return b;
+}
+
+// E-hat: the energy a particle of radius desiredRadius feels in a hexagonal packing of spacing desiredRadius, with
+// neighbours beyond queryRadius ignored (the cache's truncation), so that the packing is the radius rule's fixpoint.
+float desiredEnergy(const TesselatorOptions& o) {
+  const float q = o.queryRadius / o.desiredRadius;
+  float e = 0.0f;
+  for (int a = -8; a <= 8; ++a)
+    for (int b = -8; b <= 8; ++b) {
+      if (a == 0 && b == 0) continue;
+      const float x = float(a) + 0.5f * float(b), y = 0.8660254f * float(b);
+      const float r2 = x * x + y * y;
+      if (r2 <= q * q) e += o.energyCoeff * std::exp(-0.5f * r2);
+    }
+  return std::max(e, 1e-3f);
+}
+
+}  // namespace
+
+TesselatorOptions TesselatorOptions::fromNode(const Tesselator3MPNode& n) {
+  TesselatorOptions o;
+  o.deltaT = n.deltaT;
+  o.desiredRadius = n.desiredRadius;
+  o.queryRadius = n.queryRadius;
+  o.energyCoeff = n.energyCoeff;
+  o.surfaceCoeff = n.surfaceCoeff;
+  o.fissioningFrac = n.fissioningFrac;
+  o.isoValue = n.isoValue;
+  o.useSimpleRadii = n.useSimpleRadii;
+  o.numThreads = n.numThreads;
+  o.updatesPerRender = n.updatesPerRender;
+  o.colorWidth = n.colorWidth;
+  o.doDifferentialTransforms = n.doDifferentialTransforms;
+  o.cubeSize = n.spatialSubdivision.cubeSize;
+  o.bitsPerDim = n.spatialSubdivision.bitsPerDim;
+  o.seed = uint64_t(int64_t(n.seed));
+  return o;
+}
+
+void Tesselator::State::resizeParticles(size_t n) {
+  pos.resize(n);
+  vel.resize(n);
+  grad.resize(n);
+  nrm.resize(n);
+  sigma.resize(n);
+  sigmaRate.resize(n);
+  energy.resize(n);
+  value.resize(n);
+  owner.resize(n);
+  id.resize(n);
+  dead.resize(n);
+}
+
+void Tesselator::State::add(const glm::vec3& p, const glm::vec3& g, float s, int32_t ownerIndex) {
+  pos.push_back(p);
+  vel.push_back(glm::vec3(0.0f));
+  grad.push_back(g);
+  const float gl = glm::length(g);
+  nrm.push_back(gl > 0.0f ? -g / gl : glm::vec3(0, 0, 1));
+  sigma.push_back(s);
+  sigmaRate.push_back(0.0f);
+  energy.push_back(0.0f);
+  value.push_back(0.0f);
+  owner.push_back(ownerIndex);
+  id.push_back(nextId++);
+  dead.push_back(0);
+}
+
+Tesselator::Tesselator(const TesselatorOptions& options) : options_(options), s_(std::make_unique<State>(options)) {
+  if (!(options_.desiredRadius > 0.0f)) options_.desiredRadius = 0.3f;
+  if (!(options_.queryRadius > options_.desiredRadius)) options_.queryRadius = 2.5f * options_.desiredRadius;
+  if (!(options_.colorWidth > 0.0f)) options_.colorWidth = 1.0f;
+  options_.updatesPerRender = std::max(options_.updatesPerRender, 1);
+  s_->eHat = desiredEnergy(options_);
+}
+
+Tesselator::~Tesselator() = default;
+
+void Tesselator::reset() {
+  s_->resizeParticles(0);
+  s_->lastGeneration = ~0ull;
+  stats_ = {};
+}
+
+ParticleView Tesselator::particles() const {
+  return {s_->pos, s_->nrm, s_->sigma, s_->owner, s_->id};
+}
+
+void Tesselator::update(const SkeletonCache& skeleton) {
+  State& s = *s_;
+  const auto t0 = Clock::now();
+  s.character = skeleton.character().hierarchical() ? &skeleton.character() : nullptr;
+  // 1. Differential transforms (thesis 3.7): particles follow their owners' joints rigidly.
+  if (options_.doDifferentialTransforms && s.character && s.lastGeneration != ~0ull &&
+      skeleton.generation() != s.lastGeneration) {
+    const size_t prims = skeleton.field().size();
+    std::vector<Rigid> d(prims);
+    for (size_t i = 0; i < prims; ++i) d[i] = skeleton.primitiveDifferential(i);
+    for (size_t i = 0; i < s.size(); ++i)
+      if (s.owner[i] >= 0 && size_t(s.owner[i]) < prims) s.pos[i] = d[size_t(s.owner[i])].apply(s.pos[i]);
+  }
+  s.lastGeneration = skeleton.generation();
+  stats_.simulateMs = msSince(t0);
+  step(skeleton.field(), &skeleton);
+}
+
+void Tesselator::update(const Field& field) {
+  s_->character = nullptr;
+  stats_.simulateMs = 0.0;
+  step(field, nullptr);
+}
+
+void Tesselator::step(const Field& field, const SkeletonCache*) {
+  State& s = *s_;
+  const TesselatorOptions& o = options_;
+  const float h = o.desiredRadius, invH = 1.0f / h;
+  const float iso = field.iso();
+  s.field = &field;
+  auto t0 = Clock::now();
+
+  if (s.size() == 0) {
+    seedParticles(s, field, o);
+    if (s.size() > 0) ++stats_.reseeds;
+  }
+
+  // 2. Spatial sort: particles in hash-bucket order, so each chunk of the fixed partition is compact in space.
+  const size_t n = s.size();
+  s.hash.build(s.pos);
+  {
+    const auto order = s.hash.order();
+    auto permute = [&](auto& v, auto& tmp) {
+      tmp.resize(n);
+      for (size_t k = 0; k < n; ++k) tmp[k] = v[order[k]];
+      v.swap(tmp);
+    };
+    permute(s.pos, s.tmpV);
+    permute(s.grad, s.tmpV);
+    permute(s.nrm, s.tmpV);
+    permute(s.sigma, s.tmpF);
+    permute(s.owner, s.tmpI);
+    permute(s.id, s.tmpU);
+    s.hash.adoptOrder();
+  }
+  s.nbr.resize(n * kMaxNeighbours);
+  s.nbrCount.resize(n);
+  s.vel.resize(n);
+  s.sigmaRate.resize(n);
+  s.energy.resize(n);
+  s.value.resize(n);
+  s.dead.assign(n, 0);
+  const size_t chunks = (n + kChunk - 1) / kChunk;
+  if (s.scratch.size() < chunks) s.scratch.resize(chunks);
+
+  // 3. Compute phase (parallel): field sample, neighbour cache, constrained repulsion velocity, radius rate,
+  //    ownership. Reads positions and radii of others, writes only particle i's outputs.
+  const float alpha = o.energyCoeff, eHat = s.eHat;
+  const float q2 = o.queryRadius * o.queryRadius;
+  const Character* ch = s.character;
+  std::vector<uint8_t> transferred(n, 0), blocked(n, 0);
+  parallelFor(chunks, o.numThreads, [&](size_t c) {
+    const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
+    FieldScratch& scratch = s.scratch[c];
+    field.prepare(chunkBox(s.pos, begin, end, 0.0f), scratch);
+    float nd2[kMaxNeighbours];
+    uint32_t ni[kMaxNeighbours];
+    for (size_t i = begin; i < end; ++i) {
+      const glm::vec3 p = s.pos[i];
+      s.vel[i] = glm::vec3(0.0f);
+      s.sigmaRate[i] = 0.0f;
+      s.nbrCount[i] = 0;
+      if (!finite3(p)) {
+        s.dead[i] = 1;
+        continue;
+      }
+      const FieldSample fs = field.sample(p, scratch);
+      const glm::vec3 g = fs.gradient;
+      const float g2 = glm::dot(g, g);
+      if (!(g2 > 1e-20f) || !std::isfinite(fs.value) ||
+          std::fabs(fs.value - iso) > kStrayDistance * h * std::sqrt(g2)) {
+        s.dead[i] = 1;  // stray: left the surface (or the field vanished); fission refills the gap
+        continue;
+      }
+      s.value[i] = fs.value;
+      s.grad[i] = g;
+      s.nrm[i] = -g / std::sqrt(g2);
+      // Ownership: the field's owner, but only the current owner's blend neighbours may take a particle over.
+      const int32_t want = fs.owner;
+      if (want >= 0 && want != s.owner[i]) {
+        bool ok = s.owner[i] < 0 || ch == nullptr;
+        if (!ok) {
+          const auto& nb = ch->blendNeighbours(size_t(s.owner[i]));
+          ok = std::binary_search(nb.begin(), nb.end(), uint32_t(want));
+        }
+        if (ok) {
+          s.owner[i] = want;
+          transferred[i] = 1;
+        } else {
+          blocked[i] = 1;
+        }
+      }
+      // Neighbour cache: the kMaxNeighbours nearest within queryRadius (ties by index: deterministic).
+      size_t cnt = 0;
+      s.hash.forEachWithin(p, o.queryRadius, s.pos, [&](uint32_t j, float d2) {
+        if (j == i || d2 > q2) return;
+        if (cnt == kMaxNeighbours && !(d2 < nd2[cnt - 1] || (d2 == nd2[cnt - 1] && j < ni[cnt - 1]))) return;
+        size_t k = cnt < kMaxNeighbours ? cnt++ : cnt - 1;
+        while (k > 0 && (nd2[k - 1] > d2 || (nd2[k - 1] == d2 && ni[k - 1] > j))) {
+          nd2[k] = nd2[k - 1];
+          ni[k] = ni[k - 1];
+          --k;
+        }
+        nd2[k] = d2;
+        ni[k] = j;
+      });
+      s.nbrCount[i] = uint8_t(cnt);
+      // Repulsion (Witkin-Heckbert), in units of desiredRadius.
+      const float si = s.sigma[i] * invH;
+      const float inv2si = 0.5f / (si * si);
+      glm::vec3 P(0.0f);
+      float D = 0.0f, Ds = 0.0f;
+      for (size_t k = 0; k < cnt; ++k) {
+        const uint32_t j = ni[k];
+        s.nbr[i * kMaxNeighbours + k] = j;
+        const float sj = s.sigma[j] * invH;
+        const float r2 = nd2[k] * invH * invH;
+        const float ei = alpha * expAccurate(-r2 * inv2si);
+        const float ej = alpha * expAccurate(-r2 * 0.5f / (sj * sj));
+        D += ei;
+        Ds += r2 * ei;
+        P += (p - s.pos[j]) * (ei + (si * si) / (sj * sj) * ej);
+      }
+      // Velocity constrained to the surface, with feedback towards F = iso.
+      glm::vec3 v = P - (glm::dot(g, P) + o.surfaceCoeff * (fs.value - iso)) / g2 * g;
+      if (!finite3(v)) v = glm::vec3(0.0f);
+      s.vel[i] = v;
+      s.energy[i] = D;
+      // Radius rate: D-dot = -rho (D - E-hat); Pedersen divides by beta + D / sigma^3 (Witkin-Heckbert by
+      // beta + sum |r|^2 E / sigma^3).
+      const float dDot = -kRho * (D - eHat);
+      const float denom = kBeta + (o.useSimpleRadii ? D : Ds) / (si * si * si);
+      s.sigmaRate[i] = dDot / denom;
+    }
+  });
+  for (size_t i = 0; i < n; ++i) {
+    stats_.transfers += transferred[i];
+    stats_.blockedTransfers += blocked[i];
+  }
+
+  // 4. Integration (parallel): clamped step, then one Newton step back onto the surface along the gradient.
+  parallelFor(chunks, o.numThreads, [&](size_t c) {
+    const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
+    FieldScratch& scratch = s.scratch[c];
+    for (size_t i = begin; i < end; ++i) {
+      if (s.dead[i]) continue;
+      glm::vec3 step = o.deltaT * s.vel[i];
+      const float len = glm::length(step);
+      if (len > kMaxStep * h) step *= kMaxStep * h / len;
+      s.pos[i] += step;
+      const float si = std::clamp(s.sigma[i] * invH + o.deltaT * s.sigmaRate[i], kSigmaMin, kSigmaMax);
+      s.sigma[i] = si * h;
+    }
+    field.prepare(chunkBox(s.pos, begin, end, 0.0f), scratch);
+    for (size_t i = begin; i < end; ++i) {
+      if (s.dead[i]) continue;
+      const float F = field.value(s.pos[i], scratch);
+      const glm::vec3 g = s.grad[i];  // the gradient from the compute phase: a chord step, accurate near the surface
+      const float g2 = glm::dot(g, g);
+      glm::vec3 d = (iso - F) / g2 * g;
+      const float len = glm::length(d);
+      if (len > kMaxNewton * h) d *= kMaxNewton * h / len;
+      s.pos[i] += d;
+      if (!finite3(s.pos[i])) s.dead[i] = 1;
+    }
+  });
+  stats_.simulateMs += msSince(t0);
+
+  // 5. Additions and deletions (sequential, particle order): strays, fusion, death, fission.
+  t0 = Clock::now();
+  const float fuse2 = kFusionDistance * kFusionDistance * h * h;
+  const size_t before = n;
+  for (size_t i = 0; i < before; ++i) {
+    if (s.dead[i]) {
+      ++stats_.strays;
+      continue;
+    }
+    const size_t cnt = s.nbrCount[i];
+    bool fused = false;
+    for (size_t k = 0; k < cnt && k < 4; ++k) {
+      const uint32_t j = s.nbr[i * kMaxNeighbours + k];
+      if (s.dead[j] || s.id[j] > s.id[i]) continue;
+      const glm::vec3 d = s.pos[j] - s.pos[i];
+      if (glm::dot(d, d) < fuse2) {
+        fused = true;
+        break;
+      }
+    }
+    if (fused) {
+      s.dead[i] = 1;
+      ++stats_.fusions;
+      continue;
+    }
+    const float si = s.sigma[i] * invH;
+    if (si < kSigmaDeath && uniform01(o.seed, s.id[i], s.update, 0) < kDeathChance) {
+      s.dead[i] = 1;
+      ++stats_.deaths;
+      continue;
+    }
+    const bool fission = si >= kSigmaMax - 1e-4f || (si > kSigmaFission && s.energy[i] > o.fissioningFrac * eHat);
+    if (fission && s.size() < o.maxParticles) {
+      // Two particles of radius sigma / sqrt(2), displaced in a random tangent direction.
+      glm::vec3 b0, b1;
+      tangentBasis(s.nrm[i], b0, b1);
+      const float a = 6.2831853f * uniform01(o.seed, s.id[i], s.update, 1);
+      const glm::vec3 off = 0.25f * h * (std::cos(a) * b0 + std::sin(a) * b1);
+      const float child = s.sigma[i] * 0.70710678f;
+      s.sigma[i] = child;
+      const glm::vec3 p = s.pos[i];
+      s.pos[i] = p - off;
+      s.add(p + off, s.grad[i], child, s.owner[i]);
+      ++stats_.fissions;
+    }
+  }
+  // Compaction in particle order (children were appended after every parent).
+  size_t w = 0;
+  for (size_t i = 0; i < s.size(); ++i) {
+    if (s.dead[i]) continue;
+    if (w != i) {
+      s.pos[w] = s.pos[i];
+      s.grad[w] = s.grad[i];
+      s.nrm[w] = s.nrm[i];
+      s.sigma[w] = s.sigma[i];
+      s.owner[w] = s.owner[i];
+      s.id[w] = s.id[i];
+    }
+    ++w;
+  }
+  s.resizeParticles(w);
+  s.nbrCount.assign(w, 0);  // indices moved: the cache is stale until the next compute phase
+  ++s.update;
+  ++stats_.updates;
+  stats_.particles = w;
+  stats_.addDeleteMs = msSince(t0);
+}
+
+void Tesselator::frame(const SkeletonCache& skeleton, Mesh& mesh) {
+  for (int u = 0; u < options_.updatesPerRender; ++u) update(skeleton);
+  triangulate(mesh);
+}
+
+int Tesselator::settle(const SkeletonCache& skeleton, Mesh& mesh, int maxUpdates) {
+  std::vector<size_t> counts;
+  for (int u = 1; u <= maxUpdates; ++u) {
+    update(skeleton);
+    counts.push_back(stats_.particles);
+    if (u >= 20 && u % 5 == 0) {
+      const auto [lo, hi] = std::minmax_element(counts.end() - 10, counts.end());
+      if (double(*hi - *lo) <= 0.01 * double(*hi)) {
+        triangulate(mesh);
+        if (stats_.boundaryEdges == 0) return u;
+      }
+    }
+  }
+  triangulate(mesh);
+  return maxUpdates;
+}
+
+}  // namespace imps

@@ -1,0 +1,393 @@
+// The particle tesselator's triangulation (thesis 3.7, made closed): tangent-plane Delaunay fans voted on by their
+// three corners, manifold assembly, then hole repair.
+//
+// Based on: K. Russell, "IMPS", MIT 1999, 3.7 (neighbours sorted by angle in the tangent plane); P. Crossno and
+//           E. Angel, "Isosurface Extraction Using Particle Systems", 1997; the local Delaunay consensus idea of
+//           M. Gopi, S. Krishnan and C. Silva, "Surface Reconstruction based on Lower Dimensional Localized Delaunay
+//           Triangulation", 2000.
+//
+// Passes:
+//  A. vertices (parallel): Newton projection of each particle onto the surface, normal, colour over colorWidth;
+//  B. fans (parallel): the Voronoi cell of the particle among its projected neighbours in its tangent plane; each
+//     pair of consecutive Voronoi edges is a Delaunay triangle of the particle's 1-ring, counter-clockwise seen from
+//     outside;
+//  C. votes (parallel): a triangle is proposed by each corner whose fan holds it; the smallest proposer emits it with
+//     its vote count (1 to 3);
+//  D. assembly (sequential, particle order, 3 votes first): a triangle is kept only if none of its directed edges is
+//     already used, so no edge ever has more than two triangles and orientations agree;
+//  E. hole repair (sequential): boundary loops (directed edges whose twin is missing) are walked and closed by ear
+//     clipping, choosing each time the ear with the shortest new edge whose normal agrees with the vertex normals.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "imps/parallel.h"
+#include "tesselator_state.h"
+
+namespace imps {
+namespace {
+
+// The Voronoi cell of the origin among 2D points (halfplane clipping), as the cyclic list of the labels of its
+// edges, counter-clockwise; label -1 marks the initial bounding octagon.
+struct Cell {
+  static constexpr int kMax = 64;
+  float x[kMax], y[kMax];
+  int32_t lab[kMax];
+  int n = 0;
+
+  void init(float r) {
+    n = 8;
+    for (int k = 0; k < 8; ++k) {
+      const float a = 0.78539816f * float(k);
+      x[k] = r * std::cos(a);
+      y[k] = r * std::sin(a);
+      lab[k] = -1;
+    }
+  }
+  float radius2() const {
+    float m = 0.0f;
+    for (int k = 0; k < n; ++k) m = std::max(m, x[k] * x[k] + y[k] * y[k]);
+    return m;
+  }
+  // Keeps the part with qx * X + qy * Y <= (qx^2 + qy^2) / 2 (closer to the origin than to q).
+  void clip(float qx, float qy, int32_t label) {
+    const float h = 0.5f * (qx * qx + qy * qy);
+    float ox[kMax], oy[kMax];
+    int32_t ol[kMax];
+    int m = 0;
+    for (int k = 0; k < n && m < kMax - 2; ++k) {
+      const int k1 = k + 1 == n ? 0 : k + 1;
+      const float dc = qx * x[k] + qy * y[k] - h, dn = qx * x[k1] + qy * y[k1] - h;
+      if (dc <= 0.0f) {
+        ox[m] = x[k], oy[m] = y[k], ol[m++] = lab[k];
+        if (dn > 0.0f) {
+          const float t = dc / (dc - dn);
+          ox[m] = x[k] + t * (x[k1] - x[k]), oy[m] = y[k] + t * (y[k1] - y[k]), ol[m++] = label;
+        }
+      } else if (dn <= 0.0f) {
+        const float t = dc / (dc - dn);
+        ox[m] = x[k] + t * (x[k1] - x[k]), oy[m] = y[k] + t * (y[k1] - y[k]), ol[m++] = lab[k];
+      }
+    }
+    n = m;
+    std::copy(ox, ox + m, x);
+    std::copy(oy, oy + m, y);
+    std::copy(ol, ol + m, lab);
+  }
+};
+
+bool hasHalfEdge(const Tesselator::State& s, uint32_t a, uint32_t b) {
+  const uint32_t* to = &s.heTo[size_t(a) * kMaxHalfEdges];
+  for (size_t k = 0; k < s.heCount[a]; ++k)
+    if (to[k] == b) return true;
+  return false;
+}
+
+// Adds triangle (a, b, c) if none of its directed edges exists yet (and there is room): manifold by construction.
+bool addTriangle(Tesselator::State& s, uint32_t a, uint32_t b, uint32_t c) {
+  if (a == b || b == c || c == a) return false;
+  if (hasHalfEdge(s, a, b) || hasHalfEdge(s, b, c) || hasHalfEdge(s, c, a)) return false;
+  if (s.heCount[a] >= kMaxHalfEdges || s.heCount[b] >= kMaxHalfEdges || s.heCount[c] >= kMaxHalfEdges) return false;
+  s.heTo[size_t(a) * kMaxHalfEdges + s.heCount[a]++] = b;
+  s.heTo[size_t(b) * kMaxHalfEdges + s.heCount[b]++] = c;
+  s.heTo[size_t(c) * kMaxHalfEdges + s.heCount[c]++] = a;
+  s.tris.push_back(a);
+  s.tris.push_back(b);
+  s.tris.push_back(c);
+  return true;
+}
+
+// Does particle a's fan hold the consecutive pair (b, c)?
+bool fanHas(const Tesselator::State& s, uint32_t a, uint32_t b, uint32_t c) {
+  const int32_t* f = &s.fan[size_t(a) * kMaxFan];
+  const size_t m = s.fanCount[a];
+  for (size_t k = 0; k < m; ++k)
+    if (f[k] == int32_t(b) && f[k + 1 == m ? 0 : k + 1] == int32_t(c)) return true;
+  return false;
+}
+
+// Collects the boundary loops' directed edges: b -> a for every used a -> b whose twin is missing.
+size_t collectHoles(Tesselator::State& s) {
+  const size_t n = s.size();
+  s.holeCount.assign(n, 0);
+  size_t count = 0;
+  for (uint32_t a = 0; a < n; ++a)
+    for (size_t k = 0; k < s.heCount[a]; ++k) {
+      const uint32_t b = s.heTo[size_t(a) * kMaxHalfEdges + k];
+      if (hasHalfEdge(s, b, a)) continue;
+      ++count;
+      if (s.holeCount[b] < 4) s.holeTo[size_t(b) * 4 + s.holeCount[b]++] = a;
+    }
+  return count;
+}
+
+// Removes every triangle with a corner marked in openUp, and rebuilds the half-edge tables.
+void removeAround(Tesselator::State& s) {
+  const size_t n = s.size();
+  size_t w = 0;
+  for (size_t t = 0; t < s.tris.size(); t += 3) {
+    bool drop = false;
+    for (int k = 0; k < 3; ++k) drop = drop || s.openUp[s.tris[t + size_t(k)]] != 0;
+    if (drop) continue;
+    for (int k = 0; k < 3; ++k) s.tris[w + size_t(k)] = s.tris[t + size_t(k)];
+    w += 3;
+  }
+  s.tris.resize(w);
+  s.heCount.assign(n, 0);
+  for (size_t t = 0; t < s.tris.size(); t += 3)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = s.tris[t + size_t(k)], b = s.tris[t + size_t((k + 1) % 3)];
+      s.heTo[size_t(a) * kMaxHalfEdges + s.heCount[a]++] = b;
+    }
+}
+
+}  // namespace
+
+void Tesselator::triangulate(Mesh& mesh) {
+  State& s = *s_;
+  const TesselatorOptions& o = options_;
+  const auto t0 = std::chrono::steady_clock::now();
+  mesh.clear();
+  const size_t n = s.size();
+  if (n == 0 || s.field == nullptr) {
+    stats_.triangles = stats_.boundaryEdges = stats_.filledTriangles = stats_.unfilledLoops = 0;
+    stats_.meshMs = 0.0;
+    return;
+  }
+  const Field& field = *s.field;
+  const float h = o.desiredRadius, iso = field.iso();
+  const size_t chunks = (n + kChunk - 1) / kChunk;
+  if (s.scratch.size() < chunks) s.scratch.resize(chunks);
+  s.vpos.resize(n);
+  s.vcol.resize(n);
+
+  // A. Vertices, normals, colours.
+  const float colorExp = 1.0f / o.colorWidth;
+  parallelFor(chunks, o.numThreads, [&](size_t c) {
+    const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
+    FieldScratch& scratch = s.scratch[c];
+    Box box;
+    for (size_t i = begin; i < end; ++i) box.extend(s.pos[i]);
+    box.lo -= glm::vec3(1.6f * h);  // room for the Newton steps below (each at most 0.5 desiredRadius)
+    box.hi += glm::vec3(1.6f * h);
+    field.prepare(box, scratch);
+    for (size_t i = begin; i < end; ++i) {
+      const glm::vec3 p = s.pos[i];
+      glm::vec3 v = p;
+      FieldSample fs;
+      for (int it = 0; it < 3; ++it) {
+        fs = field.sample(v, scratch);
+        const float g2 = glm::dot(fs.gradient, fs.gradient);
+        if (!(g2 > 1e-20f)) break;
+        s.nrm[i] = -fs.gradient / std::sqrt(g2);
+        if (std::fabs(fs.value - iso) < 1e-5f * h * std::sqrt(g2)) break;
+        glm::vec3 d = (iso - fs.value) / g2 * fs.gradient;
+        const float len = glm::length(d);
+        if (len > 0.5f * h) d *= 0.5f * h / len;
+        v += d;
+      }
+      s.vpos[i] = finite3(v) ? v : p;
+      // Colour: primitive colours weighted by term^(1/colorWidth) over the owner's blend set (wider = smoother).
+      glm::vec3 col(0.0f);
+      float wsum = 0.0f;
+      auto addColor = [&](uint32_t k) {
+        const float t = field.blend().term(field.primitive(k).distance(p), field.param(k));
+        const float base = field.blend().additive() ? t : t + 1.0f;
+        if (base <= 0.0f) return;
+        const float w = std::pow(base, colorExp);
+        col += w * field.color(k);
+        wsum += w;
+      };
+      const int32_t ow = s.owner[i];
+      if (s.character && ow >= 0) {
+        addColor(uint32_t(ow));
+        for (uint32_t k : s.character->blendNeighbours(size_t(ow))) addColor(k);
+      } else {
+        for (uint32_t k : scratch.candidates) addColor(k);
+      }
+      s.vcol[i] = wsum > 0.0f ? col / wsum : fs.color;
+    }
+  });
+
+  // B. Fans: Voronoi cells in each tangent plane.
+  s.hash.build(s.vpos);
+  s.fan.resize(n * kMaxFan);
+  s.fanCount.resize(n);
+  const float rT = 2.5f * h;
+  parallelFor(chunks, o.numThreads, [&](size_t c) {
+    const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
+    Cell cell;
+    float nd2[32];
+    uint32_t ni[32];
+    for (size_t i = begin; i < end; ++i) {
+      const glm::vec3 p = s.vpos[i], nn = s.nrm[i];
+      size_t cnt = 0;
+      s.hash.forEachWithin(p, rT, s.vpos, [&](uint32_t j, float d2) {
+        if (j == i || glm::dot(s.nrm[j], nn) < 0.3f || d2 <= 0.0f) return;
+        if (cnt == 32 && !(d2 < nd2[31] || (d2 == nd2[31] && j < ni[31]))) return;
+        size_t k = cnt < 32 ? cnt++ : 31;
+        while (k > 0 && (nd2[k - 1] > d2 || (nd2[k - 1] == d2 && ni[k - 1] > j))) {
+          nd2[k] = nd2[k - 1];
+          ni[k] = ni[k - 1];
+          --k;
+        }
+        nd2[k] = d2;
+        ni[k] = j;
+      });
+      glm::vec3 b0, b1;
+      tangentBasis(nn, b0, b1);
+      cell.init(0.5f * rT);
+      float r2 = cell.radius2();
+      for (size_t k = 0; k < cnt; ++k) {
+        if (nd2[k] > 4.0f * r2) break;  // sorted by distance: no farther point can cut the cell
+        const glm::vec3 d = s.vpos[ni[k]] - p;
+        float x = glm::dot(d, b0), y = glm::dot(d, b1);
+        const float l2 = x * x + y * y;
+        if (l2 < 1e-12f * h * h) continue;
+        const float lift = std::sqrt(nd2[k] / l2);  // keep the 3D distance: a local geodesic-like unfolding
+        x *= lift, y *= lift;
+        cell.clip(x, y, int32_t(ni[k]));
+        r2 = cell.radius2();
+      }
+      int32_t* f = &s.fan[i * kMaxFan];
+      size_t m = 0;
+      for (int k = 0; k < cell.n && m < kMaxFan; ++k)
+        if (m == 0 || f[m - 1] != cell.lab[k]) f[m++] = cell.lab[k];
+      if (m > 1 && f[m - 1] == f[0]) --m;
+      s.fanCount[i] = uint8_t(m);
+    }
+  });
+
+  // C. Votes.
+  s.cand.resize(n * kMaxFan * 3);
+  s.candCount.resize(n);
+  parallelFor(chunks, o.numThreads, [&](size_t c) {
+    const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
+    for (size_t i = begin; i < end; ++i) {
+      const int32_t* f = &s.fan[i * kMaxFan];
+      const size_t m = s.fanCount[i];
+      size_t out = 0;
+      for (size_t k = 0; k < m && m >= 2; ++k) {
+        const int32_t a = f[k], b = f[k + 1 == m ? 0 : k + 1];
+        if (a < 0 || b < 0 || a == b) continue;
+        const uint32_t ua = uint32_t(a), ub = uint32_t(b), ui = uint32_t(i);
+        const bool byA = fanHas(s, ua, ub, ui), byB = fanHas(s, ub, ui, ua);
+        uint32_t minProposer = ui;
+        if (byA) minProposer = std::min(minProposer, ua);
+        if (byB) minProposer = std::min(minProposer, ub);
+        if (minProposer != ui) continue;
+        uint32_t* slot = &s.cand[(i * kMaxFan + out++) * 3];
+        slot[0] = ua;
+        slot[1] = ub;
+        slot[2] = 1u + uint32_t(byA) + uint32_t(byB);
+      }
+      s.candCount[i] = uint8_t(out);
+    }
+  });
+
+  // D. Assembly: unanimous triangles first, then the rest, never reusing a directed edge.
+  s.heTo.resize(n * kMaxHalfEdges);
+  s.heCount.assign(n, 0);
+  s.tris.clear();
+  for (uint32_t votes = 3; votes >= 2; --votes)
+    for (uint32_t i = 0; i < n; ++i)
+      for (size_t k = 0; k < s.candCount[i]; ++k) {
+        const uint32_t* slot = &s.cand[(size_t(i) * kMaxFan + k) * 3];
+        if (slot[2] == votes) addTriangle(s, i, slot[0], slot[1]);
+      }
+
+  // E. Hole repair.
+  const size_t assembled = s.tris.size() / 3;
+  s.holeTo.resize(n * 4);
+  size_t unfilled = 0;
+  for (int round = 0; round < 4; ++round) {
+    if (collectHoles(s) == 0) break;
+    s.holeUsed.assign(n * 4, 0);
+    s.openUp.assign(n, 0);
+    unfilled = 0;
+    for (uint32_t start = 0; start < n; ++start)
+      for (size_t e = 0; e < s.holeCount[start]; ++e) {
+        if (s.holeUsed[size_t(start) * 4 + e]) continue;
+        // Walk the loop start -> ... -> start along unused hole edges.
+        s.loop.clear();
+        s.loop.push_back(start);
+        s.holeUsed[size_t(start) * 4 + e] = 1;
+        uint32_t cur = s.holeTo[size_t(start) * 4 + e];
+        bool closed = false;
+        while (s.loop.size() <= size_t(4 * o.maxHoleLoop)) {
+          if (cur == start) {
+            closed = true;
+            break;
+          }
+          s.loop.push_back(cur);
+          size_t pick = 4;
+          for (size_t q = 0; q < s.holeCount[cur]; ++q)
+            if (!s.holeUsed[size_t(cur) * 4 + q]) {
+              pick = q;
+              break;
+            }
+          if (pick == 4) break;
+          s.holeUsed[size_t(cur) * 4 + pick] = 1;
+          cur = s.holeTo[size_t(cur) * 4 + pick];
+        }
+        if (!closed || s.loop.size() > size_t(o.maxHoleLoop) || s.loop.size() < 3) {
+          ++unfilled;
+          for (uint32_t v : s.loop) s.openUp[v] = 1;  // open up around it next round
+          continue;
+        }
+        // Ear clipping: ear (a, b, c) uses the hole edges a->b, b->c and adds c->a.
+        auto& L = s.loop;
+        while (L.size() > 3) {
+          size_t best = L.size();
+          float bestScore = 1e30f;
+          for (size_t k = 0; k < L.size(); ++k) {
+            const uint32_t a = L[k], b = L[(k + 1) % L.size()], c = L[(k + 2) % L.size()];
+            if (a == c || a == b || b == c || hasHalfEdge(s, c, a) || hasHalfEdge(s, a, b) || hasHalfEdge(s, b, c))
+              continue;
+            const glm::vec3 pa = s.vpos[a], pb = s.vpos[b], pc = s.vpos[c];
+            const glm::vec3 cr = glm::cross(pb - pa, pc - pa);
+            const float cl = glm::length(cr);
+            const glm::vec3 nv = s.nrm[a] + s.nrm[b] + s.nrm[c];
+            const float agree = cl > 0.0f ? glm::dot(cr, nv) / (cl * std::max(glm::length(nv), 1e-6f)) : -1.0f;
+            const glm::vec3 diag = pc - pa;
+            const float score = glm::dot(diag, diag) / (h * h) + 4.0f * (1.0f - agree) + (agree < 0.0f ? 100.0f : 0.0f);
+            if (score < bestScore) {
+              bestScore = score;
+              best = k;
+            }
+          }
+          if (best == L.size()) break;
+          const size_t k1 = (best + 1) % L.size();
+          addTriangle(s, L[best], L[k1], L[(best + 2) % L.size()]);
+          L.erase(L.begin() + std::ptrdiff_t(k1));
+        }
+        if (L.size() != 3 || !addTriangle(s, L[0], L[1], L[2])) {
+          ++unfilled;
+          for (uint32_t v : L) s.openUp[v] = 1;
+        }
+      }
+    // Loops that could not be closed (pinched or folded): remove every triangle touching them, so that the next
+    // round sees one larger, simple loop around the trouble spot.
+    if (unfilled > 0 && round < 3) removeAround(s);
+  }
+  const size_t boundary = collectHoles(s);
+
+  // Output: one vertex per particle.
+  mesh.positions.resize(3 * n);
+  mesh.normals.resize(3 * n);
+  mesh.colors.resize(3 * n);
+  for (size_t i = 0; i < n; ++i)
+    for (int a = 0; a < 3; ++a) {
+      mesh.positions[3 * i + size_t(a)] = s.vpos[i][a];
+      mesh.normals[3 * i + size_t(a)] = s.nrm[i][a];
+      mesh.colors[3 * i + size_t(a)] = std::clamp(s.vcol[i][a], 0.0f, 1.0f);
+    }
+  mesh.indices = s.tris;
+  stats_.triangles = s.tris.size() / 3;
+  stats_.filledTriangles = stats_.triangles > assembled ? stats_.triangles - assembled : 0;
+  stats_.boundaryEdges = boundary;
+  stats_.unfilledLoops = unfilled;
+  stats_.meshMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace imps

@@ -1,0 +1,92 @@
+// Internal state shared by the tesselator's source files (simulation, seeding, triangulation). Not installed.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "imps/character.h"
+#include "imps/field.h"
+#include "imps/tesselator.h"
+#include "imps/uniform_hash.h"
+
+namespace imps {
+
+inline constexpr size_t kMaxNeighbours = 40;  // neighbour cache slots per particle (nearest first)
+inline constexpr size_t kMaxFan = 24;         // tangent-plane fan entries per particle
+inline constexpr size_t kMaxHalfEdges = 24;   // outgoing half-edges per vertex during assembly
+inline constexpr size_t kChunk = 128;         // particles per parallel task: the fixed work partition
+
+// Deterministic random numbers: one stream per (seed, particle id, update, purpose); splitmix64 finaliser.
+inline uint64_t mixBits(uint64_t x) {
+  x += 0x9e3779b97f4a7c15ull;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+inline float uniform01(uint64_t seed, uint64_t id, uint64_t update, uint64_t purpose) {
+  const uint64_t h = mixBits(mixBits(mixBits(seed ^ 0x5bd1e995ull) ^ id) ^ (update * 4 + purpose));
+  return float(h >> 40) * (1.0f / 16777216.0f);
+}
+
+inline bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+// Two unit vectors b0, b1 with b0 x b1 = n (n unit).
+inline void tangentBasis(const glm::vec3& n, glm::vec3& b0, glm::vec3& b1) {
+  const glm::vec3 a = std::fabs(n.x) < 0.6f ? glm::vec3(1, 0, 0) : (std::fabs(n.y) < 0.6f ? glm::vec3(0, 1, 0) : glm::vec3(0, 0, 1));
+  b0 = glm::normalize(glm::cross(a, n));
+  b1 = glm::cross(n, b0);
+}
+
+struct Tesselator::State {
+  // Particles, structure of arrays, in particle order.
+  std::vector<glm::vec3> pos, vel, grad, nrm;
+  std::vector<float> sigma, sigmaRate, energy, value;
+  std::vector<int32_t> owner;
+  std::vector<uint64_t> id;
+  std::vector<uint8_t> dead;
+  // Neighbour cache from the last compute phase.
+  std::vector<uint32_t> nbr;
+  std::vector<uint8_t> nbrCount;
+
+  UniformHashGrid hash;
+  std::vector<FieldScratch> scratch;  // one per chunk (reused)
+
+  const Field* field = nullptr;
+  const Character* character = nullptr;  // set for hierarchical characters
+  uint64_t lastGeneration = ~0ull;
+  uint64_t nextId = 0;
+  uint64_t update = 0;
+  float eHat = 1.0f;  // desired energy per particle (hexagonal packing at spacing desiredRadius)
+
+  // Reorder scratch.
+  std::vector<glm::vec3> tmpV;
+  std::vector<float> tmpF;
+  std::vector<int32_t> tmpI;
+  std::vector<uint64_t> tmpU;
+
+  // Triangulation buffers.
+  std::vector<glm::vec3> vpos, vcol;
+  std::vector<int32_t> fan;
+  std::vector<uint8_t> fanCount;
+  std::vector<uint32_t> cand;  // per particle up to kMaxFan candidate triangles (a, b, votes)
+  std::vector<uint8_t> candCount;
+  std::vector<uint32_t> heTo;
+  std::vector<uint8_t> heCount;
+  std::vector<uint32_t> holeTo;
+  std::vector<uint8_t> holeCount, holeUsed, openUp;
+  std::vector<uint32_t> loop, tris;
+
+  explicit State(const TesselatorOptions& o) : hash(o.cubeSize, o.bitsPerDim) {}
+  size_t size() const { return pos.size(); }
+  void resizeParticles(size_t n);
+  // Appends a particle on the surface (grad: field gradient there).
+  void add(const glm::vec3& p, const glm::vec3& g, float s, int32_t ownerIndex);
+};
+
+// Places particles on the field's surface from every primitive (tesselator_seed.cpp).
+void seedParticles(Tesselator::State& s, const Field& field, const TesselatorOptions& o);
+
+}  // namespace imps
