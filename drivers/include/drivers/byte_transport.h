@@ -1,0 +1,37 @@
+// The byte pipe a DeviceSession talks through: a serial port, or the in-process simulator. Transports only move
+// bytes; codecs, handshakes and reconnects live in DeviceSession.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <expected>
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace imps::drivers {
+
+// An open connection to one device. Used by one thread at a time (the session's I/O thread); not thread-safe.
+// Closing happens in the destructor. An error from read() or write() means the connection is gone (unplugged,
+// device node vanished, I/O error): the session drops the transport and reopens through its TransportOpener.
+class ByteTransport {
+ public:
+  virtual ~ByteTransport() = default;
+  // Waits up to timeoutMs (0: do not wait) until at least one byte is available, then reads what is available,
+  // up to out.size() bytes. Returns the number read; 0 means the timeout passed with nothing to read.
+  virtual std::expected<size_t, std::string> read(std::span<uint8_t> out, int timeoutMs) = 0;
+  // Writes all of `bytes`, waiting up to timeoutMs in total; a short write within the time is an error.
+  virtual std::expected<void, std::string> write(std::span<const uint8_t> bytes, int timeoutMs) = 0;
+  // Human-readable name for messages, e.g. "/dev/ttyACM0 (2341:0043 IMPS Monkey)".
+  virtual std::string description() const = 0;
+  // Problems worth telling the performer that do not stop the connection (e.g. the FTDI latency timer).
+  virtual std::vector<std::string> warnings() const { return {}; }
+};
+
+// Opens a fresh connection each time it is called (the session calls it again to reconnect). Returns the error
+// text when the device is absent or cannot be opened. Called only from the session's I/O thread.
+using TransportOpener = std::function<std::expected<std::unique_ptr<ByteTransport>, std::string>()>;
+
+}  // namespace imps::drivers

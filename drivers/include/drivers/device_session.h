@@ -1,0 +1,139 @@
+// A live connection to one armature: the I/O thread, the connection state machine, the handshake, poll and stream
+// modes, timeouts and reconnects. Every decoded Sample goes to a PoseMailbox. State machine in docs/devices.md.
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <functional>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "drivers/byte_transport.h"
+#include "drivers/device_spec.h"
+#include "drivers/line_protocol.h"
+#include "drivers/pose_mailbox.h"
+#include "drivers/sample.h"
+
+namespace imps::drivers {
+
+// disconnected → opening → waiting for hello → streaming → lost → reconnecting → waiting for hello → …
+enum class ConnectionState : uint8_t {
+  Disconnected,     // not started, or stopped
+  Opening,          // trying to open the transport for the first time (retried every reconnectIntervalMs)
+  WaitingForHello,  // open; binary: boot banner / HELLO / GET_INFO / START_STREAM; lines: waiting for a sample line
+  Streaming,        // samples are flowing (stream mode) or being polled (poll mode)
+  Lost,             // the connection dropped (read error, node vanished, repeated timeouts); the last pose stays
+  Reconnecting,     // trying to open the transport again
+};
+const char* toString(ConnectionState state);
+
+struct DeviceSessionOptions {
+  WireProtocol protocol = WireProtocol::Binary;
+  AcquisitionMode mode = AcquisitionMode::Stream;  // binary only; the line protocol always streams
+  // Stream mode: the rate asked for with START_STREAM (0: 100 Hz). Poll mode: polls per second (0: as fast as the
+  // device answers, one poll outstanding).
+  uint16_t rateHz = 0;
+  // After opening, how long to wait for the device's own HELLO (an Arduino reboots when its port opens and needs
+  // about 1.5 s) before asking with HOST_HELLO.
+  int bootWaitMs = 2500;
+  int replyTimeoutMs = 500;  // per command attempt
+  int commandAttempts = 3;   // HOST_HELLO / GET_INFO / START_STREAM / POLL tries before giving up
+  // Streaming with no sample for this long is a timeout (counted); binary re-sends START_STREAM.
+  int sampleTimeoutMs = 1000;
+  // Consecutive timeouts after which the connection counts as lost and is reopened.
+  int timeoutsBeforeLost = 3;
+  int reconnectIntervalMs = 500;  // wait between open attempts
+  int ioWaitMs = 20;              // longest single read wait: bounds how long stop() takes
+  LineDecoderOptions lineOptions;  // line protocol decoder settings
+  // Host clock in ns for Sample::arrivalTimeNs (empty: steady_clock, as PoseMailbox). Timeouts use steady_clock.
+  std::function<int64_t()> clock;
+};
+
+// Options from a parsed spec (protocol, mode, rate, channel count); other fields keep their defaults.
+DeviceSessionOptions sessionOptionsFor(const DeviceSpec& spec);
+
+// Counters since construction (they survive reconnects). Each field is read atomically; the set is not one
+// consistent snapshot.
+struct DeviceSessionStats {
+  ConnectionState state = ConnectionState::Disconnected;
+  uint64_t bytesReceived = 0;
+  uint64_t samples = 0;          // published to the mailbox
+  uint64_t garbageBytes = 0;     // bytes skipped by the decoder while resynchronising (plus overlong lines)
+  uint64_t crcErrors = 0;        // binary: header + frame CRC failures
+  uint64_t malformedFrames = 0;  // binary: good CRC, bad payload (plus unknown types and versions)
+  uint64_t parseErrors = 0;      // lines: malformed, mismatched-count and overlong lines
+  uint64_t samplesDropped = 0;   // binary: sequence numbers missing in the stream
+  uint64_t timeouts = 0;         // commands unanswered and streams gone quiet
+  uint64_t deviceErrors = 0;     // ERROR messages from the device
+  uint64_t deviceResets = 0;     // unsolicited HELLO while streaming (the device rebooted)
+  uint64_t connections = 0;      // times the state reached Streaming
+  uint64_t reconnects = 0;       // of which after a loss
+  uint64_t openFailures = 0;
+};
+
+// Owns one device's I/O thread. Thread-safety: construct, start(), stop() and destroy from one controlling
+// thread; state(), stats(), deviceInfo(), lastError(), banner(), warnings() and waitForState() may be called
+// from any thread at any time. The hot path (state(), stats(), and the mailbox) takes no locks; deviceInfo(),
+// lastError(), banner() and warnings() take a short mutex and copy — call them from UI code, not per sample.
+// The consumer is never blocked: samples reach it only through the PoseMailbox (wait-free). The mailbox is not
+// owned and must outlive the session; the session is its only producer.
+class DeviceSession {
+ public:
+  DeviceSession(TransportOpener opener, PoseMailbox& mailbox, DeviceSessionOptions options = {});
+  ~DeviceSession();  // stop()
+  DeviceSession(const DeviceSession&) = delete;
+  DeviceSession& operator=(const DeviceSession&) = delete;
+
+  // Starts the I/O thread (no-op when running).
+  void start();
+  // Asks the I/O thread to finish, sends STOP_STREAM when streaming, closes the transport and joins; the state
+  // becomes Disconnected. Returns within about ioWaitMs + one write timeout.
+  void stop();
+
+  ConnectionState state() const { return state_.load(std::memory_order_acquire); }
+  DeviceSessionStats stats() const;
+  // The device's description from the last HELLO/INFO (synthesised for the line protocol); nullopt before the
+  // first handshake. Kept while lost.
+  std::optional<DeviceInfo> deviceInfo() const;
+  std::string lastError() const;          // the latest open/read/protocol problem, "" when none
+  std::vector<std::string> banner() const;  // lines protocol: the boot banner lines; binary: text seen before HELLO
+  std::vector<std::string> warnings() const;  // the transport's warnings (e.g. FTDI latency)
+
+  // Blocks the caller until state() == wanted or timeoutMs passes; returns whether the state was reached.
+  bool waitForState(ConnectionState wanted, int timeoutMs) const;
+
+ private:
+  struct Io;  // the I/O thread's private state (transport, decoders)
+  void run();
+  void setState(ConnectionState s);
+  void setError(std::string message);
+
+  TransportOpener opener_;
+  PoseMailbox& mailbox_;
+  DeviceSessionOptions options_;
+  std::thread thread_;
+  std::atomic<bool> stopRequested_{false};
+  std::atomic<ConnectionState> state_{ConnectionState::Disconnected};
+
+  struct Counters {
+    std::atomic<uint64_t> bytesReceived{0}, samples{0}, garbageBytes{0}, crcErrors{0}, malformedFrames{0},
+        parseErrors{0}, samplesDropped{0}, timeouts{0}, deviceErrors{0}, deviceResets{0}, connections{0},
+        reconnects{0}, openFailures{0};
+  };
+  Counters counters_;
+
+  mutable std::mutex mutex_;  // guards the fields below and pairs with stateChanged_
+  mutable std::condition_variable stateChanged_;
+  std::optional<DeviceInfo> info_;
+  std::string lastError_;
+  std::vector<std::string> banner_;
+  std::vector<std::string> warnings_;
+
+  friend struct Io;
+};
+
+}  // namespace imps::drivers

@@ -1,0 +1,287 @@
+// `puppeteer devices`, `puppeteer sim` and `puppeteer record`: what is attached, a simulated armature on a
+// pseudo-terminal, and recording a live device to a session file. docs/devices.md.
+#include "cli.h"
+
+#include <CLI/CLI.hpp>
+#include <fcntl.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <thread>
+
+#include "drivers/device_session.h"
+#include "drivers/device_spec.h"
+#include "drivers/serial_transport.h"
+#include "sim/session_file.h"
+#include "sim/simulated_armature.h"
+
+namespace imps::app {
+namespace {
+
+std::atomic<bool> interrupted{false};
+void onSignal(int) { interrupted.store(true); }
+
+// Ctrl-C (and SIGTERM) end a running command cleanly instead of killing it mid-write.
+void catchInterrupts() {
+  interrupted.store(false);
+  std::signal(SIGINT, onSignal);
+  std::signal(SIGTERM, onSignal);
+}
+
+bool timeUp(std::chrono::steady_clock::time_point start, double seconds) {
+  return seconds > 0 &&
+         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() >= seconds;
+}
+
+// ---- puppeteer devices
+
+int runDevices() {
+  auto ports = drivers::listSerialPorts();
+  if (!ports) {
+    std::fprintf(stderr, "puppeteer devices: error: %s\n", ports.error().c_str());
+    return kExitIoError;
+  }
+  std::printf("Serial ports (%zu):\n", ports->size());
+  if (ports->empty()) std::printf("  none\n");
+  for (const drivers::SerialPortInfo& p : *ports) {
+    std::printf("  %-16s", p.path.c_str());
+    if (p.isUsb) std::printf(" usb %04x:%04x", p.vendorId, p.productId);
+    else std::printf(" %-13s", "native");
+    if (!p.serialNumber.empty()) std::printf("  serial %s", p.serialNumber.c_str());
+    if (!p.driver.empty()) std::printf("  driver %s", p.driver.c_str());
+    if (!p.description.empty()) std::printf("  \"%s\"", p.description.c_str());
+    if (p.latencyTimerMs) {
+      std::printf("  FTDI latency %d ms%s", *p.latencyTimerMs,
+                  *p.latencyTimerMs > 1 ? (p.latencyTimerWritable ? " (will be set to 1 ms when opened)"
+                                                                  : " (slow: see docs/devices.md, udev rule)")
+                                        : "");
+    }
+    std::printf("\n    spec: serial:%s\n", p.path.c_str());
+  }
+  std::printf("HID and USB armatures: not supported yet (serial and sim: only).\n");
+  return kExitOk;
+}
+
+// ---- puppeteer sim
+
+struct SimArgs {
+  std::string device = "sim:";
+  bool pty = false;
+  std::string link;
+  double seconds = 0;
+};
+
+int runSim(const SimArgs& a) {
+  auto spec = drivers::parseDeviceSpec(a.device);
+  if (!spec) {
+    std::fprintf(stderr, "%s\n", spec.error().c_str());
+    return kExitUsage;
+  }
+  if (spec->kind != drivers::DeviceKind::Sim) {
+    std::fprintf(stderr, "puppeteer sim: error: --device must be a sim: spec (docs/devices.md), got '%s'\n",
+                 a.device.c_str());
+    return kExitUsage;
+  }
+  auto options = sim::armatureOptionsFromSpec(*spec);
+  if (!options) {
+    std::fprintf(stderr, "%s\n", options.error().c_str());
+    return kExitInvalidInput;
+  }
+  if (!a.pty) {
+    std::fprintf(stderr, "puppeteer sim: error: choose where to serve the armature: --pty\n");
+    return kExitUsage;
+  }
+  // ---- A pseudo-terminal pair: the simulator drives the master, the drivers open the slave path.
+  const int master = ::posix_openpt(O_RDWR | O_NOCTTY);
+  if (master < 0 || ::grantpt(master) != 0 || ::unlockpt(master) != 0) {
+    std::fprintf(stderr, "puppeteer sim: error: cannot create a pseudo-terminal\n");
+    return kExitIoError;
+  }
+  const std::string slave = ::ptsname(master);
+  std::string path = slave;
+  if (!a.link.empty()) {
+    std::error_code ec;
+    if (std::filesystem::is_symlink(a.link, ec)) std::filesystem::remove(a.link, ec);
+    std::filesystem::create_symlink(slave, a.link, ec);
+    if (ec) {
+      std::fprintf(stderr, "puppeteer sim: error: cannot create link %s: %s\n", a.link.c_str(), ec.message().c_str());
+      ::close(master);
+      return kExitIoError;
+    }
+    path = a.link;
+  }
+  const char* protocol = drivers::toString(options->protocol);
+  std::printf("Simulated armature \"%s\" (%d channels, %s protocol) on %s\n", options->info.name.c_str(),
+              options->info.channelCount, protocol, path.c_str());
+  std::printf("Try:  puppeteer record --device 'serial:%s?protocol=%s' -o take.session --seconds 5\n", path.c_str(),
+              protocol);
+  std::printf("Ctrl-C stops the simulator.\n");
+  std::fflush(stdout);
+
+  catchInterrupts();
+  sim::SteadyClock clock;
+  sim::ArmatureFdServer server(sim::SimulatedArmature(*options), master, clock);
+  server.start();
+  const auto start = std::chrono::steady_clock::now();
+  while (!interrupted.load() && !timeUp(start, a.seconds)) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  server.stop();
+  ::close(master);
+  if (!a.link.empty()) std::filesystem::remove(a.link);
+  std::printf("Sent %llu samples.\n", static_cast<unsigned long long>(server.samplesSent()));
+  return kExitOk;
+}
+
+// ---- puppeteer record
+
+struct RecordArgs {
+  std::string device;
+  std::string output;
+  double seconds = 0;
+};
+
+int runRecord(const RecordArgs& a) {
+  auto spec = drivers::parseDeviceSpec(a.device);
+  if (!spec) {
+    std::fprintf(stderr, "%s\n", spec.error().c_str());
+    return kExitUsage;
+  }
+  sim::SteadyClock clock;
+  drivers::TransportOpener opener;
+  switch (spec->kind) {
+    case drivers::DeviceKind::Serial: {
+      drivers::SerialTransportOptions so;
+      so.baud = spec->baud;
+      opener = drivers::serialOpener(spec->path, so);
+      break;
+    }
+    case drivers::DeviceKind::Sim: {
+      auto options = sim::armatureOptionsFromSpec(*spec);
+      if (!options) {
+        std::fprintf(stderr, "%s\n", options.error().c_str());
+        return kExitInvalidInput;
+      }
+      opener = sim::simulatedOpener(*options, clock);
+      break;
+    }
+    default:
+      std::fprintf(stderr, "puppeteer record: error: %s devices are not supported yet (use serial: or sim:)\n",
+                   drivers::toString(spec->kind));
+      return kExitUsage;
+  }
+  if (std::filesystem::exists(a.output)) {
+    std::fprintf(stderr, "puppeteer record: error: %s exists; recordings never overwrite a file\n", a.output.c_str());
+    return kExitIoError;
+  }
+
+  catchInterrupts();
+  drivers::PoseMailboxOptions mo;
+  mo.queueCapacity = 1 << 16;  // 65 s at 1 kHz: the recorder drains every 20 ms
+  drivers::PoseMailbox mailbox(mo);
+  drivers::DeviceSession session(opener, mailbox, drivers::sessionOptionsFor(*spec));
+  session.start();
+
+  std::optional<sim::SessionWriter> writer;
+  std::vector<drivers::Sample> batch;
+  uint64_t mismatched = 0;
+  std::string lastState;
+  const auto start = std::chrono::steady_clock::now();
+  auto lastReport = start;
+  int exitCode = kExitOk;
+  auto drainInto = [&]() -> bool {
+    batch.clear();
+    mailbox.drain(batch);
+    if (batch.empty()) return true;
+    if (!writer) {
+      auto info = session.deviceInfo();
+      if (!info) return true;  // cannot happen: samples come after the handshake
+      auto created = sim::SessionWriter::create(a.output, *info);
+      if (!created) {
+        std::fprintf(stderr, "%s\n", created.error().c_str());
+        exitCode = kExitIoError;
+        return false;
+      }
+      writer.emplace(std::move(*created));
+      for (const std::string& w : session.warnings()) std::fprintf(stderr, "%s\n", w.c_str());
+    }
+    for (const drivers::Sample& s : batch) {
+      if (auto r = writer->append(s); !r) {
+        if (s.channelCount != session.deviceInfo()->channelCount) {
+          ++mismatched;  // a different device came back on reconnect; its samples do not fit this session
+          continue;
+        }
+        std::fprintf(stderr, "%s\n", r.error().c_str());
+        exitCode = kExitIoError;
+        return false;
+      }
+    }
+    return true;
+  };
+  while (!interrupted.load() && !timeUp(start, a.seconds)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    if (!drainInto()) break;
+    const std::string state = drivers::toString(session.state());
+    const auto now = std::chrono::steady_clock::now();
+    if (state != lastState || now - lastReport >= std::chrono::seconds(1)) {
+      const drivers::DeviceSessionStats st = session.stats();
+      std::fprintf(stderr, "\r%-18s samples %llu  dropped %llu  crc %llu  timeouts %llu  reconnects %llu   ",
+                   state.c_str(), static_cast<unsigned long long>(st.samples),
+                   static_cast<unsigned long long>(st.samplesDropped), static_cast<unsigned long long>(st.crcErrors),
+                   static_cast<unsigned long long>(st.timeouts), static_cast<unsigned long long>(st.reconnects));
+      if (state != lastState && !session.lastError().empty() && state != "streaming")
+        std::fprintf(stderr, "\n  (%s)\n", session.lastError().c_str());
+      lastState = state;
+      lastReport = now;
+    }
+  }
+  session.stop();
+  if (exitCode == kExitOk) drainInto();
+  std::fprintf(stderr, "\n");
+  if (!writer) {
+    std::fprintf(stderr, "puppeteer record: error: no samples from %s: %s\n", a.device.c_str(),
+                 session.lastError().empty() ? "the device never started streaming" : session.lastError().c_str());
+    return exitCode == kExitOk ? kExitIoError : exitCode;
+  }
+  if (auto r = writer->close(); !r) {
+    std::fprintf(stderr, "%s\n", r.error().c_str());
+    return kExitIoError;
+  }
+  const drivers::DeviceSessionStats st = session.stats();
+  std::printf("Recorded %llu samples to %s (dropped by the device link: %llu, queue overflows: %llu%s)\n",
+              static_cast<unsigned long long>(writer->samplesWritten()), a.output.c_str(),
+              static_cast<unsigned long long>(st.samplesDropped),
+              static_cast<unsigned long long>(mailbox.stats().queueOverflows),
+              mismatched ? (", " + std::to_string(mismatched) + " from a different device skipped").c_str() : "");
+  return exitCode;
+}
+
+}  // namespace
+
+void addDeviceCommands(CLI::App& app, Commands& commands) {
+  CLI::App* devices = app.add_subcommand("devices", "List attached armatures (serial ports with USB VID:PID)");
+  commands.push_back({devices, [] { return runDevices(); }});
+
+  auto simArgs = std::make_shared<SimArgs>();
+  CLI::App* simCmd = app.add_subcommand("sim", "Run a simulated armature on a path the drivers can open");
+  simCmd->add_option("--device", simArgs->device, "sim: spec: generated motion or a session (docs/devices.md)")
+      ->capture_default_str();
+  simCmd->add_flag("--pty", simArgs->pty, "serve on a new pseudo-terminal (its path is printed)");
+  simCmd->add_option("--link", simArgs->link, "also create this symlink to the pseudo-terminal");
+  simCmd->add_option("--seconds", simArgs->seconds, "stop after this long (default: until Ctrl-C)");
+  commands.push_back({simCmd, [simArgs] { return runSim(*simArgs); }});
+
+  auto recordArgs = std::make_shared<RecordArgs>();
+  CLI::App* record = app.add_subcommand("record", "Record a device's raw samples to a session file");
+  record->add_option("--device", recordArgs->device, "device spec, e.g. serial:/dev/ttyACM0 (docs/devices.md)")
+      ->required();
+  record->add_option("-o,--output", recordArgs->output, "session file to create (never overwritten)")->required();
+  record->add_option("--seconds", recordArgs->seconds, "stop after this long (default: until Ctrl-C)");
+  commands.push_back({record, [recordArgs] { return runRecord(*recordArgs); }});
+}
+
+}  // namespace imps::app

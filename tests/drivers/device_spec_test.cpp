@@ -1,0 +1,97 @@
+// Tests for drivers/device_spec: the grammar in docs/devices.md, its error messages and round trips.
+#include "drivers/device_spec.h"
+
+#include <gtest/gtest.h>
+
+namespace imps::drivers {
+namespace {
+
+TEST(DeviceSpec, SerialWithQuery) {
+  auto spec = parseDeviceSpec("serial:/dev/ttyACM0?baud=57600&protocol=lines&channels=6");
+  ASSERT_TRUE(spec) << spec.error();
+  EXPECT_EQ(spec->kind, DeviceKind::Serial);
+  EXPECT_EQ(spec->path, "/dev/ttyACM0");
+  EXPECT_EQ(spec->baud, 57600);
+  EXPECT_EQ(spec->protocol, WireProtocol::Lines);
+  EXPECT_EQ(spec->channels, 6);
+  EXPECT_EQ(spec->mode, AcquisitionMode::Stream);
+}
+
+TEST(DeviceSpec, SerialDefaultsAndPollMode) {
+  auto spec = parseDeviceSpec("serial:/dev/ttyUSB0?mode=poll&rate=60");
+  ASSERT_TRUE(spec) << spec.error();
+  EXPECT_EQ(spec->baud, 115200);
+  EXPECT_EQ(spec->protocol, WireProtocol::Binary);
+  EXPECT_EQ(spec->mode, AcquisitionMode::Poll);
+  EXPECT_EQ(spec->rateHz, 60);
+}
+
+TEST(DeviceSpec, HidAndUsbIds) {
+  auto hid = parseDeviceSpec("hid:2341:8036?serial=A1B2");
+  ASSERT_TRUE(hid) << hid.error();
+  EXPECT_EQ(hid->kind, DeviceKind::Hid);
+  EXPECT_EQ(hid->vendorId, 0x2341);
+  EXPECT_EQ(hid->productId, 0x8036);
+  EXPECT_EQ(hid->serialNumber, "A1B2");
+  auto usb = parseDeviceSpec("usb:1209:1");
+  ASSERT_TRUE(usb) << usb.error();
+  EXPECT_EQ(usb->vendorId, 0x1209);
+  EXPECT_EQ(usb->productId, 0x0001);
+}
+
+TEST(DeviceSpec, SimKeepsSimulatorKeysInOrder) {
+  auto spec = parseDeviceSpec("sim:take3.session?rate=200&noise=2&channels=16");
+  ASSERT_TRUE(spec) << spec.error();
+  EXPECT_EQ(spec->kind, DeviceKind::Sim);
+  EXPECT_EQ(spec->path, "take3.session");
+  EXPECT_EQ(spec->rateHz, 200);
+  ASSERT_EQ(spec->simParams.size(), 2u);
+  EXPECT_EQ(spec->simParams[0].first, "noise");
+  EXPECT_EQ(spec->simParams[1].second, "16");
+  auto bare = parseDeviceSpec("sim:");
+  ASSERT_TRUE(bare) << bare.error();
+  EXPECT_TRUE(bare->path.empty());
+}
+
+TEST(DeviceSpec, ErrorsSayWhereAndWhat) {
+  struct Case {
+    const char* text;
+    const char* expected;
+  } cases[] = {
+      {"ttyACM0", "spec:1:1: error: expected SCHEME:"},
+      {"bluetooth:xx", "spec:1:1: error: unknown scheme 'bluetooth'"},
+      {"serial:", "spec:1:8: error: expected a device path"},
+      {"serial:/dev/ttyACM0?baud=fast", "spec:1:26: error: expected a baud rate"},
+      {"serial:/dev/ttyACM0?bard=9600", "spec:1:21: error: unknown key 'bard'"},
+      {"serial:/dev/ttyACM0?baud=9600&baud=9600", "spec:1:31: error: key 'baud' given twice"},
+      {"serial:/dev/ttyACM0?protocol=ascii", "error: expected protocol=binary or protocol=lines"},
+      {"serial:/dev/ttyACM0?rate=70000", "error: expected a rate in Hz"},
+      {"serial:/dev/ttyACM0?channels=65", "error: expected a channel count in 0..64"},
+      {"serial:/dev/ttyACM0?", "error: expected key=value"},
+      {"hid:2341", "spec:1:5: error: expected VID:PID"},
+      {"hid:12345:1", "error: expected a USB vendor id"},
+      {"usb:1209:xyz", "spec:1:10: error: expected a USB product id"},
+      {"usb:1209:0001?baud=9600", "error: unknown key 'baud' for usb"},
+  };
+  for (const Case& c : cases) {
+    auto spec = parseDeviceSpec(c.text);
+    ASSERT_FALSE(spec) << c.text;
+    EXPECT_NE(spec.error().find(c.expected), std::string::npos) << c.text << " gave: " << spec.error();
+  }
+}
+
+TEST(DeviceSpec, FormatRoundTrips) {
+  for (const char* text : {"serial:/dev/ttyACM0", "serial:/dev/ttyUSB1?baud=9600&protocol=lines&channels=4",
+                           "serial:/dev/ttyACM0?mode=poll&rate=30", "hid:2341:8036?serial=X", "usb:1209:0001",
+                           "sim:?rate=1000&channels=64&noise=1"}) {
+    auto spec = parseDeviceSpec(text);
+    ASSERT_TRUE(spec) << spec.error();
+    EXPECT_EQ(formatDeviceSpec(*spec), text);
+    auto again = parseDeviceSpec(formatDeviceSpec(*spec));
+    ASSERT_TRUE(again);
+    EXPECT_EQ(*again, *spec);
+  }
+}
+
+}  // namespace
+}  // namespace imps::drivers
