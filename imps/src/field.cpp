@@ -83,7 +83,7 @@ Box Field::surfaceBounds() const {
           Box b;
           b.lo = all.lo + cell * glm::vec3(c, j, k);
           b.hi = b.lo + cell;
-          const float d = primitives_[i].minDistance(b);
+          const float d = primitives_[i].minDistance(b, /*tight=*/false);
           const size_t index = size_t(c) + kCells * (size_t(j) + kCells * size_t(k));
           if (blend_.additive()) upper[index] += blend_.term(d, params_[i]);
           else if (d < support_[i]) unbounded[index] = 1;

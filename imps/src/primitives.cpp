@@ -191,7 +191,7 @@ float squaredFarthestInBox(const glm::vec3& p, const Box& box) {
 }
 }  // namespace
 
-float Primitive::minDistance(const Box& box) const {
+float Primitive::minDistance(const Box& box, bool tight) const {
   switch (kind) {
     case PrimitiveKind::Metaball: return squaredDistanceToBox(center, box) / (radius * radius);
     case PrimitiveKind::Ellipsoid: {
@@ -199,12 +199,22 @@ float Primitive::minDistance(const Box& box) const {
       return squaredDistanceToBox(center, box) / (a * a);
     }
     case PrimitiveKind::LineSeg: {
-      // d >= |x - segment|^2 / max radius^2, and |x - segment| >= |centre - segment| - half diagonal.
-      const glm::vec3 c = box.center();
-      const float halfDiagonal = 0.5f * glm::length(box.size());
-      const float t = std::clamp(glm::dot(c - p1, axis), 0.0f, length);
-      const float dist = std::max(0.0f, glm::length(c - (p1 + t * axis)) - halfDiagonal);
+      // d(x) >= |x - segment|^2 / max radius^2. First the cheap bound |centre - segment| - half diagonal; when
+      // that does not already put the box beyond any support, refine: the distance from c(s) to a box is convex in
+      // s, so a ternary search finds the segment's distance to the box (its tolerance subtracted).
       const float rMax = std::max(r1, r2);
+      const glm::vec3 c = box.center();
+      const float tc = std::clamp(glm::dot(c - p1, axis), 0.0f, length);
+      const float cheap = std::max(0.0f, glm::length(c - (p1 + tc * axis)) - 0.5f * glm::length(box.size()));
+      if (!tight || cheap > 8.0f * rMax) return cheap * cheap / (rMax * rMax);
+      float lo = 0.0f, hi = length;
+      for (int it = 0; it < 16; ++it) {
+        const float a = lo + (hi - lo) / 3.0f, b = hi - (hi - lo) / 3.0f;
+        if (squaredDistanceToBox(p1 + a * axis, box) <= squaredDistanceToBox(p1 + b * axis, box)) hi = b;
+        else lo = a;
+      }
+      const float slack = (hi - lo) + 1e-6f * (length + glm::length(box.size()));
+      const float dist = std::max(cheap, std::sqrt(squaredDistanceToBox(p1 + 0.5f * (lo + hi) * axis, box)) - slack);
       return dist * dist / (rMax * rMax);
     }
   }

@@ -79,8 +79,9 @@ struct Primitive {
 
   // Box enclosing every x with d(x) <= dMax (dMax >= 0).
   Box bounds(float dMax) const;
-  // Lower and upper bounds of d over `box` (conservative: lower <= d(x) <= upper for every x in box).
-  float minDistance(const Box& box) const;
+  // Lower and upper bounds of d over `box` (conservative: lower <= d(x) <= upper for every x in box). With
+  // tight = false, minDistance skips the line segment's refinement: cheaper, still conservative, looser.
+  float minDistance(const Box& box, bool tight = true) const;
   float maxDistance(const Box& box) const;
   // The smallest radius of the primitive (metres): a ball of this radius fits in it wherever its core is.
   float minRadius() const;
