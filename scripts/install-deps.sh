@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs every Debian package the project needs to build, test and run. The one place that knows them.
-# Usage: scripts/install-deps.sh        (as root, or with sudo available; skips what is already installed)
+# Usage: scripts/install-deps.sh [fuzz]   (as root, or with sudo available; skips what is already installed)
+#   fuzz: also the clang that builds the libFuzzer targets (make fuzz)
 set -euo pipefail
 
 packages=(
@@ -15,6 +16,9 @@ packages=(
   # app, pictures and headless rendering
   libglfw3-dev libgl-dev libegl-dev libopenimageio-dev libimgui-dev xvfb xauth libgl1-mesa-dri
 )
+if [ "${1:-}" = "fuzz" ]; then
+  packages+=(clang-16 libclang-rt-16-dev)
+fi
 
 missing=()
 for p in "${packages[@]}"; do

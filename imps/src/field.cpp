@@ -252,7 +252,12 @@ inline float foldElliptical(float g, float x) {
 
 // The loops are compiled twice, for AVX2 and for the baseline, and chosen at run time. Both give the same bits:
 // IEEE add, multiply, divide, min and max are exact per lane, and -ffp-contract=off rules out fused multiply-adds.
+// (clang 16 cannot clone templates; its builds, the fuzz targets, use the baseline only.)
+#if defined(__clang__)
+#define IMPS_VECTOR_CLONES
+#else
 #define IMPS_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
+#endif
 
 template <float (*Distance)(const Primitive&, float, float, float)>
 IMPS_VECTOR_CLONES void distanceLoop(const Primitive& p, const float* xs, const float* ys, const float* zs, size_t n, float* d) {
