@@ -291,8 +291,7 @@ void Field::terms(size_t i, size_t n, FieldScratch& scratch) const {
   }
 }
 
-void Field::values(std::span<const glm::vec3> points, std::span<float> out, FieldScratch& scratch) const {
-  IMPS_CHECK_EQ(points.size(), out.size());
+void Field::accumulate(std::span<const glm::vec3> points, FieldScratch& scratch, bool keepTerms) const {
   const size_t n = points.size();
   scratch.xs.resize(n);
   scratch.ys.resize(n);
@@ -303,15 +302,16 @@ void Field::values(std::span<const glm::vec3> points, std::span<float> out, Fiel
     scratch.ys[i] = points[i].y;
     scratch.zs[i] = points[i].z;
   }
-  const size_t sets = scratch.setCount();
   const bool additive = blend_.additive();
-  scratch.acc.assign(sets * n, additive ? 0.0f : -1.0f);
+  scratch.acc.assign(scratch.setCount() * n, additive ? 0.0f : -1.0f);
+  if (keepTerms) scratch.terms.assign(scratch.candidates.size() * n, 0.0f);
   // Accumulate each candidate's terms into every local set holding it, candidates in ascending order (the order
   // every region and the point evaluation share).
   for (size_t k = 0; k < scratch.candidates.size(); ++k) {
     if (scratch.memberOffsets[k] == scratch.memberOffsets[k + 1]) continue;
     terms(scratch.candidates[k], n, scratch);
     const float* t = scratch.term.data();
+    if (keepTerms) std::copy(t, t + n, scratch.terms.begin() + long(k * n));
     for (uint32_t m = scratch.memberOffsets[k]; m < scratch.memberOffsets[k + 1]; ++m) {
       float* acc = scratch.acc.data() + size_t(scratch.memberSets[m]) * n;
       if (additive) {
@@ -321,6 +321,14 @@ void Field::values(std::span<const glm::vec3> points, std::span<float> out, Fiel
       }
     }
   }
+}
+
+void Field::values(std::span<const glm::vec3> points, std::span<float> out, FieldScratch& scratch) const {
+  IMPS_CHECK_EQ(points.size(), out.size());
+  const size_t n = points.size();
+  const size_t sets = scratch.setCount();
+  const bool additive = blend_.additive();
+  accumulate(points, scratch, /*keepTerms=*/false);
   for (size_t i = 0; i < n; ++i) out[i] = 0.0f;
   for (size_t s = 0; s < sets; ++s) {
     const float* acc = scratch.acc.data() + s * n;
@@ -433,30 +441,10 @@ void Field::samples(std::span<const glm::vec3> points, std::span<FieldSample> ou
   }
   const auto& cand = scratch.candidates;
   const size_t sets = scratch.setCount();
-  scratch.xs.resize(n);
-  scratch.ys.resize(n);
-  scratch.zs.resize(n);
-  scratch.term.resize(n);
-  for (size_t i = 0; i < n; ++i) {
-    scratch.xs[i] = points[i].x;
-    scratch.ys[i] = points[i].y;
-    scratch.zs[i] = points[i].z;
-    out[i] = FieldSample{};
-  }
+  for (size_t i = 0; i < n; ++i) out[i] = FieldSample{};
   if (sets == 0) return;
-  // Pass 1: every candidate's distances and terms, accumulated per set as values() does.
-  scratch.dist.resize(cand.size() * n);
-  scratch.terms.resize(cand.size() * n);
-  scratch.acc.assign(sets * n, 0.0f);
-  for (size_t k = 0; k < cand.size(); ++k) {
-    if (scratch.memberOffsets[k] == scratch.memberOffsets[k + 1]) continue;
-    terms(cand[k], n, scratch);
-    std::copy(scratch.term.begin(), scratch.term.begin() + long(n), scratch.terms.begin() + long(k * n));
-    for (uint32_t m = scratch.memberOffsets[k]; m < scratch.memberOffsets[k + 1]; ++m) {
-      float* acc = scratch.acc.data() + size_t(scratch.memberSets[m]) * n;
-      for (size_t i = 0; i < n; ++i) acc[i] += scratch.term[i];
-    }
-  }
+  // Pass 1: every candidate's terms, accumulated per set exactly as values() does.
+  accumulate(points, scratch, /*keepTerms=*/true);
   // The winning set of each point (the first maximum, as sample() picks it) and the value.
   scratch.winner.assign(n, 0);
   for (size_t i = 0; i < n; ++i) {

@@ -44,7 +44,7 @@ struct FieldScratch {
   std::vector<uint32_t> setOffsets, setMembers;  // local sets (CSR over candidate positions), deduplicated
   std::vector<uint32_t> memberOffsets, memberSets;  // for each candidate, the local sets holding it (CSR)
   std::vector<float> xs, ys, zs, term, acc;      // points (SoA), one primitive's terms, per-set accumulators
-  std::vector<float> dist, terms;                // samples(): every candidate's distances and terms
+  std::vector<float> terms;                       // samples(): every candidate's terms
   std::vector<uint32_t> winner;                  // samples(): each point's winning set
   std::vector<int32_t> globalToLocal;
   size_t setCount() const { return setOffsets.size() - 1; }
@@ -100,6 +100,9 @@ class Field {
   void prepareSets(FieldScratch& scratch) const;
   // Terms of primitive i at scratch.xs/ys/zs[0, n) into scratch.term.
   void terms(size_t i, size_t n, FieldScratch& scratch) const;
+  // Every candidate's terms at the points, combined per local set into scratch.acc (sets x points); with
+  // keepTerms, each candidate's terms are also kept in scratch.terms (candidates x points).
+  void accumulate(std::span<const glm::vec3> points, FieldScratch& scratch, bool keepTerms) const;
 
   std::vector<Primitive> primitives_;
   std::vector<float> params_;
