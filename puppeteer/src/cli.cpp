@@ -13,6 +13,7 @@ int runCli(int argc, char** argv) {
   addSceneCommands(app, commands);
   addDeviceCommands(app, commands);
   addTesselatorCommands(app, commands);
+  addCalibrationCommands(app, commands);
 
   try {
     app.parse(argc, argv);

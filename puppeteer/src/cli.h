@@ -29,6 +29,7 @@ using Commands = std::vector<Command>;
 void addSceneCommands(CLI::App& app, Commands& commands);  // mesh, check
 void addDeviceCommands(CLI::App& app, Commands& commands);  // devices, sim, record
 void addTesselatorCommands(CLI::App& app, Commands& commands);  // bench
+void addCalibrationCommands(CLI::App& app, Commands& commands);  // calibrate
 
 int runCli(int argc, char** argv);
 

@@ -1,0 +1,490 @@
+// Rig map / calibration files: parsing with source locations, validation against a character and a device,
+// writing (nlohmann-json) and atomic saves.
+#include "calibration/rig_map.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "json_document.h"
+#include "object_reader.h"
+
+namespace imps::calibration {
+
+using detail::JsonValue;
+using detail::ObjectReader;
+using detail::kDegree;
+
+const char* toString(Axis axis) {
+  switch (axis) {
+    case Axis::X: return "x";
+    case Axis::Y: return "y";
+    case Axis::Z: return "z";
+  }
+  return "?";
+}
+
+int RigMap::findChannel(int channel) const {
+  for (size_t i = 0; i < channels.size(); ++i)
+    if (channels[i].channel == channel) return static_cast<int>(i);
+  return -1;
+}
+
+std::string RigMap::channelLabel(size_t mapping, const drivers::DeviceInfo* dev) const {
+  const ChannelMap& c = channels[mapping];
+  std::string name = c.channelName;
+  if (name.empty() && dev && c.channel >= 0 && static_cast<size_t>(c.channel) < dev->channelNames.size())
+    name = dev->channelNames[static_cast<size_t>(c.channel)];
+  std::string label = c.channel >= 0 ? "channel " + std::to_string(c.channel) : "channel";
+  if (!name.empty()) label += " '" + name + "'";
+  return label;
+}
+
+namespace {
+
+
+std::string channelText(const ChannelMap& c) {
+  return c.channelName.empty() ? "channel " + std::to_string(c.channel) : "channel '" + c.channelName + "'";
+}
+
+// Value checks for one channel, each reported at `at(field)`.
+template <typename LocFn>
+void checkChannelValues(const ChannelMap& c, int bits, LocFn at, Diagnostics& diags) {
+  if (c.sign != 1 && c.sign != -1) diags.error(at("sign"), "'sign' must be 1 or -1, not " + std::to_string(c.sign));
+  if (!(std::isfinite(c.gain) && c.gain > 0))
+    diags.error(at("gain"), "gain must be a positive number of counts per radian (got " + std::to_string(c.gain) + ")");
+  if (std::isnan(c.minAngle) || std::isnan(c.maxAngle)) diags.error(at("min"), "limits must not be NaN");
+  else if (c.minAngle > c.maxAngle)
+    diags.error(at("max"), "'max' (" + std::to_string(c.maxAngle / kDegree) + " deg) is below 'min' (" +
+                               std::to_string(c.minAngle / kDegree) + " deg)");
+  if (!(c.deadband >= 0) || !std::isfinite(c.deadband))
+    diags.error(at("deadband"), "deadband must be >= 0 radians (got " + std::to_string(c.deadband) + ")");
+  if (!(c.smoothingMs >= 0) || !std::isfinite(c.smoothingMs))
+    diags.error(at("smoothing_ms"), "smoothing_ms must be >= 0 (got " + std::to_string(c.smoothingMs) + ")");
+  if (c.offset) {
+    const double turn = static_cast<double>(uint64_t{1} << bits);
+    if (!std::isfinite(*c.offset)) diags.error(at("offset"), "offset must be a finite number of counts");
+    else if (c.encoder == EncoderKind::Absolute && (*c.offset < 0 || *c.offset >= turn))
+      diags.error(at("offset"), "offset " + std::to_string(*c.offset) + " is outside the encoder's counts [0, " +
+                                    std::to_string(uint64_t{1} << bits) + ")");
+  }
+}
+
+// Checks that need the whole map or the context: duplicates, orders, joints, device channels, offsets.
+void checkMap(RigMap& map, const RigMapContext& ctx, Diagnostics& diags) {
+  if (ctx.device && ctx.device->bitsPerChannel != map.bits)
+    diags.error(map.bitsLoc, "the rig map is for " + std::to_string(map.bits) + "-bit encoders but the device '" +
+                                 ctx.device->name + "' reports " + std::to_string(ctx.device->bitsPerChannel) +
+                                 " bits per channel");
+  // Channel names → indices.
+  for (ChannelMap& c : map.channels) {
+    if (c.channelName.empty()) continue;
+    if (!ctx.device) continue;  // resolved later; Calibration requires indices
+    int found = -1;
+    for (size_t i = 0; i < ctx.device->channelNames.size(); ++i)
+      if (ctx.device->channelNames[i] == c.channelName) found = static_cast<int>(i);
+    if (found < 0) {
+      std::string message = "device '" + ctx.device->name + "' has no channel named '" + c.channelName + "'";
+      const std::string guess = closestMatch(c.channelName, ctx.device->channelNames);
+      if (!guess.empty()) message += "; did you mean '" + guess + "'?";
+      diags.error(c.loc, message);
+    }
+    c.channel = found;
+  }
+  for (size_t i = 0; i < map.channels.size(); ++i) {
+    const ChannelMap& c = map.channels[i];
+    if (ctx.device && c.channel >= ctx.device->channelCount)
+      diags.error(c.loc, "channel " + std::to_string(c.channel) + " is out of range: device '" + ctx.device->name +
+                             "' has " + std::to_string(ctx.device->channelCount) + " channels (0.." +
+                             std::to_string(ctx.device->channelCount - 1) + ")");
+    if (c.channel >= drivers::kMaxChannels)
+      diags.error(c.loc, "channel " + std::to_string(c.channel) + " is out of range: armatures have at most " +
+                             std::to_string(drivers::kMaxChannels) + " channels (0.." +
+                             std::to_string(drivers::kMaxChannels - 1) + ")");
+    for (size_t j = 0; j < i; ++j) {
+      const ChannelMap& o = map.channels[j];
+      const bool same = (c.channel >= 0 && c.channel == o.channel) ||
+                        (c.channel < 0 && !c.channelName.empty() && c.channelName == o.channelName);
+      if (same) {
+        diags.error(c.loc, channelText(c) + " is mapped twice: it already drives " + o.joint + " " + toString(o.axis) +
+                               " (line " + std::to_string(o.loc.line) + ")");
+        break;
+      }
+    }
+    if (ctx.requireOffsets && !c.offset)
+      diags.error(c.loc, "missing field 'offset' for " + channelText(c) +
+                             ": a calibration needs every channel's offset (run `puppeteer calibrate`)");
+  }
+  std::vector<std::string> jointNames;
+  if (ctx.character)
+    for (const Joint& j : ctx.character->joints()) jointNames.push_back(j.name);
+  for (size_t ji = 0; ji < map.joints.size(); ++ji) {
+    const JointMap& jm = map.joints[ji];
+    for (size_t k = 0; k < ji; ++k)
+      if (map.joints[k].joint == jm.joint)
+        diags.error(jm.loc, "joint '" + jm.joint + "' is listed twice (first at line " +
+                                std::to_string(map.joints[k].loc.line) + "): put all its channels in one entry");
+    if (ctx.character && ctx.character->findJoint(jm.joint) < 0) {
+      std::string message = "unknown joint '" + jm.joint + "'";
+      const std::string guess = closestMatch(jm.joint, jointNames);
+      if (!guess.empty()) message += "; did you mean '" + guess + "'?";
+      diags.error(jm.loc, message);
+    }
+  }
+}
+
+// Parses one channel object of a joint entry.
+void parseChannel(const JsonValue& v, const std::string& joint, int bits, RigMap& map, Diagnostics& diags) {
+  if (v.kind != JsonValue::Kind::Object) {
+    diags.error(v.loc, std::string("a channel must be an object, not ") + detail::describe(v.kind));
+    return;
+  }
+  static const std::vector<std::string> kKeys = {
+      "channel", "axis",     "sign",         "gain",         "range",       "range_deg", "offset",  "min", "min_deg",
+      "max",     "max_deg",  "deadband",     "deadband_deg", "smoothing_ms", "encoder"};
+  const size_t errorsBefore = static_cast<size_t>(diags.errorCount());
+  ObjectReader r(v, "a channel of joint '" + joint + "'", kKeys, diags);
+  ChannelMap c;
+  c.joint = joint;
+  c.loc = v.loc;
+  if (const JsonValue* ch = r.get("channel")) {
+    c.loc = ch->loc;
+    if (ch->kind == JsonValue::Kind::String) {
+      c.channelName = ch->string;
+      if (c.channelName.empty()) diags.error(ch->loc, "'channel' name must not be empty");
+    } else if (ch->kind == JsonValue::Kind::Number && ch->integral && ch->number >= 0 && ch->number < 1e6) {
+      c.channel = static_cast<int>(ch->number);
+    } else {
+      diags.error(ch->loc, "'channel' must be a channel index (0, 1, …) or a device channel name");
+    }
+  } else {
+    r.missing("channel");
+  }
+  if (const JsonValue* a = r.typed("axis", JsonValue::Kind::String, "a string")) {
+    if (a->string == "x" || a->string == "X") c.axis = Axis::X;
+    else if (a->string == "y" || a->string == "Y") c.axis = Axis::Y;
+    else if (a->string == "z" || a->string == "Z") c.axis = Axis::Z;
+    else diags.error(a->loc, "bad axis '" + a->string + "': expected 'x', 'y' or 'z'");
+  } else if (!r.get("axis")) {
+    r.missing("axis");
+  }
+  if (const JsonValue* s = r.typed("sign", JsonValue::Kind::Number, "a number")) {
+    if (s->number == 1 || s->number == -1) c.sign = static_cast<int>(s->number);
+    else diags.error(s->loc, "'sign' must be 1 or -1");
+  } else if (!r.get("sign")) {
+    r.missing("sign");
+  }
+  if (const JsonValue* e = r.typed("encoder", JsonValue::Kind::String, "a string")) {
+    if (e->string == "absolute") c.encoder = EncoderKind::Absolute;
+    else if (e->string == "linear") c.encoder = EncoderKind::Linear;
+    else diags.error(e->loc, "bad encoder '" + e->string + "': expected 'absolute' or 'linear'");
+  }
+  // Gain: explicit, or from the range the full 2^bits counts cover, or (absolute encoders) one full turn.
+  SourceLoc rangeLoc;
+  const std::optional<double> gain = r.number("gain");
+  const std::optional<double> range = r.angle("range", &rangeLoc);
+  const double turn = static_cast<double>(uint64_t{1} << bits);
+  if (r.get("gain") && (r.get("range") || r.get("range_deg"))) {
+    diags.error(r.locOf("gain"), "give either 'gain' (counts per radian) or 'range'/'range_deg', not both");
+  } else if (gain) {
+    c.gain = *gain;
+  } else if (range) {
+    if (!(*range > 0)) diags.error(rangeLoc, "the range must be positive");
+    else c.gain = turn / *range;
+  } else if (!r.get("gain") && !r.get("range") && !r.get("range_deg")) {
+    if (c.encoder == EncoderKind::Absolute) c.gain = turn / (2 * std::numbers::pi);
+    else r.missing("gain' (or 'range_deg'; a linear sensor has no natural full scale)");
+  }
+  if (r.get("offset")) c.offset = r.number("offset");
+  SourceLoc minLoc = r.loc(), maxLoc = r.loc(), deadLoc = r.loc();
+  if (auto m = r.angle("min", &minLoc)) c.minAngle = *m;
+  if (auto m = r.angle("max", &maxLoc)) c.maxAngle = *m;
+  if (auto d = r.angle("deadband", &deadLoc)) c.deadband = *d;
+  if (auto s = r.number("smoothing_ms")) c.smoothingMs = *s;
+  if (static_cast<size_t>(diags.errorCount()) == errorsBefore) {
+    checkChannelValues(
+        c, bits,
+        [&](std::string_view field) -> SourceLoc {
+          if (field == "min") return minLoc;
+          if (field == "max") return maxLoc;
+          if (field == "deadband") return deadLoc;
+          if (field == "gain" && !r.get("gain")) return rangeLoc;
+          return r.locOf(field);
+        },
+        diags);
+  }
+  map.channels.push_back(std::move(c));
+}
+
+void parseJoint(const JsonValue& v, RigMap& map, Diagnostics& diags) {
+  if (v.kind != JsonValue::Kind::Object) {
+    diags.error(v.loc, std::string("a joint entry must be an object, not ") + detail::describe(v.kind));
+    return;
+  }
+  ObjectReader r(v, "a joint entry", {"joint", "order", "channels"}, diags);
+  JointMap jm;
+  jm.loc = v.loc;
+  if (const JsonValue* name = r.typed("joint", JsonValue::Kind::String, "a string")) {
+    jm.joint = name->string;
+    jm.loc = name->loc;
+  } else if (!r.get("joint")) {
+    r.missing("joint");
+    return;
+  } else {
+    return;
+  }
+  const size_t first = map.channels.size();
+  if (const JsonValue* chans = r.typed("channels", JsonValue::Kind::Array, "an array")) {
+    if (chans->items.empty()) diags.error(chans->loc, "joint '" + jm.joint + "' has no channels");
+    for (const JsonValue& c : chans->items) parseChannel(c, jm.joint, map.bits, map, diags);
+  } else if (!r.get("channels")) {
+    r.missing("channels");
+  }
+  for (size_t i = first; i < map.channels.size(); ++i) jm.mappings.push_back(i);
+  // The composition order must name exactly the driven axes.
+  std::string used;
+  for (size_t i : jm.mappings) {
+    const char a = static_cast<char>('X' + static_cast<int>(map.channels[i].axis));
+    if (used.find(a) != std::string::npos) {
+      diags.error(map.channels[i].loc, "joint '" + jm.joint + "' axis " + toString(map.channels[i].axis) +
+                                           " is driven by two channels");
+    }
+    used += a;
+  }
+  if (const JsonValue* order = r.typed("order", JsonValue::Kind::String, "a string")) {
+    std::string o;
+    for (char ch : order->string) o += static_cast<char>(ch >= 'a' && ch <= 'z' ? ch - 'a' + 'A' : ch);
+    bool ok = o.size() == used.size() && !o.empty();
+    for (char a : used) ok = ok && std::count(o.begin(), o.end(), a) == 1;
+    if (!ok)
+      diags.error(order->loc, "order '" + order->string + "' of joint '" + jm.joint +
+                                  "' must list each driven axis once (driven: " + (used.empty() ? "none" : used) + ")");
+    jm.order = o;
+  } else if (!r.get("order")) {
+    if (used.size() > 1)
+      diags.error(jm.loc, "joint '" + jm.joint + "' is driven on " + std::to_string(used.size()) +
+                              " axes: add \"order\" (e.g. \"" + used + "\") to say how they compose");
+    jm.order = used;
+  }
+  map.joints.push_back(std::move(jm));
+}
+
+}  // namespace
+
+std::expected<RigMap, Diagnostics> parseRigMap(std::string_view json, std::string_view fileName,
+                                               const RigMapContext& context, Diagnostics* warnings) {
+  Diagnostics diags;
+  JsonValue root;
+  if (!detail::parseJson(json, fileName, root, diags)) return std::unexpected(diags);
+  if (root.kind != JsonValue::Kind::Object) {
+    diags.error(root.loc, std::string("a rig map must be a JSON object, not ") + detail::describe(root.kind));
+    return std::unexpected(diags);
+  }
+  RigMap map;
+  map.file = std::string(fileName);
+  // The version first: a newer file may mean anything, so nothing else is reported for it.
+  const JsonValue* version = root.find("version");
+  if (!version) {
+    diags.error(root.loc, "missing field 'version' (this program writes \"version\": " +
+                              std::to_string(kRigMapVersion) + ")");
+    return std::unexpected(diags);
+  }
+  if (version->kind != JsonValue::Kind::Number || !version->integral || version->number < 1) {
+    diags.error(version->loc, "'version' must be a positive integer");
+    return std::unexpected(diags);
+  }
+  if (version->number > kRigMapVersion) {
+    diags.error(version->loc, "file format version " + detail::integerText(version->number) +
+                                  " is newer than this program reads (" + std::to_string(kRigMapVersion) +
+                                  "); update puppeteer");
+    return std::unexpected(diags);
+  }
+  ObjectReader r(root, "the rig map", {"version", "bits", "device", "joints", "info"}, diags);
+  if (const JsonValue* bits = r.typed("bits", JsonValue::Kind::Number, "a number")) {
+    map.bitsLoc = bits->loc;
+    if (!bits->integral || bits->number < 1 || bits->number > 32) {
+      diags.error(bits->loc, "'bits' must be an integer from 1 to 32");
+      return std::unexpected(diags);
+    }
+    map.bits = static_cast<int>(bits->number);
+  } else {
+    if (!r.get("bits")) r.missing("bits");
+    return std::unexpected(diags);
+  }
+  if (const JsonValue* dev = r.typed("device", JsonValue::Kind::String, "a string")) map.device = dev->string;
+  if (const JsonValue* info = r.typed("info", JsonValue::Kind::Object, "an object")) {
+    // Kept verbatim: re-parse the object's text through nlohmann for a compact canonical form.
+    (void)info;
+  }
+  if (const JsonValue* joints = r.typed("joints", JsonValue::Kind::Array, "an array")) {
+    for (const JsonValue& j : joints->items) parseJoint(j, map, diags);
+  } else if (!r.get("joints")) {
+    r.missing("joints");
+  }
+  if (r.get("info") && !diags.hasErrors()) {
+    try {
+      const nlohmann::ordered_json whole = nlohmann::ordered_json::parse(json);
+      map.info = whole.at("info").dump();
+    } catch (const std::exception&) {
+      // Our reader accepted it, so nlohmann will too; keep going without the info on the impossible path.
+    }
+  }
+  checkMap(map, context, diags);
+  if (diags.hasErrors()) return std::unexpected(diags);
+  if (warnings && context.device && !map.device.empty() && map.device != context.device->name)
+    warnings->warning(r.locOf("device"), "written for device '" + map.device + "' but used with '" +
+                                             context.device->name + "'");
+  return map;
+}
+
+std::expected<RigMap, Diagnostics> readRigMapFile(const std::filesystem::path& path, const RigMapContext& context,
+                                                  Diagnostics* warnings) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  if (in) text << in.rdbuf();
+  if (!in || std::filesystem::is_directory(path)) {
+    Diagnostics d;
+    d.error({path.string(), 0, 0}, std::string("cannot read rig map: ") +
+                                       (std::filesystem::exists(path) ? "not a readable file" : "no such file"));
+    return std::unexpected(d);
+  }
+  return parseRigMap(text.str(), path.string(), context, warnings);
+}
+
+bool validateRigMap(RigMap& map, const RigMapContext& context, Diagnostics& diags) {
+  const int before = diags.errorCount();
+  if (map.bits < 1 || map.bits > 32) {
+    diags.error(map.bitsLoc, "'bits' must be an integer from 1 to 32");
+    return false;
+  }
+  for (const ChannelMap& c : map.channels) checkChannelValues(c, map.bits, [&](std::string_view) { return c.loc; }, diags);
+  // The structure the parser guarantees by construction: mappings in range and on their joint, orders that list
+  // exactly the driven axes.
+  for (const JointMap& jm : map.joints) {
+    std::string used;
+    bool ok = !jm.mappings.empty();
+    for (size_t i : jm.mappings) {
+      if (i >= map.channels.size() || map.channels[i].joint != jm.joint) {
+        ok = false;
+        continue;
+      }
+      used += static_cast<char>('X' + static_cast<int>(map.channels[i].axis));
+    }
+    ok = ok && jm.order.size() == used.size();
+    for (char a : used) ok = ok && std::count(jm.order.begin(), jm.order.end(), a) == 1;
+    if (!ok)
+      diags.error(jm.loc, "joint '" + jm.joint + "': its channels and order '" + jm.order +
+                              "' do not match (each driven axis once, driven: " + used + ")");
+  }
+  checkMap(map, context, diags);
+  return diags.errorCount() == before;
+}
+
+namespace {
+
+// Angles are written in degrees: that is what a technician reads and edits.
+nlohmann::ordered_json degrees(double radians) { return radians / kDegree; }
+
+// {"a": 1, "b": "x"} on one line: a technician reads and edits one channel per line.
+std::string inlineObject(const nlohmann::ordered_json& o) {
+  std::string s = "{";
+  bool first = true;
+  for (const auto& [key, value] : o.items()) {
+    if (!first) s += ", ";
+    first = false;
+    s += nlohmann::ordered_json(key).dump() + ": " + value.dump();
+  }
+  return s + "}";
+}
+
+}  // namespace
+
+std::string toJson(const RigMap& map) {
+  using nlohmann::ordered_json;
+  std::string out = "{\n  \"version\": " + std::to_string(kRigMapVersion) + ",\n  \"bits\": " +
+                    std::to_string(map.bits) + ",\n";
+  if (!map.device.empty()) out += "  \"device\": " + ordered_json(map.device).dump() + ",\n";
+  if (!map.info.empty()) out += "  \"info\": " + inlineObject(ordered_json::parse(map.info)) + ",\n";
+  out += "  \"joints\": [";
+  for (size_t ji = 0; ji < map.joints.size(); ++ji) {
+    const JointMap& jm = map.joints[ji];
+    out += ji ? ",\n" : "\n";
+    out += "    {\"joint\": " + ordered_json(jm.joint).dump();
+    if (jm.mappings.size() > 1) out += ", \"order\": " + ordered_json(jm.order).dump();
+    out += ", \"channels\": [";
+    for (size_t k = 0; k < jm.mappings.size(); ++k) {
+      const ChannelMap& c = map.channels[jm.mappings[k]];
+      ordered_json o;
+      if (c.channel >= 0) o["channel"] = c.channel;
+      else o["channel"] = c.channelName;
+      o["axis"] = toString(c.axis);
+      o["sign"] = c.sign;
+      if (c.encoder == EncoderKind::Linear) o["encoder"] = "linear";
+      o["gain"] = c.gain;
+      if (c.offset) o["offset"] = *c.offset;
+      if (std::isfinite(c.minAngle)) o["min_deg"] = degrees(c.minAngle);
+      if (std::isfinite(c.maxAngle)) o["max_deg"] = degrees(c.maxAngle);
+      if (c.deadband > 0) o["deadband_deg"] = degrees(c.deadband);
+      if (c.smoothingMs > 0) o["smoothing_ms"] = c.smoothingMs;
+      out += (k ? ",\n      " : "\n      ") + inlineObject(o);
+    }
+    out += "\n    ]}";
+  }
+  out += map.joints.empty() ? "]\n}\n" : "\n  ]\n}\n";
+  return out;
+}
+
+std::expected<void, std::string> writeFileAtomically(const std::filesystem::path& path, std::string_view text) {
+  auto fail = [&](const std::string& what) {
+    return std::unexpected(path.string() + ": error: " + what + ": " + std::strerror(errno));
+  };
+  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
+  std::string tmpl = (dir / ("." + path.filename().string() + ".XXXXXX")).string();
+  const int fd = ::mkstemp(tmpl.data());
+  if (fd < 0) return fail("cannot create a temporary file in " + dir.string());
+  size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      auto e = fail("cannot write " + tmpl);
+      ::close(fd);
+      ::unlink(tmpl.c_str());
+      return e;
+    }
+    done += static_cast<size_t>(n);
+  }
+  // mkstemp makes the file 0600; a calibration is not a secret.
+  ::fchmod(fd, 0644);
+  if (::fsync(fd) != 0) {
+    auto e = fail("cannot sync " + tmpl);
+    ::close(fd);
+    ::unlink(tmpl.c_str());
+    return e;
+  }
+  ::close(fd);
+  if (::rename(tmpl.c_str(), path.c_str()) != 0) {
+    auto e = fail("cannot rename " + tmpl + " over the target");
+    ::unlink(tmpl.c_str());
+    return e;
+  }
+  // The rename itself is durable only once the directory is synced.
+  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
+  if (dfd >= 0) {
+    ::fsync(dfd);
+    ::close(dfd);
+  }
+  return {};
+}
+
+}  // namespace imps::calibration

@@ -1,0 +1,33 @@
+// Calibrations stored in recorded sessions (see session_calibration.h).
+#include "session_calibration.h"
+
+namespace imps::app {
+
+std::expected<void, std::string> appendCalibration(sim::SessionWriter& writer, const calibration::Calibration& c) {
+  return writer.appendCalibration(c.toJson());
+}
+
+std::expected<std::optional<calibration::Calibration>, Diagnostics> calibrationForSample(
+    const sim::Session& session, size_t sampleIndex, const Character* character, const std::string& sessionName) {
+  const sim::SessionCalibration* found = nullptr;
+  size_t number = 0;
+  for (size_t i = 0; i < session.calibrations.size(); ++i) {
+    if (session.calibrations[i].firstSample > sampleIndex) continue;
+    if (!found || session.calibrations[i].firstSample >= found->firstSample) {
+      found = &session.calibrations[i];
+      number = i;
+    }
+  }
+  if (!found) return std::optional<calibration::Calibration>{};
+  const drivers::DeviceInfo* device = nullptr;
+  if (sampleIndex < session.sampleDevice.size() && session.sampleDevice[sampleIndex] < session.devices.size())
+    device = &session.devices[session.sampleDevice[sampleIndex]];
+  else if (!session.devices.empty())
+    device = &session.devices[0];
+  auto cal = calibration::Calibration::parse(found->json, sessionName + " calibration #" + std::to_string(number),
+                                             character, device);
+  if (!cal) return std::unexpected(cal.error());
+  return std::optional<calibration::Calibration>(std::move(*cal));
+}
+
+}  // namespace imps::app

@@ -1,0 +1,27 @@
+// Calibrations stored in recorded sessions: writing the one in force, and finding the one a replayed sample was
+// captured with. Lives in puppeteer/ because it is where calibration/ and sim/ meet.
+#pragma once
+
+#include <cstddef>
+#include <expected>
+#include <optional>
+#include <string>
+
+#include "calibration/calibration.h"
+#include "sim/session_file.h"
+
+namespace imps::app {
+
+// Appends `calibration` as the session's calibration from the next sample on (SessionWriter::appendCalibration
+// with the calibration file's text). Errors are the writer's.
+std::expected<void, std::string> appendCalibration(sim::SessionWriter& writer, const calibration::Calibration& c);
+
+// The calibration in force for sample `sampleIndex` of `session`: the last CALIBRATION record whose firstSample is
+// <= sampleIndex; nullopt when the session has none that early. The blob is parsed and checked against the
+// character (may be null) and the sample's device; errors are reported as "SESSION calibration #N:line:column:
+// error: …" with the given session name.
+std::expected<std::optional<calibration::Calibration>, Diagnostics> calibrationForSample(
+    const sim::Session& session, size_t sampleIndex, const Character* character = nullptr,
+    const std::string& sessionName = "session");
+
+}  // namespace imps::app
