@@ -94,7 +94,7 @@ void Tesselator::State::resizeParticles(size_t n) {
   dead.resize(n);
 }
 
-void Tesselator::State::add(const glm::vec3& p, const glm::vec3& g, float s, int32_t ownerIndex) {
+void Tesselator::State::add(glm::vec3 p, glm::vec3 g, float s, int32_t ownerIndex) {
   pos.push_back(p);
   vel.push_back(glm::vec3(0.0f));
   grad.push_back(g);

@@ -83,7 +83,8 @@ struct Tesselator::State {
   size_t size() const { return pos.size(); }
   void resizeParticles(size_t n);
   // Appends a particle on the surface (grad: field gradient there).
-  void add(const glm::vec3& p, const glm::vec3& g, float s, int32_t ownerIndex);
+  // Appends a particle. Takes its vectors by value: callers pass elements of the arrays this grows.
+  void add(glm::vec3 p, glm::vec3 g, float s, int32_t ownerIndex);
 };
 
 // Places particles on the field's surface from every primitive (tesselator_seed.cpp).
