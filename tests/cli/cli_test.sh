@@ -72,5 +72,22 @@ check "no output for a bad scene" test ! -e "$work/bad.ply"
 expect "render" 0 "$puppeteer" render "$src/examples/beanito.wrl" --res 32 --width 64 --height 64 -o "$work/b.png"
 check "png magic" test "$(head -c 4 "$work/b.png" | tail -c 3)" = "PNG"
 
+# devices: lists what is attached (here: possibly nothing) and exits 0.
+expect "devices" 0 "$puppeteer" devices
+
+# record from the in-process simulated armature, then calibrate against it. The simulator's generated motion never
+# holds still, so calibration must refuse the window as too noisy, say which channels, and write nothing.
+expect "record a simulated armature" 0 "$puppeteer" record --device 'sim:?rate=200&channels=32' -o "$work/take.session" --seconds 0.5
+check "session file written" test -s "$work/take.session"
+expect "record never overwrites" 3 "$puppeteer" record --device 'sim:?rate=200&channels=32' -o "$work/take.session" --seconds 0.2
+expect "calibrate rejects a moving armature" 1 "$puppeteer" calibrate --rig "$src/examples/simple_biped.rig.json" \
+  --scene "$src/examples/simple_biped.wrl" --session "$work/take.session" -o "$work/cal.json"
+check "noisy channels are named" grep -qi "noisy\|noise" "$work/err"
+check "no calibration written" test ! -e "$work/cal.json"
+printf '{\n  "version": 1,\n  "joints": [ { "joint": "L_Elbo" } ]\n}\n' >"$work/bad.rig.json"
+expect "bad rig map" 1 "$puppeteer" calibrate --rig "$work/bad.rig.json" --scene "$src/examples/simple_biped.wrl" \
+  --session "$work/take.session" -o "$work/cal.json"
+check "rig map error has file:line:column" grep -q "bad.rig.json:[0-9]*:[0-9]*: error:" "$work/err"
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]
