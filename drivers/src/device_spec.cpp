@@ -1,6 +1,8 @@
 // Device spec parsing and formatting (grammar in docs/devices.md).
 #include "drivers/device_spec.h"
 
+#include "text.h"
+
 #include <charconv>
 #include <cstdio>
 #include <sstream>
@@ -20,20 +22,6 @@ const char* toString(WireProtocol protocol) { return protocol == WireProtocol::B
 const char* toString(AcquisitionMode mode) { return mode == AcquisitionMode::Stream ? "stream" : "poll"; }
 
 namespace {
-
-// Concatenates the operands' stream output (g++ 12 has no <format>).
-template <class... Args>
-std::string cat(const Args&... args) {
-  std::ostringstream out;
-  (out << ... << args);
-  return out.str();
-}
-
-std::string hex4(unsigned v) {
-  char buf[8];
-  std::snprintf(buf, sizeof buf, "%04x", v & 0xFFFFu);
-  return buf;
-}
 
 std::unexpected<std::string> fail(size_t offset, std::string_view what) {
   return std::unexpected(cat("spec:1:", offset + 1, ": error: ", what));

@@ -2,6 +2,8 @@
 // FTDI latency timer) because they belong to the same "what is this port" question.
 #include "drivers/serial_transport.h"
 
+#include "text.h"
+
 #include <fcntl.h>
 #include <libserialport.h>
 #include <poll.h>
@@ -22,20 +24,6 @@
 namespace imps::drivers {
 
 namespace {
-
-// Concatenates the operands' stream output (g++ 12 has no <format>).
-template <class... Args>
-std::string cat(const Args&... args) {
-  std::ostringstream out;
-  (out << ... << args);
-  return out.str();
-}
-
-std::string hex4(unsigned v) {
-  char buf[8];
-  std::snprintf(buf, sizeof buf, "%04x", v & 0xFFFFu);
-  return buf;
-}
 
 std::string spError(std::string_view what) {
   char* message = sp_last_error_message();
