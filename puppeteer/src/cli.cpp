@@ -14,6 +14,8 @@ int runCli(int argc, char** argv) {
   addDeviceCommands(app, commands);
   addTesselatorCommands(app, commands);
   addCalibrationCommands(app, commands);
+  addSessionCommands(app, commands);
+  addLiveCommands(app, commands);
 
   try {
     app.parse(argc, argv);

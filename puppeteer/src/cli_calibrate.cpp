@@ -1,6 +1,7 @@
 // `puppeteer calibrate`: joint-offset calibration of an armature against a character's calibration pose, from a
 // live device (interactive) or the first milliseconds of a recorded session (non-interactive). docs/calibration.md.
 #include "cli.h"
+#include "device_opener.h"
 
 #include <CLI/CLI.hpp>
 #include <unistd.h>
@@ -109,32 +110,12 @@ int openDevice(const std::string& specText, LiveDevice& live, drivers::DeviceInf
     std::fprintf(stderr, "%s\n", spec.error().c_str());
     return kExitUsage;
   }
-  drivers::TransportOpener opener;
-  switch (spec->kind) {
-    case drivers::DeviceKind::Serial: {
-      drivers::SerialTransportOptions so;
-      so.baud = spec->baud;
-      opener = drivers::serialOpener(spec->path, so);
-      break;
-    }
-    case drivers::DeviceKind::Sim: {
-      auto options = sim::armatureOptionsFromSpec(*spec);
-      if (!options) {
-        std::fprintf(stderr, "%s\n", options.error().c_str());
-        return kExitInvalidInput;
-      }
-      opener = sim::simulatedOpener(*options, live.clock);
-      break;
-    }
-    default:
-      std::fprintf(stderr, "puppeteer calibrate: error: %s devices are not supported yet (use serial: or sim:)\n",
-                   drivers::toString(spec->kind));
-      return kExitUsage;
-  }
+  auto opener = openerForSpec(*spec, live.clock, "calibrate");
+  if (!opener) return opener.error();
   drivers::PoseMailboxOptions mo;
   mo.queueCapacity = 1 << 14;
   live.mailbox = std::make_unique<drivers::PoseMailbox>(mo);
-  live.session = std::make_unique<drivers::DeviceSession>(opener, *live.mailbox, drivers::sessionOptionsFor(*spec));
+  live.session = std::make_unique<drivers::DeviceSession>(*opener, *live.mailbox, drivers::sessionOptionsFor(*spec));
   live.session->start();
   std::printf("Connecting to %s ...\n", specText.c_str());
   std::fflush(stdout);

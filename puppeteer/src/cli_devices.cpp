@@ -1,6 +1,7 @@
 // `puppeteer devices`, `puppeteer sim` and `puppeteer record`: what is attached, a simulated armature on a
 // pseudo-terminal, and recording a live device to a session file. docs/devices.md.
 #include "cli.h"
+#include "device_opener.h"
 
 #include <CLI/CLI.hpp>
 #include <fcntl.h>
@@ -152,28 +153,8 @@ int runRecord(const RecordArgs& a) {
     return kExitUsage;
   }
   sim::SteadyClock clock;
-  drivers::TransportOpener opener;
-  switch (spec->kind) {
-    case drivers::DeviceKind::Serial: {
-      drivers::SerialTransportOptions so;
-      so.baud = spec->baud;
-      opener = drivers::serialOpener(spec->path, so);
-      break;
-    }
-    case drivers::DeviceKind::Sim: {
-      auto options = sim::armatureOptionsFromSpec(*spec);
-      if (!options) {
-        std::fprintf(stderr, "%s\n", options.error().c_str());
-        return kExitInvalidInput;
-      }
-      opener = sim::simulatedOpener(*options, clock);
-      break;
-    }
-    default:
-      std::fprintf(stderr, "puppeteer record: error: %s devices are not supported yet (use serial: or sim:)\n",
-                   drivers::toString(spec->kind));
-      return kExitUsage;
-  }
+  auto opener = openerForSpec(*spec, clock, "record");
+  if (!opener) return opener.error();
   if (std::filesystem::exists(a.output)) {
     std::fprintf(stderr, "puppeteer record: error: %s exists; recordings never overwrite a file\n", a.output.c_str());
     return kExitIoError;
@@ -183,7 +164,7 @@ int runRecord(const RecordArgs& a) {
   drivers::PoseMailboxOptions mo;
   mo.queueCapacity = 1 << 16;  // 65 s at 1 kHz: the recorder drains every 20 ms
   drivers::PoseMailbox mailbox(mo);
-  drivers::DeviceSession session(opener, mailbox, drivers::sessionOptionsFor(*spec));
+  drivers::DeviceSession session(*opener, mailbox, drivers::sessionOptionsFor(*spec));
   session.start();
 
   std::optional<sim::SessionWriter> writer;

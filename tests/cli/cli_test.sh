@@ -89,5 +89,18 @@ expect "bad rig map" 1 "$puppeteer" calibrate --rig "$work/bad.rig.json" --scene
   --session "$work/take.session" -o "$work/cal.json"
 check "rig map error has file:line:column" grep -q "bad.rig.json:[0-9]*:[0-9]*: error:" "$work/err"
 
+# info and convert: a BVH clip becomes a session and back, and info describes it.
+expect "convert bvh to session" 0 "$puppeteer" convert "$src/tests/data/bvh/biped_wave.bvh" "$work/wave.session"
+expect "info" 0 "$puppeteer" info "$work/wave.session"
+check "info reports the samples" grep -q "samples from 1 device" "$work/out"
+check "info says the file is whole" grep -q "closed cleanly" "$work/out"
+expect "convert session to bvh" 0 "$puppeteer" convert "$work/wave.session" "$work/wave.bvh"
+check "bvh hierarchy written" grep -q "^HIERARCHY" "$work/wave.bvh"
+expect "convert never overwrites" 3 "$puppeteer" convert "$work/wave.session" "$work/wave.bvh"
+expect "convert to an unknown format" 2 "$puppeteer" convert "$work/wave.session" "$work/wave.txt"
+head -c 100 "$work/wave.session" >"$work/cut.session"
+expect "info on a truncated session still works" 0 "$puppeteer" info "$work/cut.session"
+check "truncation is reported" grep -qi "not closed cleanly" "$work/out"
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -1,0 +1,338 @@
+// `puppeteer view` (pose by hand), `puppeteer replay` (play a recorded session) and `puppeteer live` (drive the
+// character from an armature): the live app's commands.
+#include "cli.h"
+#include "device_opener.h"
+
+#include <CLI/CLI.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <glm/gtc/quaternion.hpp>
+
+#include "imps/character.h"
+#include "calibration/calibration.h"
+#include "drivers/device_session.h"
+#include "drivers/device_spec.h"
+#include "drivers/serial_transport.h"
+#include "imps/scene_reader.h"
+#include "sim/bvh.h"
+#include "sim/bvh_session.h"
+#include "sim/session_file.h"
+#include "sim/simulated_armature.h"
+#include "viewer.h"
+#include "viewer_live.h"
+#include "viewer_pipeline.h"
+#include "viewer_replay.h"
+
+namespace imps::app {
+namespace {
+
+struct LiveArgs {
+  std::string scene;
+  int frames = 0;
+  std::string screenshot;
+  std::string polygonizer = "particles";
+  bool particles = false;
+  bool noHud = false;
+  bool printHashes = false;
+  int width = 1280, height = 720;
+  int threads = -1;
+  int msaa = -1;
+  std::vector<std::string> poses;
+  std::string save;
+  // replay
+  std::string session;
+  std::string rig, calibration;
+  double speed = 1.0;
+  bool stepped = false;
+  std::string exportSession;
+  // live
+  std::string device;
+};
+
+void addCommonOptions(CLI::App* cmd, LiveArgs& a) {
+  cmd->add_option("--frames", a.frames, "Render this many frames, then exit (headless use; 0 = until closed)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--screenshot", a.screenshot, "With --frames: save the last frame to this PNG file");
+  cmd->add_option("--polygonizer", a.polygonizer, "particles (the tesselator) or mc (Marching Cubes)")
+      ->check(CLI::IsMember({"particles", "mc"}));
+  cmd->add_flag("--particles", a.particles, "Show the particles as points (key p)");
+  cmd->add_flag("--no-hud", a.noHud, "Hide the heads-up display");
+  cmd->add_flag("--mesh-hashes", a.printHashes, "Print a hash of every frame's mesh (determinism checks)");
+  cmd->add_option("--width", a.width, "Window width in pixels")->check(CLI::Range(64, 8192));
+  cmd->add_option("--height", a.height, "Window height in pixels")->check(CLI::Range(64, 8192));
+  cmd->add_option("--threads", a.threads, "Tesselator threads (default: the scene's numThreads; 0 = all cores)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--msaa", a.msaa, "Multisampling samples (0 = off; default: 4, or off under software GL)")
+      ->check(CLI::Range(0, 16));
+  cmd->add_option("--pose", a.poses,
+                  "JOINT=AX,AY,AZ,ANGLE: turn a joint by ANGLE radians about axis (AX,AY,AZ) of its parent's frame, "
+                  "on top of its rest rotation (repeatable)");
+  cmd->add_option("--save-as", a.save, "Where the s key saves the posed scene (default: SCENE with .posed.wrl)");
+}
+
+// Parses "NAME=ax,ay,az,angle".
+bool parsePose(const std::string& text, std::string* joint, glm::vec3* axis, float* angle) {
+  const size_t eq = text.find('=');
+  if (eq == std::string::npos || eq == 0) return false;
+  *joint = text.substr(0, eq);
+  std::string rest = text.substr(eq + 1);
+  for (char& c : rest)
+    if (c == ',') c = ' ';
+  std::istringstream in(rest);
+  float v[4];
+  for (float& x : v)
+    if (!(in >> x)) return false;
+  std::string extra;
+  if (in >> extra) return false;
+  *axis = glm::vec3(v[0], v[1], v[2]);
+  *angle = v[3];
+  return glm::length(*axis) > 0.0f && std::isfinite(*angle);
+}
+
+// Loads and compiles the scene, applies --pose; prints diagnostics and returns nullptr on bad input.
+std::unique_ptr<ViewerPipeline> makePipeline(const LiveArgs& a, int* exitCode) {
+  auto read = readSceneFile(a.scene);
+  if (!read) {
+    std::fputs(read.error().str().c_str(), stderr);
+    *exitCode = kExitInvalidInput;
+    return nullptr;
+  }
+  auto compiled = Character::fromScene(*read);
+  if (!compiled) {
+    std::fputs(compiled.error().str().c_str(), stderr);
+    *exitCode = kExitInvalidInput;
+    return nullptr;
+  }
+  PipelineOptions o;
+  o.polygonizer = a.polygonizer == "mc" ? Polygonizer::MarchingCubes : Polygonizer::Particles;
+  o.threads = a.threads;
+  auto pipeline = std::make_unique<ViewerPipeline>(std::move(*read), std::move(*compiled), o);
+  for (const std::string& p : a.poses) {
+    std::string joint;
+    glm::vec3 axis;
+    float angle = 0.0f;
+    const int j = parsePose(p, &joint, &axis, &angle) ? pipeline->character().findJoint(joint) : -2;
+    if (j < 0) {
+      std::fprintf(stderr, "puppeteer: error: --pose %s: %s\n", p.c_str(),
+                   j == -2 ? "expected JOINT=AX,AY,AZ,ANGLE with a non-zero axis" : "no joint of that name");
+      *exitCode = kExitUsage;
+      return nullptr;
+    }
+    const glm::quat rest = pipeline->character().joints()[size_t(j)].rest.rotation;
+    pipeline->skeleton().setRotation(j, glm::angleAxis(angle, glm::normalize(axis)) * rest);
+  }
+  pipeline->skeleton().update();
+  return pipeline;
+}
+
+ViewerOptions viewerOptions(const LiveArgs& a, const std::string& title) {
+  ViewerOptions v;
+  v.width = a.width, v.height = a.height;
+  v.frames = a.frames;
+  v.screenshot = a.screenshot;
+  v.showParticles = a.particles;
+  v.hud = !a.noHud;
+  v.msaaSamples = a.msaa;
+  v.printMeshHashes = a.printHashes;
+  v.title = title;
+  if (!a.save.empty()) {
+    v.savePath = a.save;
+  } else {
+    std::filesystem::path p(a.scene);
+    v.savePath = (p.parent_path() / (p.stem().string() + ".posed.wrl")).string();
+  }
+  return v;
+}
+
+bool checkScreenshotArgs(const LiveArgs& a) {
+  if (!a.screenshot.empty() && a.frames <= 0) {
+    std::fprintf(stderr, "puppeteer: error: --screenshot needs --frames N\n");
+    return false;
+  }
+  return true;
+}
+
+int runView(const LiveArgs& a) {
+  if (!checkScreenshotArgs(a)) return kExitUsage;
+  int code = kExitOk;
+  auto pipeline = makePipeline(a, &code);
+  if (!pipeline) return code;
+  return runViewer(*pipeline, nullptr, viewerOptions(a, "IMPS Puppeteer: " + a.scene));
+}
+
+// A .bvh clip is converted in memory (bvhToSession); anything else is read as a session file.
+std::optional<sim::Session> loadSession(const std::string& path) {
+  if (std::filesystem::path(path).extension() == ".bvh") {
+    auto clip = sim::readBvh(path);
+    if (!clip) {
+      std::fprintf(stderr, "%s\n", clip.error().c_str());
+      return std::nullopt;
+    }
+    auto session = sim::bvhToSession(*clip, std::filesystem::path(path).filename().string());
+    if (!session) {
+      std::fprintf(stderr, "%s\n", session.error().c_str());
+      return std::nullopt;
+    }
+    return std::move(*session);
+  }
+  auto session = sim::readSession(path);
+  if (!session) {
+    std::fprintf(stderr, "%s\n", session.error().c_str());
+    return std::nullopt;
+  }
+  if (!session->recovery.message.empty()) std::fprintf(stderr, "%s\n", session->recovery.message.c_str());
+  return std::move(*session);
+}
+
+// --rig alone cannot convert counts (a rig map has no offsets): refuse it with what to do instead.
+bool checkRigArgs(const LiveArgs& a) {
+  if (!a.rig.empty() && a.calibration.empty()) {
+    std::fprintf(stderr,
+                 "puppeteer: error: --rig %s: a rig map has no offsets; run `puppeteer calibrate` and pass the "
+                 "calibration it writes with --calibration\n",
+                 a.rig.c_str());
+    return false;
+  }
+  if (!a.rig.empty())
+    std::fprintf(stderr, "puppeteer: note: --rig is ignored: the calibration %s contains its rig map\n",
+                 a.calibration.c_str());
+  return true;
+}
+
+// --calibration FILE, checked against the character (and the device when known); nullopt after printing errors.
+std::optional<SampleMapper> readCalibration(const std::string& path, const Character& character,
+                                            const drivers::DeviceInfo* device) {
+  auto c = calibration::Calibration::readFile(path, &character, device);
+  if (!c) {
+    std::fputs(c.error().str().c_str(), stderr);
+    return std::nullopt;
+  }
+  return SampleMapper(std::move(*c), std::filesystem::path(path).filename().string());
+}
+
+int runReplay(const LiveArgs& a) {
+  if (!checkScreenshotArgs(a) || !checkRigArgs(a)) return kExitUsage;
+  std::optional<sim::Session> session = loadSession(a.session);
+  if (!session) return kExitInvalidInput;
+  if (!a.exportSession.empty()) {
+    if (auto saved = sim::saveSession(a.exportSession, *session); !saved) {
+      std::fprintf(stderr, "%s\n", saved.error().c_str());
+      return kExitIoError;
+    }
+    std::printf("puppeteer: wrote %s\n", a.exportSession.c_str());
+  }
+  int code = kExitOk;
+  auto pipeline = makePipeline(a, &code);
+  if (!pipeline) return code;
+  const std::string name = std::filesystem::path(a.session).filename().string();
+  const drivers::DeviceInfo* device = session->devices.empty() ? nullptr : &session->devices[0];
+
+  // Samples → joints: --calibration, else the calibration recorded with the session, else channel names.
+  std::optional<SampleMapper> mapper;
+  if (!a.calibration.empty()) {
+    mapper = readCalibration(a.calibration, pipeline->character(), device);
+    if (!mapper) return kExitInvalidInput;
+  } else if (!session->calibrations.empty()) {
+    auto c = calibration::Calibration::parse(session->calibrations.front().json, name + " (recorded calibration)",
+                                             &pipeline->character(), device);
+    if (c) {
+      mapper.emplace(std::move(*c), "recorded in " + name);
+    } else {
+      std::printf("puppeteer: note: the session's recorded calibration does not apply to this scene (%s); "
+                  "mapping channels by name\n",
+                  c.error().all().empty() ? "unknown format" : c.error().all().front().message.c_str());
+    }
+  }
+  if (!mapper) mapper.emplace(*session, pipeline->character());
+  const ChannelPoseMap* byName = mapper->byName();
+  std::printf("puppeteer: replaying %zu samples of %s: %s", session->samples.size(), name.c_str(),
+              mapper->describe().c_str());
+  if (byName && !byName->unmatched().empty())
+    std::printf(", %zu channels ignored (no such joint or not a rotation)", byName->unmatched().size());
+  std::printf("\n");
+  if (mapper->mappedJoints() == 0) {
+    std::fprintf(stderr,
+                 "puppeteer: error: %s: no channel named JOINT:Xrotation/Yrotation/Zrotation matches a joint of %s "
+                 "(pass --calibration)\n",
+                 a.session.c_str(), a.scene.c_str());
+    return kExitInvalidInput;
+  }
+  std::unique_ptr<PoseSource> source;
+  if (a.stepped)
+    source = std::make_unique<SteppedReplayPoseSource>(*session, std::move(*mapper), name);
+  else
+    source = std::make_unique<ReplayPoseSource>(*session, std::move(*mapper), a.speed, name);
+  return runViewer(*pipeline, source.get(), viewerOptions(a, "IMPS Puppeteer: replay " + name));
+}
+
+int runLive(const LiveArgs& a) {
+  if (!checkScreenshotArgs(a) || !checkRigArgs(a)) return kExitUsage;
+  auto spec = drivers::parseDeviceSpec(a.device);
+  if (!spec) {
+    std::fprintf(stderr, "%s\n", spec.error().c_str());
+    return kExitUsage;
+  }
+  int code = kExitOk;
+  auto pipeline = makePipeline(a, &code);
+  if (!pipeline) return code;
+  sim::SteadyClock clock;  // the simulated armature's; outlives the source below
+  auto opener = openerForSpec(*spec, clock, "live");
+  if (!opener) return opener.error();
+  std::optional<SampleMapper> mapper;
+  if (!a.calibration.empty()) {
+    mapper = readCalibration(a.calibration, pipeline->character(), nullptr);
+    if (!mapper) return kExitInvalidInput;
+  }
+  LivePoseSource source(*opener, drivers::sessionOptionsFor(*spec), pipeline->character(), a.device,
+                        std::move(mapper));
+  return runViewer(*pipeline, &source, viewerOptions(a, "IMPS Puppeteer: live " + a.device));
+}
+
+}  // namespace
+
+void addLiveCommands(CLI::App& app, Commands& commands) {
+  auto view = std::make_shared<LiveArgs>();
+  CLI::App* viewCmd = app.add_subcommand("view", "Open the live app on a scene and pose it by hand with the mouse");
+  viewCmd->add_option("scene", view->scene, "Scene file (.wrl)")->required()->check(CLI::ExistingFile);
+  addCommonOptions(viewCmd, *view);
+  commands.push_back({viewCmd, [view] { return runView(*view); }});
+
+  auto replay = std::make_shared<LiveArgs>();
+  CLI::App* replayCmd =
+      app.add_subcommand("replay", "Play a recorded session (or a .bvh clip) on a scene in the live app");
+  replayCmd->add_option("session", replay->session, "Session file, or a .bvh clip converted on the fly")
+      ->required()
+      ->check(CLI::ExistingFile);
+  replayCmd->add_option("scene", replay->scene, "Scene file (.wrl)")->required()->check(CLI::ExistingFile);
+  replayCmd->add_option("--calibration", replay->calibration,
+                        "Calibration file (default: the one recorded in the session, else channels by name)");
+  replayCmd->add_option("--rig", replay->rig, "Rig map (only together with --calibration, which contains it)");
+  replayCmd->add_option("--speed", replay->speed, "Playback speed (1 = real time; 0 = as fast as possible)");
+  replayCmd->add_flag("--stepped", replay->stepped,
+                      "One recorded sample per rendered frame, no clock: deterministic (tests)");
+  replayCmd->add_option("--export-session", replay->exportSession,
+                        "Also save the session (e.g. a converted .bvh) to this new file");
+  addCommonOptions(replayCmd, *replay);
+  commands.push_back({replayCmd, [replay] { return runReplay(*replay); }});
+
+  auto live = std::make_shared<LiveArgs>();
+  CLI::App* liveCmd = app.add_subcommand("live", "Drive a scene's character from an armature in the live app");
+  liveCmd->add_option("scene", live->scene, "Scene file (.wrl)")->required()->check(CLI::ExistingFile);
+  liveCmd->add_option("--device", live->device, "Device spec (docs/devices.md): serial:/dev/ttyACM0, sim:SESSION …")
+      ->required();
+  liveCmd->add_option("--calibration", live->calibration,
+                      "Calibration file (puppeteer calibrate); without one, channels map to joints by name");
+  liveCmd->add_option("--rig", live->rig, "Rig map (only together with --calibration, which contains it)");
+  addCommonOptions(liveCmd, *live);
+  commands.push_back({liveCmd, [live] { return runLive(*live); }});
+}
+
+}  // namespace imps::app

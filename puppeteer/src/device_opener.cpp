@@ -1,0 +1,35 @@
+// Device spec -> transport opener.
+#include "device_opener.h"
+
+#include <cstdio>
+
+#include "cli.h"
+#include "drivers/serial_transport.h"
+#include "sim/simulated_armature.h"
+
+namespace imps::app {
+
+std::expected<drivers::TransportOpener, int> openerForSpec(const drivers::DeviceSpec& spec, sim::Clock& clock,
+                                                           const char* command) {
+  switch (spec.kind) {
+    case drivers::DeviceKind::Serial: {
+      drivers::SerialTransportOptions options;
+      options.baud = spec.baud;
+      return drivers::serialOpener(spec.path, options);
+    }
+    case drivers::DeviceKind::Sim: {
+      auto options = sim::armatureOptionsFromSpec(spec);
+      if (!options) {
+        std::fprintf(stderr, "%s\n", options.error().c_str());
+        return std::unexpected(int(kExitInvalidInput));
+      }
+      return sim::simulatedOpener(*options, clock);
+    }
+    default:
+      std::fprintf(stderr, "puppeteer %s: error: %s devices are not supported yet (use serial: or sim:)\n", command,
+                   drivers::toString(spec.kind));
+      return std::unexpected(int(kExitUsage));
+  }
+}
+
+}  // namespace imps::app

@@ -1,0 +1,50 @@
+// The live app's heads-up display (Dear ImGui): frame rate, polygonizer timings and counts, the pose source's
+// state, sample rate, faults, sample age and sample-to-screen latency, and the key help.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+struct GLFWwindow;
+
+namespace imps::app {
+
+// What the HUD shows; the frame loop fills it every frame. Times in milliseconds; negative means "not known".
+struct HudInfo {
+  double fps = 0.0;
+  double frameMs = 0.0;       // whole frame (pose, polygonize, upload, draw, swap), averaged
+  std::string polygonizer;    // "particles" or "Marching Cubes"
+  double simulateMs = 0.0, addDeleteMs = 0.0, meshMs = 0.0;  // tesselator phases (per update, per triangulation)
+  double marchingCubesMs = 0.0;
+  int updatesPerRender = 1;
+  size_t particles = 0, triangles = 0;
+  std::string source;         // "hand" / "replay: NAME" / device name
+  std::string state;          // "posing", "playing (loop 2)", "Streaming" …
+  std::string mapping;        // how samples become joint rotations ("calibration FILE, 18 joints"); "" for hand
+  double sampleRateHz = -1.0;
+  uint64_t dropped = 0, corrupt = 0, overwritten = 0;
+  double sampleAgeMs = -1.0;
+  double latencyMedianMs = -1.0, latencyP99Ms = -1.0;
+  std::string selectedJoint;  // "" when none
+  std::string message;        // the last key's result ("saved …", "not available yet")
+};
+
+// Owns the ImGui context and its GLFW / OpenGL 3 backends for one window. Construct after the window's GL context
+// is current and after installing the app's own GLFW callbacks (ImGui chains to them). Not thread-safe.
+class Hud {
+ public:
+  explicit Hud(GLFWwindow* window);
+  ~Hud();
+  Hud(const Hud&) = delete;
+  Hud& operator=(const Hud&) = delete;
+
+  // Draws the HUD over the current frame.
+  void draw(const HudInfo& info);
+  // True when the mouse is over the HUD (the app then leaves the click to ImGui).
+  bool wantsMouse() const;
+
+ private:
+  bool visible_ = true;
+};
+
+}  // namespace imps::app

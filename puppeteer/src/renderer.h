@@ -1,0 +1,60 @@
+// The live app's OpenGL 3.3 core renderer: a background gradient, the character's lit per-vertex-coloured
+// triangles (Lambert + rim, as snapshot.h) and optional particle points.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+
+#include "imps/mesh.h"
+#include "snapshot.h"
+
+namespace imps::app {
+
+// Owns the GL objects (program, vertex arrays, buffers). Every call needs the GL 3.3 core context that was current
+// at construction to be current; not thread-safe. Colours and lighting follow SnapshotOptions (linear RGB in,
+// sRGB out), so the app and `puppeteer mesh --snapshot` pictures look alike.
+class Renderer {
+ public:
+  // Compiles the shaders; on failure ok() is false and error() says why.
+  Renderer();
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+  bool ok() const { return error_.empty(); }
+  const std::string& error() const { return error_; }
+
+  // Uploads the mesh (buffers orphaned and refilled every call, so the driver never stalls on the previous frame).
+  void uploadMesh(const Mesh& mesh);
+  // Uploads particle positions (world space, metres) to draw as points.
+  void uploadParticles(std::span<const glm::vec3> positions);
+
+  // Clears to the background gradient and draws the mesh (and the particles when `particles`) seen by `camera`
+  // into a viewport of width x height pixels.
+  void draw(const Camera& camera, int width, int height, bool particles);
+
+  // The default framebuffer's back buffer as RGBA8, rows from the top (call after draw(), before swapping).
+  static std::vector<uint8_t> readPixels(int width, int height);
+
+  static glm::mat4 viewMatrix(const Camera& camera);
+  static glm::mat4 projectionMatrix(const Camera& camera, float aspect, float sceneRadius);
+
+  // Radius of the uploaded mesh's bounding sphere around the camera target, used for the clip planes.
+  void setSceneRadius(float radius) { sceneRadius_ = radius; }
+
+ private:
+  std::string error_;
+  unsigned meshProgram_ = 0, pointProgram_ = 0, backgroundProgram_ = 0;
+  unsigned meshVao_ = 0, pointVao_ = 0, backgroundVao_ = 0;
+  unsigned positionBuffer_ = 0, normalBuffer_ = 0, colorBuffer_ = 0, indexBuffer_ = 0, pointBuffer_ = 0;
+  int32_t indexCount_ = 0, pointCount_ = 0;
+  bool meshHasNormals_ = false, meshHasColors_ = false;
+  float sceneRadius_ = 2.0f;
+  SnapshotOptions look_;
+};
+
+}  // namespace imps::app

@@ -1,0 +1,48 @@
+// The live app's window and frame loop: GLFW 3.3 + OpenGL 3.3 core. Each frame takes the newest pose (from a pose
+// source, or from the mouse), updates the skeleton cache, runs the polygonizer, uploads, draws, shows the HUD.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "hud.h"
+#include "viewer_pipeline.h"
+
+namespace imps::app {
+
+// Where poses come from besides the mouse: a replayed session or a live device. Called from the frame loop only.
+class PoseSource {
+ public:
+  virtual ~PoseSource() = default;
+  // Never blocks. Applies the newest pose, if one arrived since the last call, to `skeleton` (without update())
+  // and returns true; then *arrivalNs is that sample's arrival time on the steady clock (0 if unknown).
+  virtual bool poll(SkeletonCache& skeleton, int64_t* arrivalNs) = 0;
+  // Fills the HUD's source, state, sample rate, fault and age fields.
+  virtual void describe(HudInfo& info) = 0;
+  // Called once per frame after the frame is on screen (for per-frame bookkeeping such as deterministic replay).
+  virtual void frameDone() {}
+};
+
+struct ViewerOptions {
+  int width = 1280, height = 720;  // window size in pixels
+  // > 0: render this many frames (after the initial settle), then close; the headless mode for tests and docs.
+  int frames = 0;
+  // Written after the last frame when frames > 0 (PNG).
+  std::string screenshot;
+  bool showParticles = false;
+  bool hud = true;
+  // Multisampling samples (0 off); -1: 4 on a GPU, off under a software renderer (llvmpipe), where it costs more
+  // than the rest of the frame.
+  int msaaSamples = -1;
+  bool vsync = true;          // ignored (off) when frames > 0
+  std::string savePath;       // target of the `s` key
+  bool printMeshHashes = false;  // print "frame N hash H triangles T" per frame to stdout
+  std::string title = "IMPS Puppeteer";
+};
+
+// Opens the window and runs until Esc / close / `frames` are done. `source` may be null (hand posing only).
+// Returns an ExitCode (cli.h): kExitIoError when no window / GL 3.3 context can be created or the screenshot cannot
+// be written. Prints a one-line performance summary (frames per second, sample-to-screen latency) at the end.
+int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions& options);
+
+}  // namespace imps::app

@@ -1,0 +1,83 @@
+// The live app's per-frame work without any window: scene → character → skeleton cache → particle tesselator or
+// Marching Cubes → Mesh. The viewer drives it once per rendered frame; tests drive it headless.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "imps/character.h"
+#include "imps/marching_cubes.h"
+#include "imps/mesh.h"
+#include "imps/scene.h"
+#include "imps/skeleton_cache.h"
+#include "imps/tesselator.h"
+
+namespace imps::app {
+
+enum class Polygonizer { Particles, MarchingCubes };
+
+struct PipelineOptions {
+  Polygonizer polygonizer = Polygonizer::Particles;
+  // Tesselator threads; -1 keeps the scene's numThreads.
+  int threads = -1;
+  // Particle updates run by the constructor (and by reset()) before the first frame, so the first picture is a
+  // settled surface rather than a few seed particles (Tesselator::settle; stops earlier once settled).
+  int settleUpdates = 400;
+  // Marching Cubes cells along the longest side of the surface bounds (when the scene has no MarchingCubes node).
+  int mcResolution = 64;
+};
+
+// One character being puppeteered. Owns the scene document, the compiled character, its skeleton cache and both
+// polygonizers (only the active one runs). Not thread-safe: the frame loop owns it.
+class ViewerPipeline {
+ public:
+  // `scene` must compile (Character::fromScene succeeded on it): pass the compiled character too.
+  ViewerPipeline(Scene scene, Character character, const PipelineOptions& options);
+
+  const Scene& scene() const { return scene_; }
+  const Character& character() const { return *character_; }
+  SkeletonCache& skeleton() { return *skeleton_; }
+  const SkeletonCache& skeleton() const { return *skeleton_; }
+
+  // Runs the active polygonizer against the skeleton cache's current field (call skeleton().update() first when
+  // the pose changed): updatesPerRender particle updates and a triangulation, or one Marching Cubes pass.
+  void frame();
+  const Mesh& mesh() const { return mesh_; }
+
+  Polygonizer polygonizer() const { return options_.polygonizer; }
+  void setPolygonizer(Polygonizer p);
+  // Drops every particle and settles again from the current pose (the thesis's `r` key).
+  void resetPolygonizer();
+
+  const Tesselator& tesselator() const { return *tesselator_; }
+  const MarchingCubesStats& marchingCubesStats() const { return mcStats_; }
+  int updatesPerRender() const { return tesselator_->options().updatesPerRender; }
+  double lastFrameMs() const { return lastFrameMs_; }
+  // The character's surface bounds in the file's pose (conservative), for framing a camera that posing does not move.
+  const MeshBounds& restBounds() const { return restBounds_; }
+
+  // The scene document with the current pose written into its RigidTransforms' rotations and translations
+  // (joints are matched by name), ready for saveSceneFile().
+  Scene posedScene() const;
+
+ private:
+  Scene scene_;
+  std::unique_ptr<Character> character_;  // stable address: the skeleton cache points to it
+  std::unique_ptr<SkeletonCache> skeleton_;
+  std::unique_ptr<Tesselator> tesselator_;
+  MarchingCubes marchingCubes_;
+  MarchingCubesOptions mcOptions_;
+  MarchingCubesStats mcStats_;
+  PipelineOptions options_;
+  Mesh mesh_;
+  MeshBounds restBounds_;
+  bool settled_ = false;
+  double lastFrameMs_ = 0.0;
+};
+
+// FNV-1a 64 over the mesh's positions, normals, colours and indices (bytes as stored): equal meshes hash equal.
+uint64_t meshHash(const Mesh& mesh);
+
+}  // namespace imps::app

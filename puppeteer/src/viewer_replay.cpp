@@ -1,0 +1,190 @@
+// Session channels → joints by name, and the replay thread feeding the frame loop.
+#include "viewer_replay.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <string_view>
+#include <utility>
+
+#include "sim/bvh_session.h"
+
+namespace imps::app {
+
+ChannelPoseMap::ChannelPoseMap(const sim::Session& session, const Character& character) {
+  size_t slot = 0;
+  for (size_t d = 0; d < session.devices.size(); ++d) {
+    const sim::DeviceInfo& info = session.devices[d];
+    firstSlot_.push_back(slot);
+    bits_.push_back(info.bitsPerChannel);
+    for (int c = 0; c < info.channelCount; ++c, ++slot) {
+      const std::string name = c < static_cast<int>(info.channelNames.size()) ? info.channelNames[size_t(c)] : "";
+      // "<joint>:<channel>"; joint names may themselves contain ':' (mixamorig:Hips), so split at the last one.
+      const size_t colon = name.rfind(':');
+      const std::string_view channel = colon == std::string::npos ? std::string_view{} : std::string_view(name).substr(colon + 1);
+      const int axis = channel == "Xrotation" ? 0 : channel == "Yrotation" ? 1 : channel == "Zrotation" ? 2 : -1;
+      const int joint = axis < 0 ? -1 : character.findJoint(std::string_view(name).substr(0, colon));
+      if (joint < 0) {
+        unmatched_.push_back(name);
+        continue;
+      }
+      auto it = std::find_if(joints_.begin(), joints_.end(), [&](const MappedJoint& m) { return m.joint == joint; });
+      if (it == joints_.end()) {
+        joints_.push_back({joint, character.joints()[size_t(joint)].rest.rotation, {}});
+        it = joints_.end() - 1;
+      }
+      it->channels.push_back({slot, axis});
+    }
+  }
+  angles_.assign(slot, 0.0);
+}
+
+size_t ChannelPoseMap::mappedChannels() const {
+  size_t n = 0;
+  for (const MappedJoint& m : joints_) n += m.channels.size();
+  return n;
+}
+
+void ChannelPoseMap::apply(uint16_t device, const drivers::Sample& sample, SkeletonCache& skeleton) {
+  if (device >= firstSlot_.size()) return;
+  const size_t first = firstSlot_[device];
+  const size_t end = device + 1u < firstSlot_.size() ? firstSlot_[device + 1u] : angles_.size();
+  const size_t count = std::min<size_t>(end - first, sample.channelCount);
+  for (size_t c = 0; c < count; ++c)
+    if (sample.flags[c] == drivers::ChannelFlag::Valid)
+      angles_[first + c] = sim::countsToDegrees(sample.counts[c], bits_[device]);
+  static const glm::vec3 kAxes[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (const MappedJoint& m : joints_) {
+    glm::quat q = m.rest;
+    for (const Channel& ch : m.channels)
+      q = q * glm::angleAxis(static_cast<float>(glm::radians(angles_[ch.slot])), kAxes[ch.axis]);
+    skeleton.setRotation(m.joint, q);
+  }
+}
+
+ReplayThread::ReplayThread(const sim::Session& session, double speed) : session_(session), speed_(speed) {
+  for (size_t d = 0; d < std::max<size_t>(1, session.devices.size()); ++d)
+    mailboxes_.push_back(std::make_unique<drivers::PoseMailbox>());
+  sim::ReplayOptions options;
+  options.speed = speed_;
+  options.rewriteArrivalTime = true;
+  options.maxSleepNs = 20'000'000;
+  replay_ = std::make_unique<sim::SessionReplay>(session_, clock_, options);
+  thread_ = std::thread([this] { run(); });
+}
+
+ReplayThread::~ReplayThread() {
+  stop_.store(true, std::memory_order_relaxed);
+  replay_->stop();
+  thread_.join();
+}
+
+void ReplayThread::run() {
+  while (!stop_.load(std::memory_order_relaxed) && !session_.samples.empty()) {
+    replay_->seek(0);
+    replay_->run([this](uint16_t device, const drivers::Sample& sample) {
+      if (device < mailboxes_.size()) mailboxes_[device]->publish(sample);
+      return !stop_.load(std::memory_order_relaxed);
+    });
+    loops_.fetch_add(1, std::memory_order_relaxed);
+  }
+}
+
+}  // namespace imps::app
+
+namespace imps::app {
+namespace {
+int64_t steadyNowNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+}  // namespace
+
+SampleMapper::SampleMapper(const sim::Session& devices, const Character& character) {
+  byName_.emplace(devices, character);
+}
+
+SampleMapper::SampleMapper(calibration::Calibration calibration, std::string label) : label_(std::move(label)) {
+  calibrator_.emplace(std::move(calibration));
+}
+
+void SampleMapper::apply(uint16_t device, const drivers::Sample& sample, SkeletonCache& skeleton) {
+  if (byName_) {
+    byName_->apply(device, sample, skeleton);
+  } else if (device == 0) {
+    skeleton.setPose(calibrator_->update(sample));
+  }
+}
+
+size_t SampleMapper::mappedJoints() const {
+  return byName_ ? byName_->mappedJoints() : calibrator_->calibration().rigMap().joints.size();
+}
+
+std::string SampleMapper::describe() const {
+  return (byName_ ? std::string("channel names") : "calibration " + label_) + ", " + std::to_string(mappedJoints()) +
+         " joints";
+}
+
+ReplayPoseSource::ReplayPoseSource(const sim::Session& session, SampleMapper mapper, double speed, std::string name)
+    : map_(std::move(mapper)), thread_(session, speed), name_(std::move(name)), speed_(speed) {
+  rateWindowStartNs_ = steadyNowNs();
+}
+
+bool ReplayPoseSource::poll(SkeletonCache& skeleton, int64_t* arrivalNs) {
+  bool any = false;
+  int64_t newest = 0;
+  for (size_t d = 0; d < thread_.devices(); ++d) {
+    if (!thread_.mailbox(d).latest(sample_)) continue;
+    map_.apply(static_cast<uint16_t>(d), sample_, skeleton);
+    newest = std::max(newest, sample_.arrivalTimeNs);
+    any = true;
+  }
+  if (any && arrivalNs) *arrivalNs = newest;
+  return any;
+}
+
+void ReplayPoseSource::describe(HudInfo& info) {
+  const drivers::PoseMailboxStats stats = thread_.mailbox(0).stats();
+  const int64_t now = steadyNowNs();
+  if (now - rateWindowStartNs_ >= 500'000'000) {
+    rateHz_ = double(stats.published - rateWindowStartCount_) / (double(now - rateWindowStartNs_) * 1e-9);
+    rateWindowStartNs_ = now, rateWindowStartCount_ = stats.published;
+  }
+  info.source = "replay: " + name_;
+  info.mapping = map_.describe();
+  char state[96];
+  std::snprintf(state, sizeof state, "playing x%.2g, loop %llu", speed_,
+                static_cast<unsigned long long>(thread_.loops() + 1));
+  info.state = state;
+  info.sampleRateHz = rateHz_;
+  info.dropped = 0;  // a replay delivers every recorded sample; device-side drops are in the recording's gaps
+  info.corrupt = 0;
+  info.overwritten = stats.overwritten;
+  info.sampleAgeMs = double(stats.lastAgeNs) * 1e-6;
+}
+
+SteppedReplayPoseSource::SteppedReplayPoseSource(const sim::Session& session, SampleMapper mapper, std::string name)
+    : session_(session), map_(std::move(mapper)), name_(std::move(name)) {}
+
+bool SteppedReplayPoseSource::poll(SkeletonCache& skeleton, int64_t* arrivalNs) {
+  const size_t n = session_.samples.size();
+  if (n == 0) return false;
+  if (next_ >= n) next_ = 0;
+  // This frame's device-0 sample and every other device's sample up to the next device-0 sample.
+  do {
+    map_.apply(session_.sampleDevice[next_], session_.samples[next_], skeleton);
+    ++next_;
+  } while (next_ < n && session_.sampleDevice[next_] != 0);
+  ++frames_;
+  if (arrivalNs) *arrivalNs = 0;  // no clock: no latency to measure
+  return true;
+}
+
+void SteppedReplayPoseSource::describe(HudInfo& info) {
+  info.source = "replay: " + name_;
+  info.mapping = map_.describe();
+  info.state = "stepped, frame " + std::to_string(frames_);
+  info.sampleRateHz = -1.0;
+}
+
+}  // namespace imps::app
