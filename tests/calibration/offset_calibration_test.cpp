@@ -1,6 +1,7 @@
 // Offsets from a calibration-pose window (circular mean, noise rejection), the check pose (reversed / mis-scaled
 // channels), calibration files and session blobs, and the end-to-end path: known angles → counts → calibrate →
 // apply → the same angles.
+#include "examples.h"
 #include "calibration/offset_calibration.h"
 
 #include <gtest/gtest.h>
@@ -21,16 +22,7 @@ constexpr double kDeg = kPi / 180;
 constexpr double kTurn = 4096;
 constexpr double kGain12 = kTurn / (2 * kPi);
 
-const Character& biped() {
-  static const Character c = [] {
-    auto scene = readSceneFile(std::string(IMPS_SOURCE_DIR) + "/examples/simple_biped.wrl");
-    EXPECT_TRUE(scene.has_value());
-    auto ch = Character::fromScene(*scene);
-    EXPECT_TRUE(ch.has_value());
-    return std::move(*ch);
-  }();
-  return c;
-}
+const Character& biped() { return test::exampleCharacter("simple_biped"); }
 
 drivers::DeviceInfo device32() {
   drivers::DeviceInfo d;

@@ -1,4 +1,5 @@
 // Rig map files: parsing, validation errors with exact file:line:column messages, and round trips.
+#include "examples.h"
 #include "calibration/rig_map.h"
 
 #include <gtest/gtest.h>
@@ -12,16 +13,7 @@
 namespace imps::calibration {
 namespace {
 
-const Character& biped() {
-  static const Character c = [] {
-    auto scene = readSceneFile(std::string(IMPS_SOURCE_DIR) + "/examples/simple_biped.wrl");
-    EXPECT_TRUE(scene.has_value());
-    auto ch = Character::fromScene(*scene);
-    EXPECT_TRUE(ch.has_value());
-    return std::move(*ch);
-  }();
-  return c;
-}
+const Character& biped() { return test::exampleCharacter("simple_biped"); }
 
 drivers::DeviceInfo device32() {
   drivers::DeviceInfo d;

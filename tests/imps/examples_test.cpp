@@ -4,6 +4,7 @@
 
 #include <glm/gtc/quaternion.hpp>
 
+#include "examples.h"
 #include "imps/character.h"
 #include "imps/marching_cubes.h"
 #include "imps/scene_reader.h"
@@ -12,18 +13,12 @@
 namespace imps {
 namespace {
 
-Character loadExample(const std::string& name) {
-  auto scene = readSceneFile(std::string(IMPS_SOURCE_DIR) + "/examples/" + name + ".wrl");
-  EXPECT_TRUE(scene.has_value()) << (scene ? "" : scene.error().str());
-  auto c = Character::fromScene(*scene);
-  EXPECT_TRUE(c.has_value()) << (c ? "" : c.error().str());
-  return std::move(*c);
-}
+const Character& loadExample(const std::string& name) { return test::exampleCharacter(name); }
 
 class ExampleTest : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(ExampleTest, MeshesClosedAndManifoldAtSeveralResolutions) {
-  const Character c = loadExample(GetParam());
+  const Character& c = loadExample(GetParam());
   SkeletonCache cache(c);
   for (int res : {12, 24, 48, 96}) {
     MarchingCubesOptions o;
@@ -43,7 +38,7 @@ INSTANTIATE_TEST_SUITE_P(Examples, ExampleTest,
 
 // The simple biped is one piece, and stays one piece (its thin hands and feet included) even at a coarse cell.
 TEST(Examples, BipedIsOneConnectedSurfaceEvenAtCoarseCells) {
-  const Character c = loadExample("simple_biped");
+  const Character& c = loadExample("simple_biped");
   SkeletonCache cache(c);
   for (float cell : {0.1f, 0.05f, 0.025f}) {
     MarchingCubesOptions o;
@@ -63,7 +58,7 @@ TEST(Examples, BipedIsOneConnectedSurfaceEvenAtCoarseCells) {
 // Arms down, hands against the thighs: grandparent-grandchild pairs like hand and thigh never blend, so where a
 // global blend would glue the hand to the hip (F_flat >= iso) the character's field leaves the two apart.
 TEST(Examples, BipedHandsDoNotBlendIntoItsHips) {
-  const Character c = loadExample("simple_biped");
+  const Character& c = loadExample("simple_biped");
   SkeletonCache cache(c);
   const float down = glm::half_pi<float>();  // arms straight down: each hand touches its thigh
   cache.setRotation("L_UpperArm", glm::angleAxis(-down, glm::vec3(0, 0, 1)));
