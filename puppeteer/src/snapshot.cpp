@@ -4,9 +4,8 @@
 // (perspective-correct interpolation).
 #include "snapshot.h"
 
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
-#include <OpenImageIO/strutil.h>
+#include "png.h"
+
 
 #include <algorithm>
 #include <cmath>
@@ -208,25 +207,12 @@ std::vector<uint8_t> renderMesh(const Mesh& mesh, const SnapshotOptions& options
 }
 
 bool renderMeshToPng(const Mesh& mesh, const SnapshotOptions& options, const std::string& path, std::string* error) {
-  auto fail = [&](const std::string& reason) {
-    if (error) *error = path + ": " + reason;
-    return false;
-  };
-  if (!OIIO::Strutil::iends_with(path, ".png"))
-    return fail("snapshot files must end in .png");
   const std::vector<uint8_t> pixels = renderMesh(mesh, options);
-  if (pixels.empty()) return fail("image size and supersampling must be positive");
-
-  // Encode in memory, then save through the same atomic writer as the meshes.
-  std::vector<unsigned char> png;
-  OIIO::Filesystem::IOVecOutput memory(png);
-  std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create("png", &memory);
-  if (!out) return fail("OpenImageIO cannot write PNG: " + OIIO::geterror());
-  const OIIO::ImageSpec spec(options.width, options.height, 4, OIIO::TypeDesc::UINT8);
-  if (!out->open(path, spec) || !out->write_image(OIIO::TypeDesc::UINT8, pixels.data()) || !out->close())
-    return fail("PNG encoding failed: " + out->geterror());
-  out.reset();
-  return writeFileAtomically(path, png, error);
+  if (pixels.empty()) {
+    if (error) *error = path + ": image size and supersampling must be positive";
+    return false;
+  }
+  return savePng(pixels, options.width, options.height, path, error);
 }
 
 }  // namespace imps::app

@@ -21,7 +21,7 @@
 #include "imps/scene_writer.h"
 #include "renderer.h"
 #include "snapshot.h"
-#include "viewer_screenshot.h"
+#include "png.h"
 
 namespace imps::app {
 namespace {
@@ -340,7 +340,7 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
             s.screenshotRequested ? "puppeteer-screenshot-" + std::to_string(++screenshotCount) + ".png" : options.screenshot;
         s.screenshotRequested = false;
         std::string error;
-        if (saveScreenshotPng(Renderer::readPixels(s.width, s.height), s.width, s.height, path, &error)) {
+        if (savePng(Renderer::readPixels(s.width, s.height), s.width, s.height, path, &error)) {
           s.message = "screenshot " + path;
         } else {
           s.message = "screenshot failed: " + error;

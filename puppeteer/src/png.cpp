@@ -1,0 +1,77 @@
+// PNG saving through the lazily loaded OpenImageIO plugin (puppeteer/plugins/png_plugin.cpp).
+#include "png.h"
+
+#include <dlfcn.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdlib>
+#include <filesystem>
+#include <mutex>
+
+#include "imps/mesh_io.h"
+
+namespace imps::app {
+namespace {
+
+using EncodeFn = int (*)(int, int, const uint8_t*, uint8_t**, size_t*, char*, size_t);
+using FreeFn = void (*)(uint8_t*);
+
+struct Plugin {
+  EncodeFn encode = nullptr;
+  FreeFn release = nullptr;
+  std::string error;
+};
+
+// Loads the plugin once; later calls return the same result.
+const Plugin& plugin() {
+  static Plugin p;
+  static std::once_flag once;
+  std::call_once(once, [] {
+    std::vector<std::string> candidates;
+    if (const char* env = std::getenv("IMPS_PNG_PLUGIN")) candidates.push_back(env);
+    std::error_code ec;
+    const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+    if (!ec) candidates.push_back((exe.parent_path() / "libimps_png.so").string());
+    candidates.push_back(IMPS_PNG_PLUGIN_PATH);  // the build tree
+    std::string tried;
+    for (const std::string& path : candidates) {
+      void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+      if (!handle) {
+        tried += std::string(tried.empty() ? "" : "; ") + dlerror();
+        continue;
+      }
+      p.encode = reinterpret_cast<EncodeFn>(dlsym(handle, "imps_png_encode"));
+      p.release = reinterpret_cast<FreeFn>(dlsym(handle, "imps_png_free"));
+      if (p.encode && p.release) return;
+      tried += "; " + path + ": not an IMPS PNG plugin";
+    }
+    p.encode = nullptr;
+    p.error = "cannot load the PNG encoder plugin (" + tried + ")";
+  });
+  return p;
+}
+
+}  // namespace
+
+bool savePng(const std::vector<uint8_t>& rgba, int width, int height, const std::string& path, std::string* error) {
+  auto fail = [&](const std::string& reason) {
+    if (error) *error = path + ": " + reason;
+    return false;
+  };
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  if (ext != ".png") return fail("image files must end in .png");
+  if (width <= 0 || height <= 0 || rgba.size() != size_t(width) * size_t(height) * 4) return fail("no pixels to save");
+  const Plugin& p = plugin();
+  if (!p.encode) return fail(p.error);
+  uint8_t* png = nullptr;
+  size_t size = 0;
+  char message[512] = "";
+  if (p.encode(width, height, rgba.data(), &png, &size, message, sizeof message) != 0) return fail(message);
+  std::vector<uint8_t> bytes(png, png + size);
+  p.release(png);
+  return writeFileAtomically(path, bytes, error);
+}
+
+}  // namespace imps::app
