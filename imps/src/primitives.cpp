@@ -208,7 +208,7 @@ float Primitive::minDistance(const Box& box, bool tight) const {
       const float cheap = std::max(0.0f, glm::length(c - (p1 + tc * axis)) - 0.5f * glm::length(box.size()));
       if (!tight || cheap > 8.0f * rMax) return cheap * cheap / (rMax * rMax);
       float lo = 0.0f, hi = length;
-      for (int it = 0; it < 16; ++it) {
+      for (int it = 0; it < 10; ++it) {
         const float a = lo + (hi - lo) / 3.0f, b = hi - (hi - lo) / 3.0f;
         if (squaredDistanceToBox(p1 + a * axis, box) <= squaredDistanceToBox(p1 + b * axis, box)) hi = b;
         else lo = a;
