@@ -1,6 +1,8 @@
 // Counts → angles → joint rotations (Calibration), and the stateful per-stream filter (Calibrator).
 #include "calibration/calibration.h"
 
+#include "imps/atomic_file.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -56,7 +58,9 @@ std::expected<Calibration, Diagnostics> Calibration::readFile(const std::filesys
 }
 
 std::expected<void, std::string> Calibration::save(const std::filesystem::path& path) const {
-  return writeFileAtomically(path, toJson());
+  std::string error;
+  if (!imps::writeFileAtomically(path.string(), toJson(), &error)) return std::unexpected(error);
+  return {};
 }
 
 double Calibration::rawAngle(size_t i, double count) const {

@@ -444,47 +444,5 @@ std::string toJson(const RigMap& map) {
   return out;
 }
 
-std::expected<void, std::string> writeFileAtomically(const std::filesystem::path& path, std::string_view text) {
-  auto fail = [&](const std::string& what) {
-    return std::unexpected(path.string() + ": error: " + what + ": " + std::strerror(errno));
-  };
-  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
-  std::string tmpl = (dir / ("." + path.filename().string() + ".XXXXXX")).string();
-  const int fd = ::mkstemp(tmpl.data());
-  if (fd < 0) return fail("cannot create a temporary file in " + dir.string());
-  size_t done = 0;
-  while (done < text.size()) {
-    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      auto e = fail("cannot write " + tmpl);
-      ::close(fd);
-      ::unlink(tmpl.c_str());
-      return e;
-    }
-    done += static_cast<size_t>(n);
-  }
-  // mkstemp makes the file 0600; a calibration is not a secret.
-  ::fchmod(fd, 0644);
-  if (::fsync(fd) != 0) {
-    auto e = fail("cannot sync " + tmpl);
-    ::close(fd);
-    ::unlink(tmpl.c_str());
-    return e;
-  }
-  ::close(fd);
-  if (::rename(tmpl.c_str(), path.c_str()) != 0) {
-    auto e = fail("cannot rename " + tmpl + " over the target");
-    ::unlink(tmpl.c_str());
-    return e;
-  }
-  // The rename itself is durable only once the directory is synced.
-  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
-  if (dfd >= 0) {
-    ::fsync(dfd);
-    ::close(dfd);
-  }
-  return {};
-}
 
 }  // namespace imps::calibration

@@ -3,6 +3,8 @@
 // Greg Turk, "The PLY Polygon File Format" (1994); Wavefront, "Object Files (.obj)" (Advanced Visualizer manual).
 #include "imps/mesh_io.h"
 
+#include "imps/atomic_file.h"
+
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -98,7 +100,6 @@ class TextOut {
   std::vector<uint8_t> bytes_;
 };
 
-std::string errnoText() { return std::strerror(errno); }
 
 std::string lowercase(std::string_view s) {
   std::string out(s);
@@ -320,53 +321,6 @@ std::optional<std::vector<uint8_t>> encodeGlb(const Mesh& mesh, std::string* err
   return bytes;
 }
 
-bool writeFileAtomically(const std::string& path, const std::vector<uint8_t>& bytes, std::string* error) {
-  // A unique sibling name: same directory so rename() is atomic (same file system); O_EXCL so concurrent savers
-  // never share one; mode 0666 so the umask applies as it would to a plain fopen().
-  static std::atomic<unsigned> counter{0};
-  std::string temp;
-  int fd = -1;
-  for (int attempt = 0; attempt < 100 && fd < 0; ++attempt) {
-    temp = path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter.fetch_add(1));
-    fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-    if (fd < 0 && errno != EEXIST) break;
-  }
-  if (fd < 0) {
-    setError(error, path + ": cannot create temporary file '" + temp + "': " + errnoText());
-    return false;
-  }
-  std::FILE* file = ::fdopen(fd, "wb");
-  if (!file) {
-    const std::string reason = errnoText();
-    ::close(fd);
-    ::unlink(temp.c_str());
-    setError(error, path + ": cannot open temporary file: " + reason);
-    return false;
-  }
-  auto fail = [&](const char* what) {
-    const std::string reason = errnoText();
-    if (file) std::fclose(file);
-    ::unlink(temp.c_str());
-    setError(error, path + ": " + what + ": " + reason);
-    return false;
-  };
-  if (!bytes.empty() && std::fwrite(bytes.data(), 1, bytes.size(), file) != bytes.size()) return fail("write failed");
-  if (std::fflush(file) != 0) return fail("write failed");
-  if (::fsync(::fileno(file)) != 0) return fail("fsync failed");
-  const int closed = std::fclose(file);
-  file = nullptr;
-  if (closed != 0) return fail("close failed");
-  if (std::rename(temp.c_str(), path.c_str()) != 0) return fail("cannot rename the temporary file over it");
-
-  // Make the rename itself durable. Best effort: the data is already safe and the target complete.
-  const size_t slash = path.find_last_of('/');
-  const std::string directory = slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
-  if (const int dirFd = ::open(directory.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); dirFd >= 0) {
-    ::fsync(dirFd);
-    ::close(dirFd);
-  }
-  return true;
-}
 
 bool writeObj(const Mesh& mesh, const std::string& path, std::string* error) {
   std::string problem;

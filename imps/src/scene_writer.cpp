@@ -1,9 +1,8 @@
 // writeScene / saveSceneFile: the canonical text of a scene, and saving it atomically.
 #include "imps/scene_writer.h"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
+#include "imps/atomic_file.h"
+
 
 #include <cerrno>
 #include <charconv>
@@ -235,12 +234,6 @@ class Writer {
   int depth_ = 0;
 };
 
-std::string directoryOf(const std::string& path) {
-  const size_t slash = path.rfind('/');
-  if (slash == std::string::npos) return ".";
-  return slash == 0 ? "/" : path.substr(0, slash);
-}
-
 }  // namespace
 
 std::string writeScene(const Scene& scene) {
@@ -250,58 +243,7 @@ std::string writeScene(const Scene& scene) {
 }
 
 bool saveSceneFile(const Scene& scene, const std::string& path, std::string* error) {
-  const std::string text = writeScene(scene);
-  auto fail = [&](const std::string& step, int code) {
-    if (error) *error = "cannot save '" + path + "': " + step + ": " + std::strerror(code);
-    return false;
-  };
-
-  // 1. A temporary file beside the target, so the rename below stays within one file system.
-  std::string tempPath = path + ".tmp-XXXXXX";
-  std::vector<char> tempName(tempPath.begin(), tempPath.end());
-  tempName.push_back('\0');
-  const int fd = ::mkstemp(tempName.data());
-  if (fd < 0) return fail("creating a temporary file", errno);
-  tempPath = tempName.data();
-  auto abandon = [&](const std::string& step) {
-    const int code = errno;
-    ::close(fd);
-    ::unlink(tempPath.c_str());
-    return fail(step, code);
-  };
-
-  // 2. Permissions: the target's if it exists, else the usual 0644 (mkstemp makes 0600).
-  struct stat existing {};
-  const mode_t mode = ::stat(path.c_str(), &existing) == 0 ? (existing.st_mode & 07777) : 0644;
-  if (::fchmod(fd, mode) != 0) return abandon("setting permissions");
-
-  // 3. Write everything and force it to the disk before the rename makes it visible.
-  size_t written = 0;
-  while (written < text.size()) {
-    const ssize_t n = ::write(fd, text.data() + written, text.size() - written);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) return abandon("writing");
-    written += static_cast<size_t>(n);
-  }
-  if (::fsync(fd) != 0) return abandon("flushing to disk");
-  if (::close(fd) != 0) {
-    const int code = errno;
-    ::unlink(tempPath.c_str());
-    return fail("closing", code);
-  }
-
-  // 4. Replace the target in one step, then make the rename itself durable.
-  if (::rename(tempPath.c_str(), path.c_str()) != 0) {
-    const int code = errno;
-    ::unlink(tempPath.c_str());
-    return fail("renaming the temporary file over it", code);
-  }
-  const int dir = ::open(directoryOf(path).c_str(), O_RDONLY | O_DIRECTORY);
-  if (dir >= 0) {
-    ::fsync(dir);
-    ::close(dir);
-  }
-  return true;
+  return writeFileAtomically(path, writeScene(scene), error);
 }
 
 }  // namespace imps

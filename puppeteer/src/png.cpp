@@ -9,7 +9,7 @@
 #include <filesystem>
 #include <mutex>
 
-#include "imps/mesh_io.h"
+#include "imps/atomic_file.h"
 
 namespace imps::app {
 namespace {

@@ -256,7 +256,7 @@ TEST(CalibrationFile, SaveAndLoadRoundTrip) {
   // A save into a directory that does not exist fails and says where.
   auto bad = cal->save(dir / "missing" / "x.json");
   ASSERT_FALSE(bad.has_value());
-  EXPECT_EQ(bad.error().rfind((dir / "missing" / "x.json").string() + ": error: cannot create a temporary file", 0), 0u)
+  EXPECT_EQ(bad.error().rfind("cannot save '" + (dir / "missing" / "x.json").string() + "': creating a temporary file: ", 0), 0u)
       << bad.error();
   std::filesystem::remove_all(dir);
 }

@@ -45,7 +45,7 @@ class Calibration {
   const RigMap& rigMap() const { return map_; }
   // The calibration file / session blob text (toJson of the map); parse(toJson()) gives an equal calibration.
   std::string toJson() const { return calibration::toJson(map_); }
-  // toJson() written with writeFileAtomically.
+  // toJson() written with imps::writeFileAtomically (atomic_file.h).
   std::expected<void, std::string> save(const std::filesystem::path& path) const;
 
   // Angle in radians of mapping i (index into rigMap().channels) for a raw count, before limits.

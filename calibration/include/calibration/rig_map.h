@@ -98,8 +98,5 @@ bool validateRigMap(RigMap& map, const RigMapContext& context, Diagnostics& diag
 // The file text (pretty-printed JSON, "version" first); parseRigMap(toJson(m)) reproduces m's fields.
 std::string toJson(const RigMap& map);
 
-// Writes `text` to `path` without ever leaving a half-written file: a temporary file beside it is written,
-// fsync'ed and renamed over the target, then the directory is synced. Errors: "path: error: …".
-std::expected<void, std::string> writeFileAtomically(const std::filesystem::path& path, std::string_view text);
 
 }  // namespace imps::calibration

@@ -51,8 +51,4 @@ std::optional<std::vector<uint8_t>> encodeObj(const Mesh& mesh, std::string* err
 std::optional<std::vector<uint8_t>> encodePly(const Mesh& mesh, std::string* error);
 std::optional<std::vector<uint8_t>> encodeGlb(const Mesh& mesh, std::string* error);
 
-// Writes `bytes` to `path` atomically (temporary file beside it, fflush + fsync, rename). Same failure contract as
-// the mesh writers.
-bool writeFileAtomically(const std::string& path, const std::vector<uint8_t>& bytes, std::string* error);
-
 }  // namespace imps
