@@ -468,7 +468,18 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
     const Box box = g.blockBox(bx, by, bz);
     const std::span<const uint32_t> cand(st.binMembers.data() + st.binOffsets[b], st.binOffsets[b + 1] - st.binOffsets[b]);
     if (cand.empty() && !forced[b]) return;
-    field.prepare(cand, scratch);
+    if (forced[b]) {
+      field.prepare(cand, scratch);
+    } else {
+      // Binning used support *boxes*; drop the candidates whose support cannot reach this block at all. Their terms
+      // are exactly zero here, so every value stays bit-identical (x + 0 = x) with fewer primitives to evaluate.
+      thread_local std::vector<uint32_t> reaching;
+      reaching.clear();
+      for (uint32_t i : cand)
+        if (field.primitive(i).minDistance(box) <= field.supportDistance(i) * (1.0f + 1e-3f) + 1e-3f) reaching.push_back(i);
+      if (reaching.empty()) return;
+      field.prepare(reaching, scratch);
+    }
     if (!forced[b]) {
       if (field.upperBound(box, scratch) < iso * (1.0f - 1e-3f)) return;
       if (field.lowerBound(box, scratch) > iso * (1.0f + 1e-3f)) return;
