@@ -451,37 +451,29 @@ std::expected<void, std::string> appendFrame(const Message& message, std::vector
 
 // ---- Decoder ----
 
-BinaryDecoder::BinaryDecoder() { buf_.reserve(4 * kMaxFrameSize); }
+BinaryDecoder::BinaryDecoder() { in_.reserve(4 * kMaxFrameSize); }
 
 void BinaryDecoder::feed(std::span<const uint8_t> bytes, int64_t arrivalTimeNs) {
   stats_.bytesReceived += bytes.size();
   arrivalTimeNs_ = arrivalTimeNs;
-  // Compact: move the unconsumed tail (at most one partial frame after next() ran dry) to the front.
-  if (pos_ > 0) {
-    if (end_ > pos_) std::memmove(buf_.data(), buf_.data() + pos_, end_ - pos_);
-    end_ -= pos_;
-    pos_ = 0;
-  }
   lastFrameSize_ = 0;
-  if (buf_.size() < end_ + bytes.size()) buf_.resize(end_ + bytes.size());
-  if (!bytes.empty()) std::memcpy(buf_.data() + end_, bytes.data(), bytes.size());
-  end_ += bytes.size();
+  in_.append(bytes);  // after next() ran dry, at most one partial frame is left to move to the front
 }
 
 void BinaryDecoder::skip(size_t n) {
-  pos_ += n;
+  in_.consume(n);
   stats_.bytesSkipped += n;
 }
 
 void BinaryDecoder::reset() {
-  skip(end_ - pos_);
-  pos_ = end_ = 0;
+  skip(in_.size());
+  in_.clear();
   lastFrameSize_ = 0;
   haveSequence_ = false;
 }
 
 std::span<const uint8_t> BinaryDecoder::lastFrame() const {
-  return std::span<const uint8_t>(buf_.data() + lastFrameBegin_, lastFrameSize_);
+  return std::span<const uint8_t>(in_.data() + lastFrameBegin_, lastFrameSize_);
 }
 
 void BinaryDecoder::trackSequence(uint32_t sequence) {
@@ -502,9 +494,9 @@ std::optional<Message> BinaryDecoder::next() {
   lastFrameSize_ = 0;
   for (;;) {
     // 1. Hunt for the sync pair.
-    const size_t avail = end_ - pos_;
+    const size_t avail = in_.size();
     if (avail == 0) return std::nullopt;
-    const uint8_t* here = buf_.data() + pos_;
+    const uint8_t* here = in_.data() + in_.begin();
     const auto* sync = static_cast<const uint8_t*>(std::memchr(here, kSync0, avail));
     if (sync == nullptr) {
       skip(avail);
@@ -542,8 +534,8 @@ std::optional<Message> BinaryDecoder::next() {
       continue;
     }
     // 4. A genuine frame: consume it whole, then interpret it.
-    const size_t begin = pos_;
-    pos_ += total;
+    const size_t begin = in_.begin();
+    in_.consume(total);
     stats_.bytesInFrames += total;
     if (here[kOffVersion] != kProtocolVersion) {
       ++stats_.unsupportedVersions;

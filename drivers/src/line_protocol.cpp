@@ -44,31 +44,23 @@ LineDecoder::LineDecoder(LineDecoderOptions options) : options_(options) {
   if (options_.expectedChannelCount < 0 || options_.expectedChannelCount > kMaxChannels)
     options_.expectedChannelCount = 0;
   channelCount_ = options_.expectedChannelCount;
-  buf_.reserve(options_.maxLineLength + 4096);
+  in_.reserve(options_.maxLineLength + 4096);
 }
 
 void LineDecoder::feed(std::span<const uint8_t> bytes, int64_t arrivalTimeNs) {
   stats_.bytesReceived += bytes.size();
   arrivalTimeNs_ = arrivalTimeNs;
-  // Compact: after next() ran dry at most one partial line (<= maxLineLength bytes) is left.
-  if (pos_ > 0) {
-    if (end_ > pos_) std::memmove(buf_.data(), buf_.data() + pos_, end_ - pos_);
-    end_ -= pos_;
-    pos_ = 0;
-  }
-  if (buf_.size() < end_ + bytes.size()) buf_.resize(end_ + bytes.size());
-  if (!bytes.empty()) std::memcpy(buf_.data() + end_, bytes.data(), bytes.size());
-  end_ += bytes.size();
+  in_.append(bytes);  // after next() ran dry, at most one partial line (<= maxLineLength bytes) is left
 }
 
 void LineDecoder::skip(size_t n) {
-  pos_ += n;
+  in_.consume(n);
   stats_.bytesSkipped += n;
 }
 
 void LineDecoder::reset() {
-  skip(end_ - pos_);
-  pos_ = end_ = 0;
+  skip(in_.size());
+  in_.clear();
   discarding_ = false;
   channelCount_ = options_.expectedChannelCount;
   seenSample_ = false;
@@ -154,24 +146,24 @@ std::optional<Sample> LineDecoder::acceptLine(const char* begin, const char* end
 
 std::optional<Sample> LineDecoder::next() {
   for (;;) {
-    if (pos_ == end_) return std::nullopt;
-    const uint8_t* base = buf_.data();
+    if (in_.size() == 0) return std::nullopt;
+    const uint8_t* base = in_.data();
     if (discarding_) {
-      size_t i = pos_;
-      while (i != end_ && !isTerminator(base[i])) ++i;
-      if (i == end_) {
-        skip(end_ - pos_);
+      size_t i = in_.begin();
+      while (i != in_.end() && !isTerminator(base[i])) ++i;
+      if (i == in_.end()) {
+        skip(in_.size());
         return std::nullopt;
       }
-      skip(i + 1 - pos_);
+      skip(i + 1 - in_.begin());
       discarding_ = false;
       continue;
     }
     // Look for a terminator no further than one byte past the longest acceptable line.
-    const size_t window = std::min(end_ - pos_, options_.maxLineLength + 1);
-    size_t i = pos_;
-    while (i != pos_ + window && !isTerminator(base[i])) ++i;
-    if (i == pos_ + window) {
+    const size_t window = std::min(in_.size(), options_.maxLineLength + 1);
+    size_t i = in_.begin();
+    while (i != in_.begin() + window && !isTerminator(base[i])) ++i;
+    if (i == in_.begin() + window) {
       if (window <= options_.maxLineLength) return std::nullopt;  // a line still arriving
       // Overlong: count it once and drop it up to its terminator, however many chunks that takes.
       ++stats_.lines;
@@ -180,10 +172,10 @@ std::optional<Sample> LineDecoder::next() {
       skip(window);
       continue;
     }
-    const char* begin = reinterpret_cast<const char*>(base + pos_);
+    const char* begin = reinterpret_cast<const char*>(base + in_.begin());
     const char* end = reinterpret_cast<const char*>(base + i);
-    stats_.bytesInLines += i + 1 - pos_;
-    pos_ = i + 1;
+    stats_.bytesInLines += i + 1 - in_.begin();
+    in_.consume(i + 1 - in_.begin());
     const char* q = begin;
     while (q != end && isBlank(*q)) ++q;
     if (q == end) continue;  // blank line, or the LF of a CRLF

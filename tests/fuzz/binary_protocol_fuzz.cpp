@@ -7,17 +7,11 @@
 
 #include "drivers/binary_protocol.h"
 
+#include "fuzz_check.h"
+
 using namespace imps::drivers;
 
 namespace {
-
-#define FUZZ_CHECK(cond)                                                              \
-  do {                                                                                \
-    if (!(cond)) {                                                                    \
-      std::fprintf(stderr, "%s:%d: invariant failed: %s\n", __FILE__, __LINE__, #cond); \
-      std::abort();                                                                   \
-    }                                                                                 \
-  } while (0)
 
 void checkStats(const BinaryDecoder& d) {
   const auto& s = d.stats();

@@ -6,17 +6,11 @@
 
 #include "drivers/line_protocol.h"
 
+#include "fuzz_check.h"
+
 using namespace imps::drivers;
 
 namespace {
-
-#define FUZZ_CHECK(cond)                                                              \
-  do {                                                                                \
-    if (!(cond)) {                                                                    \
-      std::fprintf(stderr, "%s:%d: invariant failed: %s\n", __FILE__, __LINE__, #cond); \
-      std::abort();                                                                   \
-    }                                                                                 \
-  } while (0)
 
 void checkStats(const LineDecoder& d) {
   const auto& s = d.stats();

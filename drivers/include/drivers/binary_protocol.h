@@ -11,6 +11,8 @@
 #include <variant>
 #include <vector>
 
+#include "drivers/receive_buffer.h"
+
 #include "drivers/sample.h"
 
 namespace imps::drivers {
@@ -202,16 +204,14 @@ class BinaryDecoder {
   void reset();
 
   // Bytes fed but not yet consumed as a frame or skipped.
-  size_t buffered() const { return end_ - pos_; }
+  size_t buffered() const { return in_.size(); }
   const BinaryDecoderStats& stats() const { return stats_; }
 
  private:
   void skip(size_t n);
   void trackSequence(uint32_t sequence);
 
-  std::vector<uint8_t> buf_;
-  size_t pos_ = 0;  // first unconsumed byte in buf_
-  size_t end_ = 0;  // one past the last fed byte in buf_
+  ReceiveBuffer in_;
   size_t lastFrameBegin_ = 0, lastFrameSize_ = 0;
   int64_t arrivalTimeNs_ = 0;
   bool haveSequence_ = false;

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "drivers/receive_buffer.h"
+
 #include "drivers/sample.h"
 
 namespace imps::drivers {
@@ -73,7 +75,7 @@ class LineDecoder {
   int channelCount() const { return channelCount_; }
   // Banner lines (without terminators) seen before the first sample, at most maxBannerLines of them.
   const std::vector<std::string>& banner() const { return banner_; }
-  size_t buffered() const { return end_ - pos_; }
+  size_t buffered() const { return in_.size(); }
   const LineDecoderStats& stats() const { return stats_; }
   const LineDecoderOptions& options() const { return options_; }
 
@@ -84,8 +86,7 @@ class LineDecoder {
   void skip(size_t n);
 
   LineDecoderOptions options_;
-  std::vector<uint8_t> buf_;
-  size_t pos_ = 0, end_ = 0;
+  ReceiveBuffer in_;
   bool discarding_ = false;  // inside an overlong line: drop bytes up to the next terminator
   int64_t arrivalTimeNs_ = 0;
   int channelCount_ = 0;
