@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <chrono>
 #include <cmath>
 
@@ -18,6 +19,7 @@ constexpr int kBlock = 8;                          // cells per block side
 constexpr int kBlockVerts = kBlock + 1;            // samples per block side
 constexpr int kBlockSamples = kBlockVerts * kBlockVerts * kBlockVerts;
 constexpr int kBlockEdges = 3 * kBlock * kBlock * kBlock;  // edges owned by a block (start vertex in [0, B)^3)
+constexpr uint32_t kCellBits = (1u << kBlock) - 1;  // the cells (or owned edges) of one row, as bits
 constexpr int kCentre = 12;                        // table code of a cell's first loop-centre vertex
 constexpr uint32_t kProvisional = 0x80000000u;     // triangle index of a centre vertex before final numbering
 
@@ -73,10 +75,13 @@ std::array<Face, 6> makeFaces() {
 struct CaseTable {
   std::array<Face, 6> faces = makeFaces();
   std::array<uint8_t, 256> ambiguousFaces{};  // bit f: face f has diagonal inside corners
+  std::array<uint8_t, 12> edgeStartCorner{};   // edgeStart(e), looked up on the hot path
   // entries[(case << 6) | joinedMask]: triangle count then 3 edge ids per triangle.
   std::vector<std::array<uint8_t, 37>> entries = std::vector<std::array<uint8_t, 37>>(256 * 64);
+  std::vector<uint8_t> centreCount = std::vector<uint8_t>(256 * 64, 0);  // loop-centre vertices of each entry
 
   CaseTable() {
+    for (int e = 0; e < 12; ++e) edgeStartCorner[size_t(e)] = uint8_t(edgeStart(e));
     for (int c = 0; c < 256; ++c) {
       for (int f = 0; f < 6; ++f) {
         int changes = 0;
@@ -86,7 +91,7 @@ struct CaseTable {
       }
       for (int joined = 0; joined < 64; ++joined) {
         if ((joined & ~ambiguousFaces[c]) != 0) continue;  // only meaningful bits
-        build(c, joined, entries[(c << 6) | joined]);
+        centreCount[size_t((c << 6) | joined)] = uint8_t(build(c, joined, entries[(c << 6) | joined]));
       }
     }
   }
@@ -156,7 +161,8 @@ struct CaseTable {
 
   // Contour segments on each face go from an entry crossing (outside -> inside along the cycle) to an exit; chained
   // across faces they form loops, each triangulated (triangulateLoop). Orientation: counter-clockwise seen from outside.
-  void build(int c, int joined, std::array<uint8_t, 37>& out) const {
+  // Returns the number of loop-centre vertices.
+  int build(int c, int joined, std::array<uint8_t, 37>& out) const {
     std::array<int, 12> next;
     next.fill(-1);
     for (int f = 0; f < 6; ++f) {
@@ -195,6 +201,7 @@ struct CaseTable {
       triangulateLoop(loop.data(), n, out, triangles, centres);
     }
     out[0] = uint8_t(triangles);
+    return centres;
   }
 };
 
@@ -257,6 +264,7 @@ struct BlockResult {
   bool sampled = false, hasSurface = false;
   std::vector<float> samples;                   // kBlockSamples
   std::vector<int32_t> edgeVertex;              // kBlockEdges: local vertex index or -1
+  std::vector<uint32_t> cells;                  // surface cells: index i + B (j + B k), case code << 16
   std::vector<float> positions, normals, colors;
   std::vector<uint32_t> triangles;              // global indices (centre vertices provisional until step 6)
   std::vector<float> centrePositions, centreNormals, centreColors;  // loop-centre vertices of this block
@@ -505,24 +513,40 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
           }
         }
     }
-    bool anyIn = false, anyOut = false;
-    for (float v : r.samples) (v >= iso ? anyIn : anyOut) = true;
-    r.hasSurface = anyIn && anyOut;
-    if (!r.hasSurface) return;
 
-    // Crossing edges owned by this block, in the order that numbers their vertices.
+    // Inside bits, one 9-bit mask per row of samples: rows[j + 9k] bit i is sample (i, j, k).
+    std::array<uint32_t, kBlockVerts * kBlockVerts> rows;
+    for (int row = 0; row < kBlockVerts * kBlockVerts; ++row) {
+      const float* v = r.samples.data() + row * kBlockVerts;
+      uint32_t m = 0;
+      for (int i = 0; i < kBlockVerts; ++i) m |= uint32_t(v[i] >= iso) << i;
+      rows[size_t(row)] = m;
+    }
+    auto rowMask = [&](int j, int k) { return rows[size_t(j + kBlockVerts * k)]; };
+
+    // Surface cells (case code and cell index) and the crossing edges this block owns, in the order that numbers
+    // their vertices: cells (i, j, k) ascending with i fastest, axes x, y, z within a cell.
     thread_local std::vector<EdgeRoot> edges;
     edges.clear();
+    r.cells.clear();
     r.edgeVertex.assign(kBlockEdges, -1);
     for (int k = 0; k < kBlock; ++k)
-      for (int j = 0; j < kBlock; ++j)
-        for (int i = 0; i < kBlock; ++i) {
+      for (int j = 0; j < kBlock; ++j) {
+        const uint32_t r00 = rowMask(j, k), r10 = rowMask(j + 1, k), r01 = rowMask(j, k + 1), r11 = rowMask(j + 1, k + 1);
+        const uint32_t anyIn = r00 | r10 | r01 | r11, allIn = r00 & r10 & r01 & r11;
+        for (uint32_t mixed = (anyIn | anyIn >> 1) & ~(allIn & allIn >> 1) & kCellBits; mixed != 0; mixed &= mixed - 1) {
+          const int i = std::countr_zero(mixed);
+          const uint32_t cs = ((r00 >> i) & 3u) | ((r10 >> i) & 3u) << 2 | ((r01 >> i) & 3u) << 4 | ((r11 >> i) & 3u) << 6;
+          r.cells.push_back(uint32_t(i + kBlock * (j + kBlock * k)) | cs << 16);
+        }
+        const std::array<uint32_t, 3> crossing = {(r00 ^ r00 >> 1) & kCellBits, (r00 ^ r10) & kCellBits, (r00 ^ r01) & kCellBits};
+        for (uint32_t any = crossing[0] | crossing[1] | crossing[2]; any != 0; any &= any - 1) {
+          const int i = std::countr_zero(any);
           const int s0 = sampleIndex(i, j, k);
-          const float f0 = r.samples[s0];
           for (int axis = 0; axis < 3; ++axis) {
+            if (!((crossing[size_t(axis)] >> i) & 1u)) continue;
             const int s1 = s0 + (axis == 0 ? 1 : axis == 1 ? kBlockVerts : kBlockVerts * kBlockVerts);
-            const float f1 = r.samples[s1];
-            if ((f0 >= iso) == (f1 >= iso)) continue;
+            const float f0 = r.samples[s0], f1 = r.samples[s1];
             r.edgeVertex[ownedEdgeIndex(axis, i, j, k)] = int32_t(edges.size());
             EdgeRoot e;
             e.pa = points[s0];
@@ -541,6 +565,9 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
             edges.push_back(e);
           }
         }
+      }
+    r.hasSurface = !r.cells.empty();
+    if (!r.hasSurface) return;
 
     // Illinois root finding on the true field, every unfinished edge of the block evaluated in one batch per step.
     thread_local std::vector<uint32_t> active, stillActive;
@@ -634,7 +661,7 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
     bool prepared = false;
     // The block owning cell (i, j, k)'s cube edge e, and the vertex's index in it.
     auto edgeVertex = [&](int i, int j, int k, int e) -> std::pair<const BlockResult*, uint32_t> {
-      const int corner = edgeStart(e), axis = e / 4;
+      const int corner = table.edgeStartCorner[size_t(e)], axis = e / 4;
       int vi = i + (corner & 1), vj = j + ((corner >> 1) & 1), vk = k + ((corner >> 2) & 1);
       int ox = 0, oy = 0, oz = 0;
       if (vi == kBlock) { vi = 0; ox = 1; }
@@ -646,73 +673,70 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
       IMPS_CHECK(local >= 0);
       return {&owner, uint32_t(local)};
     };
-    for (int k = 0; k < kBlock; ++k)
-      for (int j = 0; j < kBlock; ++j)
-        for (int i = 0; i < kBlock; ++i) {
-          float f[8];
-          int cs = 0;
-          for (int c = 0; c < 8; ++c) {
-            f[c] = r.samples[sampleIndex(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1))];
-            if (f[c] >= iso) cs |= 1 << c;
-          }
-          if (cs == 0 || cs == 255) continue;
-          int joined = 0;
-          const uint8_t ambiguous = table.ambiguousFaces[cs];
-          if (ambiguous) {
-            for (int face = 0; face < 6; ++face) {
-              if (!((ambiguous >> face) & 1)) continue;
-              const auto& cc = table.faces[face].canonical;
-              const float a = f[cc[0]] - iso, bb = f[cc[1]] - iso, c2 = f[cc[2]] - iso, d = f[cc[3]] - iso;
-              // Bilinear saddle value: inside corners are joined when it is inside.
-              const float denom = a + c2 - bb - d;
-              const float saddle = denom != 0.0f ? (a * c2 - bb * d) / denom : 0.0f;
-              if (saddle >= 0.0f) joined |= 1 << face;
-            }
-          }
-          const auto& entry = table.entries[(cs << 6) | joined];
-          // Loop-centre vertices: the mean of the loop's vertices, then Newton steps onto the surface.
-          uint32_t centreIndex[2] = {0, 0};
-          for (int centre = 0; centre < 2; ++centre) {
-            glm::vec3 sum(0.0f);
-            int count = 0;
-            for (int t = 0; t < entry[0]; ++t) {
-              if (entry[1 + 3 * t] != kCentre + centre) continue;
-              const auto [owner, local] = edgeVertex(i, j, k, entry[2 + 3 * t]);
-              sum += glm::vec3(owner->positions[3 * local], owner->positions[3 * local + 1], owner->positions[3 * local + 2]);
-              ++count;
-            }
-            if (count == 0) break;
-            if (!prepared) {
-              field.prepare(std::span<const uint32_t>(st.binMembers.data() + st.binOffsets[b],
-                                                      st.binOffsets[b + 1] - st.binOffsets[b]), scratch);
-              prepared = true;
-            }
-            glm::vec3 x = sum / float(count);
-            FieldSample fs = field.sample(x, scratch);
-            for (int step = 0; step < 3; ++step) {
-              const float g2 = glm::dot(fs.gradient, fs.gradient);
-              if (g2 <= 0.0f) break;
-              x -= (fs.value - iso) / g2 * fs.gradient;
-              fs = field.sample(x, scratch);
-            }
-            centreIndex[centre] = kProvisional | uint32_t(r.centrePositions.size() / 3);
-            r.centrePositions.insert(r.centrePositions.end(), {x.x, x.y, x.z});
-            const float len = glm::length(fs.gradient);
-            const glm::vec3 n = len > 0.0f ? -fs.gradient / len : glm::vec3(0, 0, 1);
-            if (options.computeNormals) r.centreNormals.insert(r.centreNormals.end(), {n.x, n.y, n.z});
-            if (options.computeColors) r.centreColors.insert(r.centreColors.end(), {fs.color.x, fs.color.y, fs.color.z});
-          }
-          for (int t = 0; t < entry[0]; ++t)
-            for (int v = 0; v < 3; ++v) {
-              const int code = entry[1 + 3 * t + v];
-              if (code >= kCentre) {
-                r.triangles.push_back(centreIndex[code - kCentre]);
-              } else {
-                const auto [owner, local] = edgeVertex(i, j, k, code);
-                r.triangles.push_back(owner->base + local);
-              }
-            }
+    for (const uint32_t cell : r.cells) {
+      const int i = int(cell & 0xFFFFu) % kBlock, j = int(cell & 0xFFFFu) / kBlock % kBlock,
+                k = int(cell & 0xFFFFu) / (kBlock * kBlock);
+      const int cs = int(cell >> 16);
+      int joined = 0;
+      const uint8_t ambiguous = table.ambiguousFaces[cs];
+      if (ambiguous) {
+        float f[8];
+        for (int c = 0; c < 8; ++c) f[c] = r.samples[sampleIndex(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1))];
+        for (int face = 0; face < 6; ++face) {
+          if (!((ambiguous >> face) & 1)) continue;
+          const auto& cc = table.faces[face].canonical;
+          const float a = f[cc[0]] - iso, bb = f[cc[1]] - iso, c2 = f[cc[2]] - iso, d = f[cc[3]] - iso;
+          // Bilinear saddle value: inside corners are joined when it is inside.
+          const float denom = a + c2 - bb - d;
+          const float saddle = denom != 0.0f ? (a * c2 - bb * d) / denom : 0.0f;
+          if (saddle >= 0.0f) joined |= 1 << face;
         }
+      }
+      const auto& entry = table.entries[(cs << 6) | joined];
+      // Loop-centre vertices: the mean of the loop's vertices, then Newton steps onto the surface.
+      uint32_t centreIndex[2] = {0, 0};
+      const int centres = table.centreCount[size_t((cs << 6) | joined)];
+      for (int centre = 0; centre < centres; ++centre) {
+        glm::vec3 sum(0.0f);
+        int count = 0;
+        for (int t = 0; t < entry[0]; ++t) {
+          if (entry[1 + 3 * t] != kCentre + centre) continue;
+          const auto [owner, local] = edgeVertex(i, j, k, entry[2 + 3 * t]);
+          sum += glm::vec3(owner->positions[3 * local], owner->positions[3 * local + 1], owner->positions[3 * local + 2]);
+          ++count;
+        }
+        if (count == 0) break;
+        if (!prepared) {
+          field.prepare(std::span<const uint32_t>(st.binMembers.data() + st.binOffsets[b],
+                                                  st.binOffsets[b + 1] - st.binOffsets[b]), scratch);
+          prepared = true;
+        }
+        glm::vec3 x = sum / float(count);
+        FieldSample fs = field.sample(x, scratch);
+        for (int step = 0; step < 3; ++step) {
+          const float g2 = glm::dot(fs.gradient, fs.gradient);
+          if (g2 <= 0.0f) break;
+          x -= (fs.value - iso) / g2 * fs.gradient;
+          fs = field.sample(x, scratch);
+        }
+        centreIndex[centre] = kProvisional | uint32_t(r.centrePositions.size() / 3);
+        r.centrePositions.insert(r.centrePositions.end(), {x.x, x.y, x.z});
+        const float len = glm::length(fs.gradient);
+        const glm::vec3 n = len > 0.0f ? -fs.gradient / len : glm::vec3(0, 0, 1);
+        if (options.computeNormals) r.centreNormals.insert(r.centreNormals.end(), {n.x, n.y, n.z});
+        if (options.computeColors) r.centreColors.insert(r.centreColors.end(), {fs.color.x, fs.color.y, fs.color.z});
+      }
+      for (int t = 0; t < entry[0]; ++t)
+        for (int v = 0; v < 3; ++v) {
+          const int code = entry[1 + 3 * t + v];
+          if (code >= kCentre) {
+            r.triangles.push_back(centreIndex[code - kCentre]);
+          } else {
+            const auto [owner, local] = edgeVertex(i, j, k, code);
+            r.triangles.push_back(owner->base + local);
+          }
+        }
+    }
   }, 1);
 
   phaseMs[3] = lap();
@@ -736,7 +760,12 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
     out.positions.insert(out.positions.end(), r.centrePositions.begin(), r.centrePositions.end());
     out.normals.insert(out.normals.end(), r.centreNormals.begin(), r.centreNormals.end());
     out.colors.insert(out.colors.end(), r.centreColors.begin(), r.centreColors.end());
-    for (uint32_t v : r.triangles) out.indices.push_back(v & kProvisional ? centreBases[b] + (v & ~kProvisional) : v);
+    const size_t at = out.indices.size();
+    out.indices.resize(at + r.triangles.size());
+    for (size_t q = 0; q < r.triangles.size(); ++q) {
+      const uint32_t v = r.triangles[q];
+      out.indices[at + q] = v & kProvisional ? centreBases[b] + (v & ~kProvisional) : v;
+    }
   }
 
   phaseMs[4] = lap();

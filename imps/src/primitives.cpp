@@ -201,17 +201,32 @@ float Primitive::minDistance(const Box& box, bool tight) const {
     case PrimitiveKind::LineSeg: {
       // d(x) >= |x - segment|^2 / max radius^2. First the cheap bound |centre - segment| - half diagonal; when
       // that does not already put the box beyond any support, refine: the distance from c(s) to a box is convex in
-      // s, so a ternary search finds the segment's distance to the box (its tolerance subtracted).
+      // s, so a golden-section search (one distance per step) brackets the segment's nearest point to the box; the
+      // distance is 1-Lipschitz in s, so subtracting the bracket's width keeps the bound conservative.
       const float rMax = std::max(r1, r2);
       const glm::vec3 c = box.center();
       const float tc = std::clamp(glm::dot(c - p1, axis), 0.0f, length);
       const float cheap = std::max(0.0f, glm::length(c - (p1 + tc * axis)) - 0.5f * glm::length(box.size()));
       if (!tight || cheap > 8.0f * rMax) return cheap * cheap / (rMax * rMax);
+      constexpr float kInvPhi = 0.618034f;
+      auto at = [&](float s) { return squaredDistanceToBox(p1 + s * axis, box); };
       float lo = 0.0f, hi = length;
+      float a = hi - kInvPhi * (hi - lo), b = lo + kInvPhi * (hi - lo);
+      float fa = at(a), fb = at(b);
       for (int it = 0; it < 10; ++it) {
-        const float a = lo + (hi - lo) / 3.0f, b = hi - (hi - lo) / 3.0f;
-        if (squaredDistanceToBox(p1 + a * axis, box) <= squaredDistanceToBox(p1 + b * axis, box)) hi = b;
-        else lo = a;
+        if (fa <= fb) {
+          hi = b;
+          b = a;
+          fb = fa;
+          a = hi - kInvPhi * (hi - lo);
+          fa = at(a);
+        } else {
+          lo = a;
+          a = b;
+          fa = fb;
+          b = lo + kInvPhi * (hi - lo);
+          fb = at(b);
+        }
       }
       const float slack = (hi - lo) + 1e-6f * (length + glm::length(box.size()));
       const float dist = std::max(cheap, std::sqrt(squaredDistanceToBox(p1 + 0.5f * (lo + hi) * axis, box)) - slack);
