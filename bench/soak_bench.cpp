@@ -7,7 +7,6 @@
 #include <fcntl.h>
 #include <stdlib.h>
 #include <sys/resource.h>
-#include <termios.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -23,6 +22,7 @@
 #include "drivers/device_session.h"
 #include "drivers/pose_mailbox.h"
 #include "drivers/serial_transport.h"
+#include "sim/pseudo_terminal.h"
 #include "sim/simulated_armature.h"
 
 namespace {
@@ -75,20 +75,6 @@ double processCpuSeconds() {
   return seconds(u.ru_utime) + seconds(u.ru_stime);
 }
 
-// A pseudo-terminal pair: the armature drives `master`, the drivers open `slave` by path. The slave is held open
-// (`holder`) in raw mode from the start: in a new terminal's default cooked mode the armature's boot HELLO, written
-// before the drivers open the port, arrives mangled (counted as garbage bytes; the session then asks with
-// HOST_HELLO), which would spoil the "no garbage" check.
-bool openRawPty(int& master, int& holder, std::string& slave) {
-  master = ::posix_openpt(O_RDWR | O_NOCTTY);
-  if (master < 0 || ::grantpt(master) != 0 || ::unlockpt(master) != 0) return false;
-  slave = ::ptsname(master);
-  holder = ::open(slave.c_str(), O_RDWR | O_NOCTTY | O_CLOEXEC);
-  termios tio{};
-  if (holder < 0 || ::tcgetattr(holder, &tio) != 0) return false;
-  ::cfmakeraw(&tio);
-  return ::tcsetattr(holder, TCSANOW, &tio) == 0;
-}
 
 // The simulator's clock: the steady clock, remembering its first reading and able to stand still.
 // ArmatureFdServer powers the armature on at its clock's first reading, and device times count from power-on, so
@@ -212,12 +198,9 @@ void runStream(StreamRun& r, double seconds, double warmupSeconds, double frameH
   r.rssBefore = rssKiB();
 
   // ---- The armature on a pseudo-terminal, as `puppeteer sim --pty` serves it.
-  int master = -1, holder = -1;
-  std::string slave;
-  if (!openRawPty(master, holder, slave)) {
-    r.error = "cannot create a pseudo-terminal";
-    if (holder >= 0) ::close(holder);
-    if (master >= 0) ::close(master);
+  auto pty = sim::PseudoTerminal::open();
+  if (!pty) {
+    r.error = pty.error();
     return;
   }
   sim::ArmatureOptions ao;
@@ -226,7 +209,7 @@ void runStream(StreamRun& r, double seconds, double warmupSeconds, double frameH
   ao.deviceTimestamps = true;
   ao.channelFlags = true;
   SoakClock clock;
-  auto server = std::make_unique<sim::ArmatureFdServer>(sim::SimulatedArmature(std::move(ao)), master, clock);
+  auto server = std::make_unique<sim::ArmatureFdServer>(sim::SimulatedArmature(std::move(ao)), pty->master(), clock);
   server->start();
 
   // ---- The drivers on the slave end.
@@ -236,14 +219,12 @@ void runStream(StreamRun& r, double seconds, double warmupSeconds, double frameH
   drivers::DeviceSessionOptions so;
   so.rateHz = kRateHz;
   so.bootWaitMs = 300;  // the pty server's boot HELLO went out before the port was opened: ask at once
-  auto session = std::make_unique<drivers::DeviceSession>(drivers::serialOpener(slave), mailbox, so);
+  auto session = std::make_unique<drivers::DeviceSession>(drivers::serialOpener(pty->slavePath()), mailbox, so);
   session->start();
   if (!session->waitForState(drivers::ConnectionState::Streaming, 10000)) {
     r.error = "the session never reached streaming: " + session->lastError();
     session.reset();
     server.reset();
-    ::close(holder);
-    ::close(master);
     return;
   }
   const int64_t deviceEpoch = clock.firstReadingNs();
@@ -345,8 +326,6 @@ void runStream(StreamRun& r, double seconds, double warmupSeconds, double frameH
   r.mailbox = mailbox.stats();
   session.reset();
   server.reset();
-  ::close(holder);
-  ::close(master);
 }
 
 void reportAges(benchmark::State& state, const StreamRun& r) {

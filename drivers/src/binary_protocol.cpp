@@ -449,6 +449,22 @@ std::expected<void, std::string> appendFrame(const Message& message, std::vector
   return {};
 }
 
+std::expected<std::vector<uint8_t>, std::string> encodeDeviceInfo(const DeviceInfo& info) {
+  auto size = deviceInfoSize(info);
+  if (!size) return std::unexpected(size.error());
+  std::vector<uint8_t> out(*size);
+  putDeviceInfo(out.data(), info);
+  return out;
+}
+
+std::expected<DeviceInfo, std::string> decodeDeviceInfo(std::span<const uint8_t> bytes) {
+  Reader r{bytes.data(), bytes.data() + bytes.size()};
+  DeviceInfo info;
+  if (!readDeviceInfo(r, info))
+    return std::unexpected("malformed DeviceInfo block (" + std::to_string(bytes.size()) + " bytes)");
+  return info;
+}
+
 // ---- Decoder ----
 
 BinaryDecoder::BinaryDecoder() { in_.reserve(4 * kMaxFrameSize); }

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "drivers/binary_protocol.h"
+#include "drivers/hid_report.h"
 
 namespace imps::drivers {
 
@@ -28,6 +29,13 @@ DeviceSessionOptions sessionOptionsFor(const DeviceSpec& spec) {
   o.mode = spec.mode;
   o.rateHz = spec.rateHz;
   o.lineOptions.expectedChannelCount = spec.channels;
+  if (spec.kind == DeviceKind::Hid) o.protocol = WireProtocol::HidReports;
+  // A USB armature booted when it enumerated: no boot banner to wait for, and failed opens are cheap (usbOpener
+  // waits for the hotplug arrival), so retry often.
+  if (spec.kind == DeviceKind::Usb) {
+    o.bootWaitMs = 100;
+    o.reconnectIntervalMs = 100;
+  }
   return o;
 }
 
@@ -56,6 +64,7 @@ struct DeviceSession::Io {
   std::unique_ptr<ByteTransport> transport;
   BinaryDecoder binary;
   LineDecoder lines;
+  HidReportDecoder hid;
   uint32_t commandSequence = 0;
   std::array<uint8_t, 4096> readBuffer{};
   std::vector<uint8_t> writeBuffer;
@@ -73,13 +82,15 @@ struct DeviceSession::Io {
   void syncCounters() {
     const BinaryDecoderStats& b = binary.stats();
     const LineDecoderStats& l = lines.stats();
+    const HidDecoderStats& h = hid.stats();
     Counters& c = s.counters_;
-    raise(c.bytesReceived, b.bytesReceived + l.bytesReceived);
+    raise(c.bytesReceived, b.bytesReceived + l.bytesReceived + h.bytes);
     raise(c.garbageBytes, b.bytesSkipped + l.bytesSkipped);
     raise(c.crcErrors, b.headerCrcErrors + b.crcErrors);
-    raise(c.malformedFrames, b.malformedFrames + b.unknownTypes + b.unsupportedVersions + b.oversizeFrames);
+    raise(c.malformedFrames, b.malformedFrames + b.unknownTypes + b.unsupportedVersions + b.oversizeFrames +
+                                 h.unknownReportIds + h.shortReports);
     raise(c.parseErrors, l.errors());
-    raise(c.samplesDropped, b.samplesDropped);
+    raise(c.samplesDropped, b.samplesDropped + h.samplesDropped);
   }
 
   // Reads what arrives within waitMs and feeds the active decoder. False when the transport failed.
@@ -94,6 +105,12 @@ struct DeviceSession::Io {
     if (o.protocol == WireProtocol::Binary) {
       if (!s.info_.has_value() || s.state() == ConnectionState::WaitingForHello) noteText(bytes);
       binary.feed(bytes, hostNow());
+    } else if (o.protocol == WireProtocol::HidReports) {
+      // A message transport: these bytes are exactly one input report.
+      if (auto sample = hid.decode(bytes, hostNow())) {
+        if (s.state() != ConnectionState::Streaming) connected();
+        publish(*sample);
+      }
     } else {
       lines.feed(bytes, hostNow());
     }
@@ -348,6 +365,42 @@ struct DeviceSession::Io {
     }
   }
 
+  // ---- HID input reports
+
+  // No handshake: the transport read the description and layout when it opened. Streaming from the first
+  // sample on; silence is a timeout as for the line protocol.
+  End runHid() {
+    const HidDeviceDescription* d = transport->hidDescription();
+    if (!d) {
+      s.setError("internal: HID reports need a HID transport (hid: spec)");
+      return End::Lost;
+    }
+    hid.setLayout(d->layout);
+    {
+      std::lock_guard lock(s.mutex_);
+      s.info_ = d->info;
+    }
+    s.setState(ConnectionState::WaitingForHello);
+    int64_t lastCheck = steadyNs();
+    for (;;) {
+      if (stopping()) return End::Stopped;
+      const uint64_t before = s.counters_.samples.load(std::memory_order_relaxed);
+      if (!pump(o.ioWaitMs)) return End::Lost;
+      syncCounters();
+      if (s.counters_.samples.load(std::memory_order_relaxed) != before) lastCheck = steadyNs();
+      const bool haveSample = s.state() == ConnectionState::Streaming;
+      const int64_t limit = (haveSample ? o.sampleTimeoutMs : o.bootWaitMs + o.sampleTimeoutMs) * kMs;
+      if (steadyNs() - lastCheck >= limit) {
+        bump(s.counters_.timeouts);
+        lastCheck = steadyNs();
+        if (++consecutiveTimeouts >= o.timeoutsBeforeLost) {
+          s.setError("no HID input reports for " + std::to_string(o.sampleTimeoutMs * o.timeoutsBeforeLost) + " ms");
+          return End::Lost;
+        }
+      }
+    }
+  }
+
   bool everConnected = false;
   void connected() {
     consecutiveTimeouts = 0;
@@ -417,7 +470,9 @@ void DeviceSession::run() {
     io.textBeforeHello.clear();
     io.consecutiveTimeouts = 0;
 
-    const End end = options_.protocol == WireProtocol::Binary ? io.runBinary() : io.runLines();
+    const End end = options_.protocol == WireProtocol::Binary       ? io.runBinary()
+                    : options_.protocol == WireProtocol::HidReports ? io.runHid()
+                                                                    : io.runLines();
     io.syncCounters();
     if (end == End::Stopped) {
       if (options_.protocol == WireProtocol::Binary && io.streamingStarted &&

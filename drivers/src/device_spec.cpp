@@ -18,7 +18,14 @@ const char* toString(DeviceKind kind) {
   }
   return "?";
 }
-const char* toString(WireProtocol protocol) { return protocol == WireProtocol::Binary ? "binary" : "lines"; }
+const char* toString(WireProtocol protocol) {
+  switch (protocol) {
+    case WireProtocol::Binary: return "binary";
+    case WireProtocol::Lines: return "lines";
+    case WireProtocol::HidReports: return "hid-reports";
+  }
+  return "?";
+}
 const char* toString(AcquisitionMode mode) { return mode == AcquisitionMode::Stream ? "stream" : "poll"; }
 
 namespace {
@@ -103,11 +110,11 @@ std::expected<DeviceSpec, std::string> parseDeviceSpec(std::string_view text) {
       if (value == "binary") spec.protocol = WireProtocol::Binary;
       else if (value == "lines") spec.protocol = WireProtocol::Lines;
       else return fail(valueAt, "expected protocol=binary or protocol=lines");
-    } else if (key == "mode" && serialLike) {
+    } else if (key == "mode" && (serialLike || spec.kind == DeviceKind::Usb)) {
       if (value == "stream") spec.mode = AcquisitionMode::Stream;
       else if (value == "poll") spec.mode = AcquisitionMode::Poll;
       else return fail(valueAt, "expected mode=stream or mode=poll");
-    } else if (key == "rate" && serialLike) {
+    } else if (key == "rate" && (serialLike || spec.kind == DeviceKind::Usb)) {
       if (!parseNumber(value, spec.rateHz)) return fail(valueAt, "expected a rate in Hz, 0..65535");
     } else if (key == "channels" && spec.kind == DeviceKind::Serial) {
       if (!parseNumber(value, spec.channels) || spec.channels < 0 || spec.channels > 64)
@@ -118,7 +125,9 @@ std::expected<DeviceSpec, std::string> parseDeviceSpec(std::string_view text) {
     } else if (spec.kind == DeviceKind::Sim) {
       spec.simParams.emplace_back(key, value);
     } else {
-      const char* known = spec.kind == DeviceKind::Serial ? "baud, protocol, mode, rate, channels" : "serial";
+      const char* known = spec.kind == DeviceKind::Serial ? "baud, protocol, mode, rate, channels"
+                          : spec.kind == DeviceKind::Usb  ? "serial, mode, rate"
+                                                          : "serial";
       return fail(pos, cat("unknown key '", key, "' for ", toString(spec.kind), " (known: ", known, ")"));
     }
     pos = amp + 1;
@@ -133,6 +142,8 @@ std::string formatDeviceSpec(const DeviceSpec& spec) {
   if (spec.kind == DeviceKind::Hid || spec.kind == DeviceKind::Usb) {
     out += hex4(spec.vendorId) + ":" + hex4(spec.productId);
     if (!spec.serialNumber.empty()) query.push_back("serial=" + spec.serialNumber);
+    if (spec.mode != AcquisitionMode::Stream) query.push_back("mode=poll");
+    if (spec.rateHz != 0) query.push_back(cat("rate=", spec.rateHz));
   } else {
     out += spec.path;
     if (spec.kind == DeviceKind::Serial && spec.baud != 115200) query.push_back(cat("baud=", spec.baud));

@@ -4,9 +4,6 @@
 #include "device_opener.h"
 
 #include <CLI/CLI.hpp>
-#include <fcntl.h>
-#include <stdlib.h>
-#include <unistd.h>
 
 #include <atomic>
 #include <chrono>
@@ -18,7 +15,10 @@
 
 #include "drivers/device_session.h"
 #include "drivers/device_spec.h"
+#include "drivers/hid_transport.h"
 #include "drivers/serial_transport.h"
+#include "drivers/usb_transport.h"
+#include "sim/pseudo_terminal.h"
 #include "sim/session_file.h"
 #include "sim/simulated_armature.h"
 
@@ -41,6 +41,54 @@ bool timeUp(std::chrono::steady_clock::time_point start, double seconds) {
 }
 
 // ---- puppeteer devices
+
+// HID devices (hidapi): VID:PID, serial, product, usage page, hidraw node, and whether the report descriptor
+// looks like an IMPS armature (docs/protocol.md, "HID armatures").
+void printHidDevices() {
+  auto hid = drivers::listHidDevices();
+  if (!hid) {
+    std::printf("HID devices: cannot list: %s\n", hid.error().c_str());
+    return;
+  }
+  std::printf("HID devices (%zu):\n", hid->size());
+  if (hid->empty()) std::printf("  none\n");
+  for (const drivers::HidDeviceEntry& d : *hid) {
+    std::printf("  %-16s usb %04x:%04x  usage page %04x:%04x", d.path.c_str(), d.vendorId, d.productId, d.usagePage,
+                d.usage);
+    if (!d.serialNumber.empty()) std::printf("  serial %s", d.serialNumber.c_str());
+    if (!d.product.empty()) std::printf("  \"%s\"", d.product.c_str());
+    if (d.layout)
+      std::printf("\n    %s: %zu channels of up to %d bits%s", d.looksLikeArmature() ? "IMPS armature" : "other HID",
+                  d.layout->channels.size(), d.layout->bitsPerChannel(),
+                  d.layout->infoReportId ? ", INFO feature report" : "");
+    else
+      std::printf("\n    no channels: %s", d.layoutError.c_str());
+    std::printf("\n    spec: hid:%04x:%04x%s%s\n", d.vendorId, d.productId, d.serialNumber.empty() ? "" : "?serial=",
+                d.serialNumber.c_str());
+  }
+}
+
+// Vendor-USB armatures (libusb) with the known VID:PIDs: bus/address, strings, and what their INFO request says.
+void printUsbArmatures() {
+  auto usb = drivers::listUsbDevices();
+  if (!usb) {
+    std::printf("USB armatures: cannot list: %s\n", usb.error().c_str());
+    return;
+  }
+  std::printf("USB armatures (%zu):\n", usb->size());
+  if (usb->empty()) std::printf("  none\n");
+  for (const drivers::UsbDeviceInfo& d : *usb) {
+    std::printf("  bus %03d address %03d  usb %04x:%04x", d.bus, d.address, d.vendorId, d.productId);
+    if (!d.serialNumber.empty()) std::printf("  serial %s", d.serialNumber.c_str());
+    if (!d.product.empty()) std::printf("  \"%s\"", d.product.c_str());
+    if (d.info)
+      std::printf("\n    \"%s\": %d channels of %d bits, firmware %s", d.info->name.c_str(), d.info->channelCount,
+                  d.info->bitsPerChannel, d.info->firmwareVersion.c_str());
+    if (!d.problem.empty()) std::printf("\n    %s", d.problem.c_str());
+    std::printf("\n    spec: usb:%04x:%04x%s%s\n", d.vendorId, d.productId, d.serialNumber.empty() ? "" : "?serial=",
+                d.serialNumber.c_str());
+  }
+}
 
 int runDevices() {
   auto ports = drivers::listSerialPorts();
@@ -65,7 +113,8 @@ int runDevices() {
     }
     std::printf("\n    spec: serial:%s\n", p.path.c_str());
   }
-  std::printf("HID and USB armatures: not supported yet (serial and sim: only).\n");
+  printHidDevices();
+  printUsbArmatures();
   return kExitOk;
 }
 
@@ -99,12 +148,12 @@ int runSim(const SimArgs& a) {
     return kExitUsage;
   }
   // ---- A pseudo-terminal pair: the simulator drives the master, the drivers open the slave path.
-  const int master = ::posix_openpt(O_RDWR | O_NOCTTY);
-  if (master < 0 || ::grantpt(master) != 0 || ::unlockpt(master) != 0) {
-    std::fprintf(stderr, "puppeteer sim: error: cannot create a pseudo-terminal\n");
+  auto pty = sim::PseudoTerminal::open();
+  if (!pty) {
+    std::fprintf(stderr, "puppeteer sim: error: %s\n", pty.error().c_str());
     return kExitIoError;
   }
-  const std::string slave = ::ptsname(master);
+  const std::string slave = pty->slavePath();
   std::string path = slave;
   if (!a.link.empty()) {
     std::error_code ec;
@@ -112,7 +161,6 @@ int runSim(const SimArgs& a) {
     std::filesystem::create_symlink(slave, a.link, ec);
     if (ec) {
       std::fprintf(stderr, "puppeteer sim: error: cannot create link %s: %s\n", a.link.c_str(), ec.message().c_str());
-      ::close(master);
       return kExitIoError;
     }
     path = a.link;
@@ -127,12 +175,11 @@ int runSim(const SimArgs& a) {
 
   catchInterrupts();
   sim::SteadyClock clock;
-  sim::ArmatureFdServer server(sim::SimulatedArmature(*options), master, clock);
+  sim::ArmatureFdServer server(sim::SimulatedArmature(*options), pty->master(), clock);
   server.start();
   const auto start = std::chrono::steady_clock::now();
   while (!interrupted.load() && !timeUp(start, a.seconds)) std::this_thread::sleep_for(std::chrono::milliseconds(20));
   server.stop();
-  ::close(master);
   if (!a.link.empty()) std::filesystem::remove(a.link);
   std::printf("Sent %llu samples.\n", static_cast<unsigned long long>(server.samplesSent()));
   return kExitOk;
@@ -244,7 +291,8 @@ int runRecord(const RecordArgs& a) {
 }  // namespace
 
 void addDeviceCommands(CLI::App& app, Commands& commands) {
-  CLI::App* devices = app.add_subcommand("devices", "List attached armatures (serial ports with USB VID:PID)");
+  CLI::App* devices = app.add_subcommand(
+      "devices", "List attached armatures (serial ports with USB VID:PID, HID devices, USB armatures)");
   commands.push_back({devices, [] { return runDevices(); }});
 
   auto simArgs = std::make_shared<SimArgs>();

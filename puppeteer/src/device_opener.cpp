@@ -4,7 +4,9 @@
 #include <cstdio>
 
 #include "cli.h"
+#include "drivers/hid_transport.h"
 #include "drivers/serial_transport.h"
+#include "drivers/usb_transport.h"
 #include "sim/simulated_armature.h"
 
 namespace imps::app {
@@ -16,6 +18,17 @@ std::expected<drivers::TransportOpener, int> openerForSpec(const drivers::Device
       drivers::SerialTransportOptions options;
       options.baud = spec.baud;
       return drivers::serialOpener(spec.path, options);
+    }
+    case drivers::DeviceKind::Hid:
+      return drivers::hidOpener(spec.vendorId, spec.productId, spec.serialNumber);
+    case drivers::DeviceKind::Usb: {
+      drivers::UsbTransportOptions options;
+      options.vendorId = spec.vendorId;
+      options.productId = spec.productId;
+      options.serialNumber = spec.serialNumber;
+      // Hotplug events make reconnects prompt; without them (no libusb hotplug here) every retry simply opens.
+      auto monitor = drivers::UsbHotplugMonitor::start({spec.vendorId, spec.productId});
+      return drivers::usbOpener(options, monitor ? std::shared_ptr(std::move(*monitor)) : nullptr);
     }
     case drivers::DeviceKind::Sim: {
       auto options = sim::armatureOptionsFromSpec(spec);

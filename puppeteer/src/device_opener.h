@@ -9,7 +9,8 @@
 
 namespace imps::app {
 
-// An opener for `spec`: serial ports through libserialport, `sim:` through the in-process simulated armature
+// An opener for `spec`: serial ports through libserialport, `hid:` armatures through hidapi, `usb:` armatures
+// through libusb (with hotplug), `sim:` through the in-process simulated armature
 // (timed by `clock`, which must outlive every transport opened). On failure prints `puppeteer COMMAND: error: …`
 // to stderr and returns the exit code to use (cli.h).
 std::expected<drivers::TransportOpener, int> openerForSpec(const drivers::DeviceSpec& spec, sim::Clock& clock,

@@ -597,5 +597,34 @@ TEST(BinaryProtocol, MessageTypeMatchesPayload) {
   EXPECT_EQ((Message{0, 0, msg::HostHello{}}).type(), MessageType::HostHello);
 }
 
+// The bare DeviceInfo block (a USB armature's INFO control request) is exactly INFO's payload.
+TEST(BinaryProtocol, DeviceInfoBlockIsTheInfoPayload) {
+  DeviceInfo info;
+  info.name = "IMPS USB Monkey";
+  info.serialNumber = "U1";
+  info.firmwareVersion = "2.0";
+  info.channelCount = 3;
+  info.bitsPerChannel = 12;
+  info.channelNames = {"hip", "knee", "ankle"};
+  info.hasDeviceTimestamp = true;
+  auto block = encodeDeviceInfo(info);
+  ASSERT_TRUE(block) << block.error();
+  std::vector<uint8_t> frame;
+  ASSERT_TRUE(appendFrame(Message{0, kFlagReply, msg::Info{info}}, frame));
+  ASSERT_EQ(frame.size(), kFrameHeaderSize + block->size() + kFrameCrcSize);
+  EXPECT_TRUE(std::equal(block->begin(), block->end(), frame.begin() + kFrameHeaderSize));
+  auto back = decodeDeviceInfo(*block);
+  ASSERT_TRUE(back) << back.error();
+  EXPECT_EQ(*back, info);
+
+  std::vector<uint8_t> longer = *block;
+  longer.push_back(0);  // a trailing byte is malformed, as in INFO
+  EXPECT_FALSE(decodeDeviceInfo(longer));
+  for (size_t n = 0; n < block->size(); ++n)  // so is every truncation
+    EXPECT_FALSE(decodeDeviceInfo(std::span(block->data(), n))) << n;
+  info.channelCount = 0;
+  EXPECT_FALSE(encodeDeviceInfo(info));
+}
+
 }  // namespace
 }  // namespace imps::drivers

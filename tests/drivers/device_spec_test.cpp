@@ -1,5 +1,6 @@
 // Tests for drivers/device_spec: the grammar in docs/devices.md, its error messages and round trips.
 #include "drivers/device_spec.h"
+#include "drivers/device_session.h"
 
 #include <gtest/gtest.h>
 
@@ -37,6 +38,15 @@ TEST(DeviceSpec, HidAndUsbIds) {
   ASSERT_TRUE(usb) << usb.error();
   EXPECT_EQ(usb->vendorId, 0x1209);
   EXPECT_EQ(usb->productId, 0x0001);
+  // A USB armature speaks the binary protocol: poll or stream mode and a rate (sessionOptionsFor passes them on).
+  auto usbPoll = parseDeviceSpec("usb:1209:0001?serial=U1&mode=poll&rate=250");
+  ASSERT_TRUE(usbPoll) << usbPoll.error();
+  EXPECT_EQ(usbPoll->serialNumber, "U1");
+  EXPECT_EQ(usbPoll->mode, AcquisitionMode::Poll);
+  EXPECT_EQ(usbPoll->rateHz, 250);
+  EXPECT_EQ(sessionOptionsFor(*usbPoll).mode, AcquisitionMode::Poll);
+  EXPECT_EQ(sessionOptionsFor(*usbPoll).rateHz, 250);
+  EXPECT_FALSE(parseDeviceSpec("usb:1209:0001?protocol=lines"));
 }
 
 TEST(DeviceSpec, SimKeepsSimulatorKeysInOrder) {
@@ -83,6 +93,7 @@ TEST(DeviceSpec, ErrorsSayWhereAndWhat) {
 TEST(DeviceSpec, FormatRoundTrips) {
   for (const char* text : {"serial:/dev/ttyACM0", "serial:/dev/ttyUSB1?baud=9600&protocol=lines&channels=4",
                            "serial:/dev/ttyACM0?mode=poll&rate=30", "hid:2341:8036?serial=X", "usb:1209:0001",
+                           "usb:1209:0001?serial=U1&mode=poll&rate=250",
                            "sim:?rate=1000&channels=64&noise=1"}) {
     auto spec = parseDeviceSpec(text);
     ASSERT_TRUE(spec) << spec.error();

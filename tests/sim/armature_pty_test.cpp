@@ -2,11 +2,6 @@
 // (SerialTransport's termios path, DeviceSession, PoseMailbox): a 1 kHz × 64-channel stream arrives whole, in order
 // and byte-exact. Behaviour, not speed: the assertions count and compare samples and never time anything, so a
 // loaded machine makes the test slower, not red. The timing figures are bench/soak_bench.cpp's.
-#include <fcntl.h>
-#include <stdlib.h>
-#include <termios.h>
-#include <unistd.h>
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -16,6 +11,7 @@
 
 #include "drivers/device_session.h"
 #include "drivers/serial_transport.h"
+#include "sim/pseudo_terminal.h"
 #include "sim/simulated_armature.h"
 
 namespace imps::sim {
@@ -43,31 +39,9 @@ class FreezableClock final : public Clock {
   std::atomic<int64_t> frozenAt_{INT64_MAX};
 };
 
-// A pty pair: the armature drives the master, the drivers open the slave by path. The slave is held open in raw
-// mode from the start: in a new terminal's default cooked mode the armature's boot HELLO, written before the
-// drivers open the port, arrives mangled (counted as garbage bytes; the session then asks with HOST_HELLO).
-struct Pty {
-  int master = -1;
-  int holder = -1;
-  std::string slave;
-  Pty() {
-    master = ::posix_openpt(O_RDWR | O_NOCTTY);
-    if (master < 0 || ::grantpt(master) != 0 || ::unlockpt(master) != 0) return;
-    holder = ::open(::ptsname(master), O_RDWR | O_NOCTTY | O_CLOEXEC);
-    termios tio{};
-    if (holder < 0 || ::tcgetattr(holder, &tio) != 0) return;
-    ::cfmakeraw(&tio);
-    if (::tcsetattr(holder, TCSANOW, &tio) == 0) slave = ::ptsname(master);
-  }
-  ~Pty() {
-    if (holder >= 0) ::close(holder);
-    if (master >= 0) ::close(master);
-  }
-};
-
 TEST(ArmaturePty, Stream1kHz64ChannelsEverySampleInOrderByteExact) {
-  Pty pty;
-  ASSERT_FALSE(pty.slave.empty()) << "cannot create a pseudo-terminal";
+  auto pty = PseudoTerminal::open();
+  ASSERT_TRUE(pty) << pty.error();
 
   // 4096 distinct poses using every bit of 16-bit counts, with some channels flagged.
   ArmatureOptions o;
@@ -86,7 +60,7 @@ TEST(ArmaturePty, Stream1kHz64ChannelsEverySampleInOrderByteExact) {
   }
   const std::vector<Sample> poses = o.recorded;
   FreezableClock clock;
-  ArmatureFdServer server(SimulatedArmature(std::move(o)), pty.master, clock);
+  ArmatureFdServer server(SimulatedArmature(std::move(o)), pty->master(), clock);
   server.start();
 
   PoseMailboxOptions mo;
@@ -97,7 +71,7 @@ TEST(ArmaturePty, Stream1kHz64ChannelsEverySampleInOrderByteExact) {
   so.bootWaitMs = 300;         // the boot HELLO went out before the port was opened: ask with HOST_HELLO soon
   so.replyTimeoutMs = 2000;    // generous: only speed would change, never the result
   so.sampleTimeoutMs = 10000;  // a stall on a loaded machine must not look like a silent device
-  DeviceSession session(serialOpener(pty.slave), mailbox, so);
+  DeviceSession session(serialOpener(pty->slavePath()), mailbox, so);
   session.start();
   ASSERT_TRUE(session.waitForState(ConnectionState::Streaming, 20000)) << session.lastError();
 

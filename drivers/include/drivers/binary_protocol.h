@@ -151,6 +151,13 @@ std::expected<size_t, std::string> encodeFrame(const Message& message, std::span
 // Appends one frame to `out`; `out` is unchanged on error.
 std::expected<void, std::string> appendFrame(const Message& message, std::vector<uint8_t>& out);
 
+// The DeviceInfo block alone (the payload of INFO, docs/protocol.md): what a USB armature returns for its vendor
+// GET_INFO control request. Errors as encodedFrameSize() gives them for an invalid description.
+std::expected<std::vector<uint8_t>, std::string> encodeDeviceInfo(const DeviceInfo& info);
+// Parses a DeviceInfo block that fills `bytes` exactly (the layout and limits of INFO's payload); the error says
+// that the block is malformed. Never throws.
+std::expected<DeviceInfo, std::string> decodeDeviceInfo(std::span<const uint8_t> bytes);
+
 // ---- Decoder -------------------------------------------------------------------------------------------------
 
 // Every byte fed ends up in exactly one of bytesInFrames, bytesSkipped or BinaryDecoder::buffered():

@@ -13,6 +13,8 @@
 
 namespace imps::drivers {
 
+struct HidDeviceDescription;  // drivers/hid_report.h
+
 // An open connection to one device. Used by one thread at a time (the session's I/O thread); not thread-safe.
 // Closing happens in the destructor. An error from read() or write() means the connection is gone (unplugged,
 // device node vanished, I/O error): the session drops the transport and reopens through its TransportOpener.
@@ -28,6 +30,9 @@ class ByteTransport {
   virtual std::string description() const = 0;
   // Problems worth telling the performer that do not stop the connection (e.g. the FTDI latency timer).
   virtual std::vector<std::string> warnings() const { return {}; }
+  // Message transports (HID): read() returns exactly one input report per call, and this describes the device
+  // and its report layout (valid while the transport lives). nullptr for byte streams.
+  virtual const HidDeviceDescription* hidDescription() const { return nullptr; }
 };
 
 // Opens a fresh connection each time it is called (the session calls it again to reconnect). Returns the error

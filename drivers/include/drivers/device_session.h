@@ -24,7 +24,8 @@ namespace imps::drivers {
 enum class ConnectionState : uint8_t {
   Disconnected,     // not started, or stopped
   Opening,          // trying to open the transport for the first time (retried every reconnectIntervalMs)
-  WaitingForHello,  // open; binary: boot banner / HELLO / GET_INFO / START_STREAM; lines: waiting for a sample line
+  WaitingForHello,  // open; binary: boot banner / HELLO / GET_INFO / START_STREAM; lines: waiting for a sample line;
+                    // HID: waiting for the first input report
   Streaming,        // samples are flowing (stream mode) or being polled (poll mode)
   Lost,             // the connection dropped (read error, node vanished, repeated timeouts); the last pose stays
   Reconnecting,     // trying to open the transport again

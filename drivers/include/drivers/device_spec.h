@@ -12,8 +12,9 @@
 namespace imps::drivers {
 
 enum class DeviceKind : uint8_t { Serial, Hid, Usb, Sim };
-// Which codec the session feeds: the binary framed protocol or the DIY line protocol (docs/protocol.md).
-enum class WireProtocol : uint8_t { Binary, Lines };
+// Which codec the session feeds: the binary framed protocol or the DIY line protocol (docs/protocol.md), or HID
+// input reports (one per transport read, decoded with drivers/hid_report.h; used for hid: specs, not a spec key).
+enum class WireProtocol : uint8_t { Binary, Lines, HidReports };
 // Binary protocol only: the device streams at a rate (START_STREAM) or answers one POLL at a time.
 enum class AcquisitionMode : uint8_t { Stream, Poll };
 
