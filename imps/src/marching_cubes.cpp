@@ -210,6 +210,18 @@ const CaseTable& caseTable() {
   return table;
 }
 
+// ln x for normal, positive, finite x, branch-free so batches vectorise: x = 2^e m with m in [sqrt(1/2), sqrt(2)),
+// then ln m = 2 atanh(s), s = (m - 1) / (m + 1), |s| <= 0.172, by its series to s^9 (error below 1e-9).
+inline float lnPositive(float x) {
+  const uint32_t bits = std::bit_cast<uint32_t>(x);
+  const int32_t e = int32_t(bits - 0x3F3504F3u) >> 23;  // 0x3F3504F3: sqrt(1/2)
+  const float m = std::bit_cast<float>(bits - (uint32_t(e) << 23));
+  const float s = (m - 1.0f) / (m + 1.0f);
+  const float s2 = s * s;
+  const float series = 2.0f + s2 * (2.0f / 3.0f + s2 * (2.0f / 5.0f + s2 * (2.0f / 7.0f + s2 * (2.0f / 9.0f))));
+  return s * series + float(e) * 0.69314718f;
+}
+
 // ---- Grid and blocks -----------------------------------------------------------------------------------------
 
 struct Grid {
@@ -456,11 +468,11 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
   // 3. Per block: bound test, samples, owned edge vertices.
   const int threads = options.threads;
   const bool logSpace = field.blend().kind == BlendKind::Exponential;
-  const float logIso = std::log(iso);
+  const float logIso = lnPositive(iso);
   // Root finding runs on ln F for the exponential blend: close to linear along an edge (F is a sum of exponentials
   // of squared distances), so the first interpolation is already near the root. F is exactly 0 beyond every
   // support; clamping at the smallest non-zero term keeps ln F finite.
-  auto transform = [&](float v) { return logSpace ? std::log(std::max(v, kExponentialCutoff)) - logIso : v - iso; };
+  auto transform = [&](float v) { return logSpace ? lnPositive(std::max(v, kExponentialCutoff)) - logIso : v - iso; };
   parallelFor(blockCount, threads, [&](size_t b) {
     thread_local FieldScratch scratch;
     thread_local std::vector<glm::vec3> points;
@@ -569,7 +581,7 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
     r.hasSurface = !r.cells.empty();
     if (!r.hasSurface) return;
 
-    // Illinois root finding on the true field, every unfinished edge of the block evaluated in one batch per step.
+    // Regula falsi root finding on the true field, every unfinished edge of the block evaluated in one batch per step.
     thread_local std::vector<uint32_t> active, stillActive;
     thread_local std::vector<glm::vec3> at;
     thread_local std::vector<float> values;
@@ -584,20 +596,25 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
         at[q] = e.pa + e.t * (e.pb - e.pa);
       }
       field.values(at, values, scratch);
+      for (float& v : values) v = transform(v);  // one vectorised pass
       stillActive.clear();
       for (size_t q = 0; q < active.size(); ++q) {
         EdgeRoot& e = edges[active[q]];
-        const float gt = transform(values[q]);
+        const float gt = values[q];
         if (std::abs(gt) <= e.tolerance) continue;
+        // Anderson-Bjorck: when the same end moves twice in a row, scale the stale end's value by
+        // m = 1 - g(new) / g(old end), or halve it (Illinois) when m <= 0.
         if ((gt > 0.0f) == (e.ga > 0.0f)) {
+          const float m = 1.0f - gt / e.ga;
           e.ta = e.t;
           e.ga = gt;
-          if (e.side == -1) e.gb *= 0.5f;
+          if (e.side == -1) e.gb *= m > 0.0f ? m : 0.5f;
           e.side = -1;
         } else {
+          const float m = 1.0f - gt / e.gb;
           e.tb = e.t;
           e.gb = gt;
-          if (e.side == 1) e.ga *= 0.5f;
+          if (e.side == 1) e.ga *= m > 0.0f ? m : 0.5f;
           e.side = 1;
         }
         e.t = e.ta + (e.tb - e.ta) * e.ga / (e.ga - e.gb);

@@ -355,6 +355,9 @@ TEST(SceneReaderErrors, NonPositiveAndOutOfRangeValues) {
        "field 'bitsPerDim' of UniformHash must be between 1 and 10, found 11"},
       {"Tesselator3MP { desiredRadius 0 }", "field 'desiredRadius' of Tesselator3MP must be > 0, found 0"},
       {"Tesselator3MP { deltaT -0.01 }", "field 'deltaT' of Tesselator3MP must be > 0, found -0.01"},
+      // F >= 0 everywhere: an iso-value of 0 or below would make all of space inside.
+      {"Tesselator3MP { isoValue 0 }", "field 'isoValue' of Tesselator3MP must be > 0, found 0"},
+      {"MarchingCubes { isoValue -1 }", "field 'isoValue' of MarchingCubes must be > 0, found -1"},
       {"Tesselator3MP { numThreads -1 }", "field 'numThreads' of Tesselator3MP must be >= 0, found -1"},
       {"Tesselator3MP { updatesPerRender 0 }", "field 'updatesPerRender' of Tesselator3MP must be >= 1, found 0"},
       {"Metaball { material Material { diffuseColor 1.5 0 0 } }",
