@@ -293,34 +293,51 @@ void Field::terms(size_t i, size_t n, FieldScratch& scratch) const {
 
 void Field::accumulate(std::span<const glm::vec3> points, FieldScratch& scratch, bool keepTerms) const {
   const size_t n = points.size();
-  scratch.xs.resize(n);
-  scratch.ys.resize(n);
-  scratch.zs.resize(n);
-  scratch.term.resize(n);
+  // Scratch buffers only grow: resizing down and up again between a block's samples and its root-finding batches
+  // would zero-fill the regrown part every time.
+  auto atLeast = [](std::vector<float>& v, size_t size) {
+    if (v.size() < size) v.resize(size);
+  };
+  atLeast(scratch.xs, n);
+  atLeast(scratch.ys, n);
+  atLeast(scratch.zs, n);
+  atLeast(scratch.term, n);
   for (size_t i = 0; i < n; ++i) {
     scratch.xs[i] = points[i].x;
     scratch.ys[i] = points[i].y;
     scratch.zs[i] = points[i].z;
   }
   const bool additive = blend_.additive();
-  scratch.acc.assign(scratch.setCount() * n, additive ? 0.0f : -1.0f);
-  if (keepTerms) scratch.terms.assign(scratch.candidates.size() * n, 0.0f);
+  const size_t sets = scratch.setCount();
+  atLeast(scratch.acc, sets * n);
+  scratch.setStarted.assign(sets, 0);
+  if (keepTerms) atLeast(scratch.terms, scratch.candidates.size() * n);
   // Accumulate each candidate's terms into every local set holding it, candidates in ascending order (the order
-  // every region and the point evaluation share).
+  // every region and the point evaluation share). A set's first member is copied rather than added to the empty
+  // value (0, or -1 for the elliptical fold): 0 + t and fold(-1, t) are exactly t, so the bits are the same.
   for (size_t k = 0; k < scratch.candidates.size(); ++k) {
-    if (scratch.memberOffsets[k] == scratch.memberOffsets[k + 1]) continue;
+    if (scratch.memberOffsets[k] == scratch.memberOffsets[k + 1]) {
+      if (keepTerms) std::fill_n(scratch.terms.begin() + long(k * n), n, 0.0f);
+      continue;
+    }
     terms(scratch.candidates[k], n, scratch);
     const float* t = scratch.term.data();
     if (keepTerms) std::copy(t, t + n, scratch.terms.begin() + long(k * n));
     for (uint32_t m = scratch.memberOffsets[k]; m < scratch.memberOffsets[k + 1]; ++m) {
-      float* acc = scratch.acc.data() + size_t(scratch.memberSets[m]) * n;
-      if (additive) {
+      const uint32_t set = scratch.memberSets[m];
+      float* acc = scratch.acc.data() + size_t(set) * n;
+      if (!scratch.setStarted[set]) {
+        std::copy(t, t + n, acc);
+        scratch.setStarted[set] = 1;
+      } else if (additive) {
         for (size_t i = 0; i < n; ++i) acc[i] += t[i];
       } else {
         for (size_t i = 0; i < n; ++i) acc[i] = foldElliptical(acc[i], t[i]);
       }
     }
   }
+  for (size_t set = 0; set < sets; ++set)  // (every local set has a member, so this is only a safeguard)
+    if (!scratch.setStarted[set]) std::fill_n(scratch.acc.begin() + long(set * n), n, additive ? 0.0f : -1.0f);
 }
 
 void Field::values(std::span<const glm::vec3> points, std::span<float> out, FieldScratch& scratch) const {

@@ -46,6 +46,7 @@ struct FieldScratch {
   std::vector<float> xs, ys, zs, term, acc;      // points (SoA), one primitive's terms, per-set accumulators
   std::vector<float> terms;                       // samples(): every candidate's terms
   std::vector<uint32_t> winner;                  // samples(): each point's winning set
+  std::vector<uint8_t> setStarted;               // accumulate(): which sets hold a value yet
   std::vector<int32_t> globalToLocal;
   size_t setCount() const { return setOffsets.size() - 1; }
 };
