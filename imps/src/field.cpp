@@ -70,7 +70,7 @@ Box Field::surfaceBounds() const {
   // bound for any blend set).
   const Box all = bounds();
   if (all.empty()) return all;
-  constexpr int kCells = 14;
+  constexpr int kCells = 8;
   const glm::vec3 cell = all.size() / float(kCells);
   std::vector<float> upper(kCells * kCells * kCells, 0.0f);
   std::vector<uint8_t> unbounded(upper.size(), 0);
