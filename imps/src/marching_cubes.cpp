@@ -506,10 +506,12 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
     }
     r.sampled = true;
     points.resize(kBlockSamples);
+    std::array<glm::vec3, kBlockVerts> axes;  // g.vertex()'s coordinates along each axis, computed once
+    for (int v = 0; v < kBlockVerts; ++v) axes[size_t(v)] = g.vertex(bx * kBlock + v, by * kBlock + v, bz * kBlock + v);
     for (int k = 0; k < kBlockVerts; ++k)
       for (int j = 0; j < kBlockVerts; ++j)
         for (int i = 0; i < kBlockVerts; ++i)
-          points[sampleIndex(i, j, k)] = g.vertex(bx * kBlock + i, by * kBlock + j, bz * kBlock + k);
+          points[sampleIndex(i, j, k)] = glm::vec3(axes[size_t(i)].x, axes[size_t(j)].y, axes[size_t(k)].z);
     r.samples.resize(kBlockSamples);
     field.values(points, r.samples, scratch);
     if (!snaps.empty()) {
@@ -677,16 +679,17 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
     thread_local FieldScratch scratch;
     bool prepared = false;
     // The block owning cell (i, j, k)'s cube edge e, and the vertex's index in it.
-    auto edgeVertex = [&](int i, int j, int k, int e) -> std::pair<const BlockResult*, uint32_t> {
+    struct EdgeRef {
+      const BlockResult* owner;
+      uint32_t local;
+    };
+    auto edgeVertex = [&](int i, int j, int k, int e) -> EdgeRef {
       const int corner = table.edgeStartCorner[size_t(e)], axis = e / 4;
-      int vi = i + (corner & 1), vj = j + ((corner >> 1) & 1), vk = k + ((corner >> 2) & 1);
-      int ox = 0, oy = 0, oz = 0;
-      if (vi == kBlock) { vi = 0; ox = 1; }
-      if (vj == kBlock) { vj = 0; oy = 1; }
-      if (vk == kBlock) { vk = 0; oz = 1; }
+      const int vi = i + (corner & 1), vj = j + ((corner >> 1) & 1), vk = k + ((corner >> 2) & 1);
+      const int ox = vi / kBlock, oy = vj / kBlock, oz = vk / kBlock;  // 1 on the far faces: the next block owns it
       const BlockResult& owner = (ox | oy | oz) ? st.blocks[g.blockIndex(bx + ox, by + oy, bz + oz)] : r;
       IMPS_CHECK(owner.hasSurface);
-      const int32_t local = owner.edgeVertex[ownedEdgeIndex(axis, vi, vj, vk)];
+      const int32_t local = owner.edgeVertex[ownedEdgeIndex(axis, vi - ox * kBlock, vj - oy * kBlock, vk - oz * kBlock)];
       IMPS_CHECK(local >= 0);
       return {&owner, uint32_t(local)};
     };
@@ -694,6 +697,16 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
       const int i = int(cell & 0xFFFFu) % kBlock, j = int(cell & 0xFFFFu) / kBlock % kBlock,
                 k = int(cell & 0xFFFFu) / (kBlock * kBlock);
       const int cs = int(cell >> 16);
+      // Each crossing edge is looked up once per cell, however many triangles use it.
+      std::array<EdgeRef, 12> refs;
+      uint32_t known = 0;
+      auto ref = [&](int e) -> const EdgeRef& {
+        if (!((known >> e) & 1u)) {
+          refs[size_t(e)] = edgeVertex(i, j, k, e);
+          known |= 1u << e;
+        }
+        return refs[size_t(e)];
+      };
       int joined = 0;
       const uint8_t ambiguous = table.ambiguousFaces[cs];
       if (ambiguous) {
@@ -718,7 +731,7 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
         int count = 0;
         for (int t = 0; t < entry[0]; ++t) {
           if (entry[1 + 3 * t] != kCentre + centre) continue;
-          const auto [owner, local] = edgeVertex(i, j, k, entry[2 + 3 * t]);
+          const auto [owner, local] = ref(entry[2 + 3 * t]);
           sum += glm::vec3(owner->positions[3 * local], owner->positions[3 * local + 1], owner->positions[3 * local + 2]);
           ++count;
         }
@@ -749,7 +762,7 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
           if (code >= kCentre) {
             r.triangles.push_back(centreIndex[code - kCentre]);
           } else {
-            const auto [owner, local] = edgeVertex(i, j, k, code);
+            const auto [owner, local] = ref(code);
             r.triangles.push_back(owner->base + local);
           }
         }
