@@ -222,6 +222,48 @@ inline float kernelDistance(const Primitive& p, float x, float y, float z) {
   return 0.0f;
 }
 
+// kernelDistance() (the very same arithmetic, so the same bits) and its gradient in x, for sample() and samples().
+// Line segment: by the envelope theorem the gradient is that of the sphere at the closest parameter s.
+inline float kernelDistanceGradient(const Primitive& p, const glm::vec3& x, glm::vec3& gradient) {
+  switch (p.kind) {
+    case PrimitiveKind::Metaball: {
+      const float vx = x.x - p.center.x, vy = x.y - p.center.y, vz = x.z - p.center.z;
+      const float inv = 2.0f / (p.radius * p.radius);
+      gradient = glm::vec3(inv * vx, inv * vy, inv * vz);
+      return (vx * vx + vy * vy + vz * vz) / (p.radius * p.radius);
+    }
+    case PrimitiveKind::Ellipsoid: {
+      const glm::mat3& w = p.worldToLocal;
+      const float vx = x.x - p.center.x, vy = x.y - p.center.y, vz = x.z - p.center.z;
+      const float qx = w[0][0] * vx + w[1][0] * vy + w[2][0] * vz;
+      const float qy = w[0][1] * vx + w[1][1] * vy + w[2][1] * vz;
+      const float qz = w[0][2] * vx + w[1][2] * vy + w[2][2] * vz;
+      gradient = 2.0f * glm::vec3(w[0][0] * qx + w[0][1] * qy + w[0][2] * qz, w[1][0] * qx + w[1][1] * qy + w[1][2] * qz,
+                                  w[2][0] * qx + w[2][1] * qy + w[2][2] * qz);
+      return qx * qx + qy * qy + qz * qz;
+    }
+    case PrimitiveKind::LineSeg: {
+      const float vx = x.x - p.p1.x, vy = x.y - p.p1.y, vz = x.z - p.p1.z;
+      const float vv = vx * vx + vy * vy + vz * vz;
+      const float t = vx * p.axis.x + vy * p.axis.y + vz * p.axis.z;
+      const float rho2 = std::max(0.0f, vv - t * t);
+      const float a = p.r1 + p.slope * t;
+      const float safeA = a > 0.0f ? a : 1.0f;
+      const float sInside = std::min(std::max(t + p.slope * rho2 / safeA, 0.0f), p.length);
+      const float wx = x.x - p.p2.x, wy = x.y - p.p2.y, wz = x.z - p.p2.z;
+      const float sApex = vv / (p.r1 * p.r1) <= (wx * wx + wy * wy + wz * wz) / (p.r2 * p.r2) ? 0.0f : p.length;
+      const float s = a > 0.0f ? sInside : sApex;
+      const float ux = x.x - (p.p1.x + s * p.axis.x), uy = x.y - (p.p1.y + s * p.axis.y), uz = x.z - (p.p1.z + s * p.axis.z);
+      const float r = p.r1 + p.slope * s;
+      const float inv = 2.0f / (r * r);
+      gradient = glm::vec3(inv * ux, inv * uy, inv * uz);
+      return (ux * ux + uy * uy + uz * uz) / (r * r);
+    }
+  }
+  gradient = glm::vec3(0.0f);
+  return 0.0f;
+}
+
 // Blend term kernels (blend.h's BlendFunction::term, written for vectorisation).
 inline float exponentialTerm(float param, float d) {
   const float c = expAccurate(param * (d - 1.0f));
@@ -244,6 +286,12 @@ inline float kernelTerm(const BlendFunction& blend, float param, float d) {
     case BlendKind::Elliptical: return ellipticalTerm(param, d);
   }
   return 0.0f;
+}
+
+// dc/dd of an additive blend given d and the term c = kernelTerm(d) already computed (the exponential's derivative
+// is param * c: no second exponential).
+inline float kernelTermSlope(const BlendFunction& blend, float param, float d, float c) {
+  return blend.kind == BlendKind::Exponential ? param * c : blend.termDerivative(d, param);
 }
 
 inline float foldElliptical(float g, float x) {
@@ -367,9 +415,10 @@ float Field::value(const glm::vec3& x, FieldScratch& scratch) const {
     const uint32_t first = scratch.memberOffsets[k], last = scratch.memberOffsets[k + 1];
     if (first == last) continue;
     const uint32_t i = scratch.candidates[k];
+    // Outside the padded support box, or clearly beyond the support, the kernel's term is exactly "nothing" (0, or
+    // -1 for the elliptical blend, which the fold ignores): skip it. The margins keep this exact despite rounding.
+    if (!supportBoxes_[i].contains(x)) continue;
     const float d = kernelDistance(primitives_[i], x.x, x.y, x.z);
-    // Clearly beyond the support the kernel's term is exactly "nothing" (0, or -1 for the elliptical blend, which
-    // the fold ignores): skip the exponential. The margin keeps this exact despite rounding near the boundary.
     if (d > supportSkip_[i]) continue;
     const float t = kernelTerm(blend_, params_[i], d);
     for (uint32_t m = first; m < last; ++m) {
@@ -389,13 +438,23 @@ FieldSample Field::sample(const glm::vec3& x, FieldScratch& scratch) const {
   const size_t sets = scratch.setCount();
   if (sets == 0) return out;
   // Per-candidate terms at x, then each set's value in member order. This is value()'s arithmetic (sums in
-  // ascending candidate order, skipped terms being exactly zero), so the maximum is exactly value(x).
-  thread_local std::vector<float> t;
+  // ascending candidate order, skipped terms being exactly zero), so the maximum is exactly value(x). A candidate
+  // whose padded support box misses x has no term there (the padding guarantees it), so it costs a box test only;
+  // the additive blends get each distance's gradient in the same pass.
+  const bool additive = blend_.additive();
+  const float none = additive ? 0.0f : -1.0f;
+  thread_local std::vector<float> t, dist;
+  thread_local std::vector<glm::vec3> dGrad;
   t.resize(cand.size());
+  dist.resize(cand.size());
+  dGrad.resize(cand.size());
   for (size_t k = 0; k < cand.size(); ++k) {
     const uint32_t i = cand[k];
-    const float d = kernelDistance(primitives_[i], x.x, x.y, x.z);
-    t[k] = d > supportSkip_[i] ? (blend_.additive() ? 0.0f : -1.0f) : kernelTerm(blend_, params_[i], d);
+    t[k] = none;
+    if (!supportBoxes_[i].contains(x)) continue;
+    const float d = additive ? kernelDistanceGradient(primitives_[i], x, dGrad[k]) : kernelDistance(primitives_[i], x.x, x.y, x.z);
+    dist[k] = d;
+    if (d <= supportSkip_[i]) t[k] = kernelTerm(blend_, params_[i], d);
   }
   int best = 0;
   float bestValue = -1.0f;
@@ -423,11 +482,7 @@ FieldSample Field::sample(const glm::vec3& x, FieldScratch& scratch) const {
     const uint32_t i = cand[k];
     const float w = blend_.additive() ? t[k] : t[k] + 1.0f;
     if (w <= 0.0f) continue;
-    if (blend_.additive()) {
-      glm::vec3 gd;
-      const float d = primitives_[i].distance(x, gd);
-      out.gradient += blend_.termDerivative(d, params_[i]) * gd;
-    }
+    if (additive) out.gradient += kernelTermSlope(blend_, params_[i], dist[k], t[k]) * dGrad[k];
     color += w * colors_[i];
     weightSum += w;
     if (w > bestWeight) {
@@ -490,8 +545,8 @@ void Field::samples(std::span<const glm::vec3> points, std::span<FieldSample> ou
       for (uint32_t m = first; m < last && !member; ++m) member = scratch.memberSets[m] == scratch.winner[i];
       if (!member) continue;
       glm::vec3 gd;
-      const float d = primitives_[p].distance(points[i], gd);
-      out[i].gradient += blend_.termDerivative(d, params_[p]) * gd;
+      const float d = kernelDistanceGradient(primitives_[p], points[i], gd);  // sample()'s arithmetic: same bits
+      out[i].gradient += kernelTermSlope(blend_, params_[p], d, t[i]) * gd;
       out[i].color += t[i] * colors_[p];
       weightSum[i] += t[i];
       if (t[i] > bestWeight[i]) {

@@ -60,6 +60,98 @@ float desiredEnergy(const TesselatorOptions& o) {
 
 }  // namespace
 
+void findNeighbours(Tesselator::State& s, const TesselatorOptions& o) {
+  // Spatial sort: particles in hash-bucket order, so each chunk of the fixed partition is compact in space.
+  const size_t n = s.size();
+  s.hash.build(s.pos);
+  {
+    const auto order = s.hash.order();
+    auto permute = [&](auto& v, auto& tmp) {
+      tmp.resize(n);
+      for (size_t k = 0; k < n; ++k) tmp[k] = v[order[k]];
+      v.swap(tmp);
+    };
+    permute(s.pos, s.tmpV);
+    permute(s.grad, s.tmpV);
+    permute(s.nrm, s.tmpV);
+    permute(s.sigma, s.tmpF);
+    permute(s.value, s.tmpF);
+    permute(s.owner, s.tmpI);
+    permute(s.id, s.tmpU);
+    s.hash.adoptOrder();
+  }
+  // Everything within the list radius, in the hash's visiting order (deterministic); only when more than
+  // kMaxNeighbours are found are they sorted by (distance, index) and the nearest kept.
+  const float radius = std::max(o.queryRadius, kFanRadius * o.desiredRadius);
+  const float r2 = radius * radius;
+  s.nbr.resize(n * kMaxNeighbours);
+  s.nbrCount.resize(n);
+  const size_t chunks = (n + kChunk - 1) / kChunk;
+  const float cube = s.hash.cubeSize();
+  parallelFor(chunks, o.numThreads, [&](size_t c) {
+    const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
+    constexpr size_t kFound = 512;  // a denser crowd than this keeps the first kFound visited
+    uint64_t found[kFound];
+    // Candidates of a run of particles sharing a hash bucket (consecutive after the sort), gathered once: SoA, so the
+    // distance loop vectorises.
+    constexpr size_t kGather = 2048;
+    float cx[kGather], cy[kGather], cz[kGather], cd2[kGather];
+    uint32_t cj[kGather];
+    auto keep = [&](size_t i, size_t cnt) {
+      if (cnt > kMaxNeighbours) {
+        std::nth_element(found, found + kMaxNeighbours, found + cnt);
+        cnt = kMaxNeighbours;
+      }
+      uint32_t* out = &s.nbr[i * kMaxNeighbours];
+      for (size_t k = 0; k < cnt; ++k) out[k] = uint32_t(found[k]);
+      s.nbrCount[i] = uint8_t(cnt);
+    };
+    for (size_t a = begin; a < end;) {
+      // The run [a, b): one bucket, inside this chunk (the partition is fixed, so runs do not depend on threads).
+      const uint32_t bucket = s.hash.bucketOf(s.pos[a]);
+      size_t b = a + 1;
+      Box box;
+      box.extend(s.pos[a]);
+      while (b < end && s.hash.bucketOf(s.pos[b]) == bucket) box.extend(s.pos[b++]);
+      size_t gathered = 0;
+      const glm::vec3 extent = box.size();
+      bool grouped = b - a > 1 && finite3(box.lo) && finite3(box.hi) && extent.x <= cube && extent.y <= cube &&
+                     extent.z <= cube;  // else far-apart cubes share the bucket: query one by one
+      if (grouped) {
+        s.hash.forEachInBox(box.lo - glm::vec3(radius), box.hi + glm::vec3(radius), [&](uint32_t j) {
+          if (gathered == kGather) {
+            grouped = false;
+            return;
+          }
+          cx[gathered] = s.pos[j].x, cy[gathered] = s.pos[j].y, cz[gathered] = s.pos[j].z;
+          cj[gathered++] = j;
+        });
+      }
+      for (size_t i = a; i < b; ++i) {
+        size_t cnt = 0;
+        if (!finite3(s.pos[i])) {
+        } else if (grouped) {
+          const glm::vec3 p = s.pos[i];
+          for (size_t k = 0; k < gathered; ++k) {
+            const float dx = cx[k] - p.x, dy = cy[k] - p.y, dz = cz[k] - p.z;
+            cd2[k] = dx * dx + dy * dy + dz * dz;
+          }
+          for (size_t k = 0; k < gathered; ++k)
+            if (cd2[k] <= r2 && cj[k] != i && cnt < kFound) found[cnt++] = sortKey(cd2[k], cj[k]);
+        } else {
+          s.hash.forEachWithin(s.pos[i], radius, s.pos, [&](uint32_t j, float d2) {
+            if (j == i || d2 > r2 || cnt == kFound) return;
+            found[cnt++] = sortKey(d2, j);
+          });
+        }
+        keep(i, cnt);
+      }
+      a = b;
+    }
+  });
+  s.nbrValid = true;
+}
+
 TesselatorOptions TesselatorOptions::fromNode(const Tesselator3MPNode& n) {
   TesselatorOptions o;
   o.deltaT = n.deltaT;
@@ -121,6 +213,7 @@ Tesselator::~Tesselator() = default;
 
 void Tesselator::reset() {
   s_->resizeParticles(0);
+  s_->nbrValid = false;
   s_->lastGeneration = ~0ull;
   stats_ = {};
 }
@@ -141,6 +234,7 @@ void Tesselator::update(const SkeletonCache& skeleton) {
     for (size_t i = 0; i < prims; ++i) d[i] = skeleton.primitiveDifferential(i);
     for (size_t i = 0; i < s.size(); ++i)
       if (s.owner[i] >= 0 && size_t(s.owner[i]) < prims) s.pos[i] = d[size_t(s.owner[i])].apply(s.pos[i]);
+    s.nbrValid = false;
   }
   s.lastGeneration = skeleton.generation();
   stats_.simulateMs = msSince(t0);
@@ -162,31 +256,17 @@ void Tesselator::step(const Field& field, const SkeletonCache*) {
   auto t0 = Clock::now();
 
   if (s.size() == 0) {
+    s.nbrValid = false;
     seedParticles(s, field, o);
     if (s.size() > 0) ++stats_.reseeds;
   }
 
-  // 2. Spatial sort: particles in hash-bucket order, so each chunk of the fixed partition is compact in space.
+  // 2. Spatial sort and neighbour list (unless nothing moved since the last triangulation built them).
+  if (!s.nbrValid) findNeighbours(s, o);
   const size_t n = s.size();
-  s.hash.build(s.pos);
-  {
-    const auto order = s.hash.order();
-    auto permute = [&](auto& v, auto& tmp) {
-      tmp.resize(n);
-      for (size_t k = 0; k < n; ++k) tmp[k] = v[order[k]];
-      v.swap(tmp);
-    };
-    permute(s.pos, s.tmpV);
-    permute(s.grad, s.tmpV);
-    permute(s.nrm, s.tmpV);
-    permute(s.sigma, s.tmpF);
-    permute(s.owner, s.tmpI);
-    permute(s.id, s.tmpU);
-    s.hash.adoptOrder();
-  }
-  s.nbr.resize(n * kMaxNeighbours);
-  s.nbrCount.resize(n);
   s.vel.resize(n);
+  s.fuse.resize(n * kMaxFuse);
+  s.fuseCount.resize(n);
   s.sigmaRate.resize(n);
   s.energy.resize(n);
   s.value.resize(n);
@@ -210,7 +290,7 @@ void Tesselator::step(const Field& field, const SkeletonCache*) {
       const glm::vec3 p = s.pos[i];
       s.vel[i] = glm::vec3(0.0f);
       s.sigmaRate[i] = 0.0f;
-      s.nbrCount[i] = 0;
+      s.fuseCount[i] = 0;
       if (!finite3(p)) {
         s.dead[i] = 1;
         continue;
@@ -241,29 +321,46 @@ void Tesselator::step(const Field& field, const SkeletonCache*) {
           blocked[i] = 1;
         }
       }
-      // Neighbour cache: the kMaxNeighbours nearest within queryRadius (ties by index: deterministic).
+      // Repulsion (Witkin-Heckbert), in units of desiredRadius, over the neighbours within queryRadius (the nearest
+      // kMaxRepulsion of them in a crowd).
+      const uint32_t* nl = &s.nbr[i * kMaxNeighbours];
       size_t cnt = 0;
-      s.hash.forEachWithin(p, o.queryRadius, s.pos, [&](uint32_t j, float d2) {
-        if (j == i || d2 > q2) return;
-        if (cnt == kMaxNeighbours && !(d2 < nd2[cnt - 1] || (d2 == nd2[cnt - 1] && j < ni[cnt - 1]))) return;
-        size_t k = cnt < kMaxNeighbours ? cnt++ : cnt - 1;
-        while (k > 0 && (nd2[k - 1] > d2 || (nd2[k - 1] == d2 && ni[k - 1] > j))) {
-          nd2[k] = nd2[k - 1];
-          ni[k] = ni[k - 1];
-          --k;
+      for (size_t k = 0; k < s.nbrCount[i]; ++k) {
+        const glm::vec3 d = s.pos[nl[k]] - p;
+        const float d2 = d.x * d.x + d.y * d.y + d.z * d.z;
+        if (d2 > q2) continue;
+        nd2[cnt] = d2;
+        ni[cnt++] = nl[k];
+      }
+      // The kMaxFuse nearest, by (distance, index), for the fusion test of the add/delete phase.
+      uint64_t nearest[kMaxFuse];
+      size_t nearCount = 0;
+      for (size_t k = 0; k < cnt; ++k) {
+        const uint64_t key = sortKey(nd2[k], ni[k]);
+        if (nearCount == kMaxFuse && key >= nearest[kMaxFuse - 1]) continue;
+        size_t q = nearCount < kMaxFuse ? nearCount++ : kMaxFuse - 1;
+        for (; q > 0 && nearest[q - 1] > key; --q) nearest[q] = nearest[q - 1];
+        nearest[q] = key;
+      }
+      for (size_t k = 0; k < nearCount; ++k) s.fuse[i * kMaxFuse + k] = uint32_t(nearest[k]);
+      s.fuseCount[i] = uint8_t(nearCount);
+      if (cnt > kMaxRepulsion) {
+        uint64_t keys[kMaxNeighbours];
+        for (size_t k = 0; k < cnt; ++k) keys[k] = sortKey(nd2[k], ni[k]);
+        std::nth_element(keys, keys + kMaxRepulsion, keys + cnt);
+        cnt = kMaxRepulsion;
+        for (size_t k = 0; k < cnt; ++k) {
+          ni[k] = uint32_t(keys[k]);
+          const glm::vec3 d = s.pos[ni[k]] - p;
+          nd2[k] = d.x * d.x + d.y * d.y + d.z * d.z;
         }
-        nd2[k] = d2;
-        ni[k] = j;
-      });
-      s.nbrCount[i] = uint8_t(cnt);
-      // Repulsion (Witkin-Heckbert), in units of desiredRadius.
+      }
       const float si = s.sigma[i] * invH;
       const float inv2si = 0.5f / (si * si);
       glm::vec3 P(0.0f);
       float D = 0.0f, Ds = 0.0f;
       for (size_t k = 0; k < cnt; ++k) {
         const uint32_t j = ni[k];
-        s.nbr[i * kMaxNeighbours + k] = j;
         const float sj = s.sigma[j] * invH;
         const float r2 = nd2[k] * invH * invH;
         const float ei = alpha * expAccurate(-r2 * inv2si);
@@ -310,11 +407,16 @@ void Tesselator::step(const Field& field, const SkeletonCache*) {
       const float g2 = glm::dot(g, g);
       glm::vec3 d = (iso - F) / g2 * g;
       const float len = glm::length(d);
+      if (!(len <= kStrayDistance * h)) {
+        s.dead[i] = 1;  // the step carried it off the surface (into a limb it does not blend with): a stray
+        continue;
+      }
       if (len > kMaxNewton * h) d *= kMaxNewton * h / len;
       s.pos[i] += d;
       if (!finite3(s.pos[i])) s.dead[i] = 1;
     }
   });
+  s.nbrValid = false;  // particles moved
   stats_.simulateMs += msSince(t0);
 
   // 5. Additions and deletions (sequential, particle order): strays, fusion, death, fission.
@@ -326,16 +428,13 @@ void Tesselator::step(const Field& field, const SkeletonCache*) {
       ++stats_.strays;
       continue;
     }
-    const size_t cnt = s.nbrCount[i];
+    // Fusion into an older, living one of the kMaxFuse nearest (recorded by the compute phase).
     bool fused = false;
-    for (size_t k = 0; k < cnt && k < 4; ++k) {
-      const uint32_t j = s.nbr[i * kMaxNeighbours + k];
+    for (size_t k = 0; k < s.fuseCount[i] && !fused; ++k) {
+      const uint32_t j = s.fuse[i * kMaxFuse + k];
       if (s.dead[j] || s.id[j] > s.id[i]) continue;
       const glm::vec3 d = s.pos[j] - s.pos[i];
-      if (glm::dot(d, d) < fuse2) {
-        fused = true;
-        break;
-      }
+      fused = glm::dot(d, d) < fuse2;
     }
     if (fused) {
       s.dead[i] = 1;
@@ -378,7 +477,6 @@ void Tesselator::step(const Field& field, const SkeletonCache*) {
     ++w;
   }
   s.resizeParticles(w);
-  s.nbrCount.assign(w, 0);  // indices moved: the cache is stale until the next compute phase
   ++s.update;
   ++stats_.updates;
   stats_.particles = w;

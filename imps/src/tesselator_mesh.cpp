@@ -27,6 +27,11 @@
 namespace imps {
 namespace {
 
+// A particle farther than this (desiredRadius) from the surface, or whose projection does not converge in three
+// Newton steps, is no vertex this render: it was carried into a limb it does not blend with and dies as a stray.
+constexpr float kVertexOff = 0.5f;
+constexpr size_t kFanCandidates = 32;  // the nearest this many agreeing neighbours cut a particle's cell
+
 // The Voronoi cell of the origin among 2D points (halfplane clipping), as the cyclic list of the labels of its
 // edges, counter-clockwise; label -1 marks the initial bounding octagon.
 struct Cell {
@@ -36,11 +41,17 @@ struct Cell {
   int n = 0;
 
   void init(float r) {
+    // The unit octagon's corners, computed once.
+    static const struct Octagon {
+      float c[8], s[8];
+      Octagon() {
+        for (int k = 0; k < 8; ++k) c[k] = std::cos(0.78539816f * float(k)), s[k] = std::sin(0.78539816f * float(k));
+      }
+    } octagon;
     n = 8;
     for (int k = 0; k < 8; ++k) {
-      const float a = 0.78539816f * float(k);
-      x[k] = r * std::cos(a);
-      y[k] = r * std::sin(a);
+      x[k] = r * octagon.c[k];
+      y[k] = r * octagon.s[k];
       lab[k] = -1;
     }
   }
@@ -50,14 +61,23 @@ struct Cell {
     return m;
   }
   // Keeps the part with qx * X + qy * Y <= (qx^2 + qy^2) / 2 (closer to the origin than to q).
-  void clip(float qx, float qy, int32_t label) {
+  // Returns whether anything was cut.
+  bool clip(float qx, float qy, int32_t label) {
     const float h = 0.5f * (qx * qx + qy * qy);
+    // Most candidates do not reach the cell: test every corner first, and copy only when something is cut.
+    float dist[kMax];
+    bool cuts = false;
+    for (int k = 0; k < n; ++k) {
+      dist[k] = qx * x[k] + qy * y[k] - h;
+      cuts |= dist[k] > 0.0f;
+    }
+    if (!cuts) return false;
     float ox[kMax], oy[kMax];
     int32_t ol[kMax];
     int m = 0;
     for (int k = 0; k < n && m < kMax - 2; ++k) {
       const int k1 = k + 1 == n ? 0 : k + 1;
-      const float dc = qx * x[k] + qy * y[k] - h, dn = qx * x[k1] + qy * y[k1] - h;
+      const float dc = dist[k], dn = dist[k1];
       if (dc <= 0.0f) {
         ox[m] = x[k], oy[m] = y[k], ol[m++] = lab[k];
         if (dn > 0.0f) {
@@ -73,6 +93,7 @@ struct Cell {
     std::copy(ox, ox + m, x);
     std::copy(oy, oy + m, y);
     std::copy(ol, ol + m, lab);
+    return true;
   }
 };
 
@@ -121,6 +142,23 @@ size_t collectHoles(Tesselator::State& s) {
   return count;
 }
 
+// The number of directed edges whose twin is missing (boundary edges), counted in parallel: the common case, a
+// closed mesh, then needs no sequential pass.
+size_t countBoundary(const Tesselator::State& s, int threads) {
+  const size_t n = s.size(), chunks = (n + kChunk - 1) / kChunk;
+  std::vector<size_t> counts(chunks, 0);
+  parallelFor(chunks, threads, [&](size_t c) {
+    const uint32_t begin = uint32_t(c * kChunk), end = uint32_t(std::min(n, (c + 1) * kChunk));
+    size_t count = 0;
+    for (uint32_t a = begin; a < end; ++a)
+      for (size_t k = 0; k < s.heCount[a]; ++k) count += hasHalfEdge(s, s.heTo[size_t(a) * kMaxHalfEdges + k], a) ? 0 : 1;
+    counts[c] = count;
+  });
+  size_t total = 0;
+  for (size_t c : counts) total += c;
+  return total;
+}
+
 // Removes every triangle with a corner marked in openUp, and rebuilds the half-edge tables.
 void removeAround(Tesselator::State& s) {
   const size_t n = s.size();
@@ -154,12 +192,15 @@ void Tesselator::triangulate(Mesh& mesh) {
     stats_.meshMs = 0.0;
     return;
   }
+  // Spatial sort and neighbour list at the current positions (kept for the next update if nothing moves before it).
+  if (!s.nbrValid) findNeighbours(s, o);
   const Field& field = *s.field;
   const float h = o.desiredRadius, iso = field.iso();
   const size_t chunks = (n + kChunk - 1) / kChunk;
   if (s.scratch.size() < chunks) s.scratch.resize(chunks);
   s.vpos.resize(n);
   s.vcol.resize(n);
+  s.vok.resize(n);
 
   // A. Vertices, normals, colours.
   const float colorExp = 1.0f / o.colorWidth;
@@ -175,17 +216,31 @@ void Tesselator::triangulate(Mesh& mesh) {
       const glm::vec3 p = s.pos[i];
       glm::vec3 v = p;
       FieldSample fs;
+      bool converged = false;
       for (int it = 0; it < 3; ++it) {
         fs = field.sample(v, scratch);
         const float g2 = glm::dot(fs.gradient, fs.gradient);
-        if (!(g2 > 1e-20f)) break;
+        // A particle this far off (carried into a limb it does not blend with, about to die as a stray) would
+        // make a spike: it is left out of this render's triangulation and the gap is filled around it.
+        if (!(g2 > 1e-20f) || (it == 0 && std::fabs(fs.value - iso) > kVertexOff * h * std::sqrt(g2))) break;
         s.nrm[i] = -fs.gradient / std::sqrt(g2);
-        if (std::fabs(fs.value - iso) < 1e-5f * h * std::sqrt(g2)) break;
+        if (std::fabs(fs.value - iso) < 1e-5f * h * std::sqrt(g2)) {
+          converged = true;
+          break;
+        }
         glm::vec3 d = (iso - fs.value) / g2 * fs.gradient;
         const float len = glm::length(d);
         if (len > 0.5f * h) d *= 0.5f * h / len;
         v += d;
+        // A step this short leaves an error of order len^2 / curvature radius (< 1e-4 desiredRadius on any
+        // surface the particles can resolve): no need to sample again. The particles are usually this close, as
+        // the integration ended with a Newton step.
+        if (len < 1e-2f * h) {
+          converged = true;
+          break;
+        }
       }
+      s.vok[i] = converged ? 1 : 0;  // else no vertex this render (see kVertexOff)
       s.vpos[i] = finite3(v) ? v : p;
       // Colour: primitive colours weighted by term^(1/colorWidth) over the owner's blend set (wider = smoother).
       glm::vec3 col(0.0f);
@@ -209,31 +264,41 @@ void Tesselator::triangulate(Mesh& mesh) {
     }
   });
 
-  // B. Fans: Voronoi cells in each tangent plane.
-  s.hash.build(s.vpos);
+  // B. Fans: Voronoi cells in each tangent plane. Candidates come from the neighbour list (built at the particles,
+  // at least kFanRadius desiredRadius wide); distances are re-measured between the projected vertices.
   s.fan.resize(n * kMaxFan);
   s.fanCount.resize(n);
-  const float rT = 2.5f * h;
+  const float rT = kFanRadius * h, rT2 = rT * rT;
   parallelFor(chunks, o.numThreads, [&](size_t c) {
     const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
     Cell cell;
-    float nd2[32];
-    uint32_t ni[32];
+    float nd2[kFanCandidates];
+    uint32_t ni[kFanCandidates];
     for (size_t i = begin; i < end; ++i) {
       const glm::vec3 p = s.vpos[i], nn = s.nrm[i];
+      if (!s.vok[i]) {
+        s.fanCount[i] = 0;
+        continue;
+      }
       size_t cnt = 0;
-      s.hash.forEachWithin(p, rT, s.vpos, [&](uint32_t j, float d2) {
-        if (j == i || glm::dot(s.nrm[j], nn) < 0.3f || d2 <= 0.0f) return;
-        if (cnt == 32 && !(d2 < nd2[31] || (d2 == nd2[31] && j < ni[31]))) return;
-        size_t k = cnt < 32 ? cnt++ : 31;
-        while (k > 0 && (nd2[k - 1] > d2 || (nd2[k - 1] == d2 && ni[k - 1] > j))) {
-          nd2[k] = nd2[k - 1];
-          ni[k] = ni[k - 1];
-          --k;
+      const uint32_t* nl = &s.nbr[i * kMaxNeighbours];
+      for (size_t k = 0; k < s.nbrCount[i]; ++k) {
+        const uint32_t j = nl[k];
+        if (!s.vok[j]) continue;
+        const glm::vec3 d = s.vpos[j] - p;
+        const float d2 = d.x * d.x + d.y * d.y + d.z * d.z;
+        if (d2 > rT2 || d2 <= 0.0f || glm::dot(s.nrm[j], nn) < 0.3f) continue;
+        // Nearest first, by (distance, index), keeping kFanCandidates.
+        if (cnt == kFanCandidates && !(d2 < nd2[cnt - 1] || (d2 == nd2[cnt - 1] && j < ni[cnt - 1]))) continue;
+        size_t q = cnt < kFanCandidates ? cnt++ : cnt - 1;
+        while (q > 0 && (nd2[q - 1] > d2 || (nd2[q - 1] == d2 && ni[q - 1] > j))) {
+          nd2[q] = nd2[q - 1];
+          ni[q] = ni[q - 1];
+          --q;
         }
-        nd2[k] = d2;
-        ni[k] = j;
-      });
+        nd2[q] = d2;
+        ni[q] = j;
+      }
       glm::vec3 b0, b1;
       tangentBasis(nn, b0, b1);
       cell.init(0.5f * rT);
@@ -246,8 +311,7 @@ void Tesselator::triangulate(Mesh& mesh) {
         if (l2 < 1e-12f * h * h) continue;
         const float lift = std::sqrt(nd2[k] / l2);  // keep the 3D distance: a local geodesic-like unfolding
         x *= lift, y *= lift;
-        cell.clip(x, y, int32_t(ni[k]));
-        r2 = cell.radius2();
+        if (cell.clip(x, y, int32_t(ni[k]))) r2 = cell.radius2();
       }
       int32_t* f = &s.fan[i * kMaxFan];
       size_t m = 0;
@@ -300,8 +364,13 @@ void Tesselator::triangulate(Mesh& mesh) {
   const size_t assembled = s.tris.size() / 3;
   s.holeTo.resize(n * 4);
   size_t unfilled = 0;
+  size_t boundary = 0;
+  bool counted = false;  // boundary holds the count for the current triangles
   for (int round = 0; round < 4; ++round) {
-    if (collectHoles(s) == 0) break;
+    if (countBoundary(s, o.numThreads) == 0 || collectHoles(s) == 0) {
+      counted = true;
+      break;
+    }
     s.holeUsed.assign(n * 4, 0);
     s.openUp.assign(n, 0);
     unfilled = 0;
@@ -370,18 +439,20 @@ void Tesselator::triangulate(Mesh& mesh) {
     // round sees one larger, simple loop around the trouble spot.
     if (unfilled > 0 && round < 3) removeAround(s);
   }
-  const size_t boundary = collectHoles(s);
+  if (!counted) boundary = countBoundary(s, o.numThreads);
 
   // Output: one vertex per particle.
   mesh.positions.resize(3 * n);
   mesh.normals.resize(3 * n);
   mesh.colors.resize(3 * n);
-  for (size_t i = 0; i < n; ++i)
-    for (int a = 0; a < 3; ++a) {
-      mesh.positions[3 * i + size_t(a)] = s.vpos[i][a];
-      mesh.normals[3 * i + size_t(a)] = s.nrm[i][a];
-      mesh.colors[3 * i + size_t(a)] = std::clamp(s.vcol[i][a], 0.0f, 1.0f);
-    }
+  parallelFor(chunks, o.numThreads, [&](size_t c) {
+    for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i)
+      for (int a = 0; a < 3; ++a) {
+        mesh.positions[3 * i + size_t(a)] = s.vpos[i][a];
+        mesh.normals[3 * i + size_t(a)] = s.nrm[i][a];
+        mesh.colors[3 * i + size_t(a)] = std::clamp(s.vcol[i][a], 0.0f, 1.0f);
+      }
+  });
   mesh.indices = s.tris;
   stats_.triangles = s.tris.size() / 3;
   stats_.filledTriangles = stats_.triangles > assembled ? stats_.triangles - assembled : 0;

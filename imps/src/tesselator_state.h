@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -14,9 +15,12 @@
 
 namespace imps {
 
-inline constexpr size_t kMaxNeighbours = 40;  // neighbour cache slots per particle (nearest first)
+inline constexpr size_t kMaxNeighbours = 48;  // neighbour list slots per particle (nearest first, within nbrRadius)
+inline constexpr size_t kMaxRepulsion = 40;   // the repulsion uses at most this many nearest (within queryRadius)
+inline constexpr float kFanRadius = 2.5f;     // triangulation fans look this far (units of desiredRadius)
 inline constexpr size_t kMaxFan = 24;         // tangent-plane fan entries per particle
 inline constexpr size_t kMaxHalfEdges = 24;   // outgoing half-edges per vertex during assembly
+inline constexpr size_t kMaxFuse = 4;        // fusion partners remembered per particle
 inline constexpr size_t kChunk = 128;         // particles per parallel task: the fixed work partition
 
 // Deterministic random numbers: one stream per (seed, particle id, update, purpose); splitmix64 finaliser.
@@ -29,6 +33,13 @@ inline uint64_t mixBits(uint64_t x) {
 inline float uniform01(uint64_t seed, uint64_t id, uint64_t update, uint64_t purpose) {
   const uint64_t h = mixBits(mixBits(mixBits(seed ^ 0x5bd1e995ull) ^ id) ^ (update * 4 + purpose));
   return float(h >> 40) * (1.0f / 16777216.0f);
+}
+
+// Sort key ordering (distance squared >= 0, index) pairs: non-negative floats order like their bit patterns.
+inline uint64_t sortKey(float d2, uint32_t j) {
+  uint32_t bits;
+  std::memcpy(&bits, &d2, sizeof bits);
+  return (uint64_t(bits) << 32) | j;
 }
 
 inline bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
@@ -47,9 +58,15 @@ struct Tesselator::State {
   std::vector<int32_t> owner;
   std::vector<uint64_t> id;
   std::vector<uint8_t> dead;
-  // Neighbour cache from the last compute phase.
+  // The neighbour list: for each particle every other within max(queryRadius, kFanRadius desiredRadius) (the
+  // kMaxNeighbours nearest in a crowd), in the hash's deterministic visiting order. Built once per particle configuration by findNeighbours() and shared
+  // by the compute phase, the fusion test and the triangulation's fans; nbrValid says it matches the current
+  // positions and particle order (cleared whenever a particle moves, is born or dies).
   std::vector<uint32_t> nbr;
   std::vector<uint8_t> nbrCount;
+  bool nbrValid = false;
+  std::vector<uint32_t> fuse;  // per particle its kMaxFuse nearest at the compute phase (the fusion candidates)
+  std::vector<uint8_t> fuseCount;
 
   UniformHashGrid hash;
   std::vector<FieldScratch> scratch;  // one per chunk (reused)
@@ -69,6 +86,7 @@ struct Tesselator::State {
 
   // Triangulation buffers.
   std::vector<glm::vec3> vpos, vcol;
+  std::vector<uint8_t> vok;  // the particle is close enough to the surface to be a mesh vertex this render
   std::vector<int32_t> fan;
   std::vector<uint8_t> fanCount;
   std::vector<uint32_t> cand;  // per particle up to kMaxFan candidate triangles (a, b, votes)
@@ -86,6 +104,10 @@ struct Tesselator::State {
   // Appends a particle. Takes its vectors by value: callers pass elements of the arrays this grows.
   void add(glm::vec3 p, glm::vec3 g, float s, int32_t ownerIndex);
 };
+
+// Sorts the particles into hash-bucket order (every per-particle array is permuted) and rebuilds the neighbour list
+// (tesselator.cpp). Parallel, deterministic for any thread count.
+void findNeighbours(Tesselator::State& s, const TesselatorOptions& o);
 
 // Places particles on the field's surface from every primitive (tesselator_seed.cpp).
 void seedParticles(Tesselator::State& s, const Field& field, const TesselatorOptions& o);

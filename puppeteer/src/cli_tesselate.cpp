@@ -163,6 +163,8 @@ int runBench(const BenchArgs& a) {
   row("Num tris", [&](const Report& r) { return fmt("%.0f", double(r.tris)); });
   row("Boundary edges (max)", [&](const Report& r) { return fmt("%.0f", double(r.maxBoundary)); });
   row("Renders with holes", [&](const Report& r) { return fmt("%.0f", double(r.framesWithHoles)); });
+  row("Renders with holes (%)",
+      [&](const Report& r) { return fmt("%.1f", 100.0 * double(r.framesWithHoles) / double(std::max<size_t>(r.frames, 1))); });
   row("Worst sample dist (mm)", [&](const Report& r) { return fmt("%.2f", r.worstMm); });
   row("Updates to settle", [&](const Report& r) { return fmt("%.0f", double(r.settleUpdates)); });
   return kExitOk;

@@ -9,9 +9,10 @@
 //
 // One update (update()):
 //   1. differential transforms: every particle moves rigidly with its owner's joint since the last update;
-//   2. spatial sort and uniform hash rebuild (sequential);
-//   3. compute phase (parallel, fixed partition): field sample, neighbour cache, repulsion velocity constrained to
-//      the surface, radius rate (Pedersen), ownership transfer to blend neighbours only;
+//   2. spatial sort, uniform hash rebuild and neighbour list (only when particles moved since the list was built; the
+//      list is shared by repulsion, fusion and the triangulation's fans);
+//   3. compute phase (parallel, fixed partition): field sample, repulsion velocity constrained to the surface, radius
+//      rate (Pedersen), ownership transfer to blend neighbours only;
 //   4. integration (parallel, each particle writes only itself): clamped step, one Newton projection onto the surface;
 //   5. add/delete phase (sequential, particle order): strays killed, fusion, death, fission.
 // triangulate() builds the mesh: tangent-plane Delaunay fans (Voronoi cells of the projected neighbours) voted on by

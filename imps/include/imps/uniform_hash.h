@@ -64,6 +64,27 @@ class UniformHashGrid {
         }
   }
 
+  // Calls visit(j) for every point j of the last build in a bucket of a cube overlapping the box [lo, hi] (a superset
+  // of the points in the box: buckets are shared by far-apart cubes), in the same deterministic order as
+  // forEachWithin(). For gathering the candidates of a group of nearby queries once.
+  template <class Visit>
+  void forEachInBox(const glm::vec3& lo, const glm::vec3& hi, Visit&& visit) const {
+    int c0[3], n[3];
+    for (int a = 0; a < 3; ++a) {
+      c0[a] = cell(lo[a]);
+      n[a] = cell(hi[a]) - c0[a] + 1;
+      if (n[a] > (1 << bits_)) n[a] = 1 << bits_;
+    }
+    for (int i = 0; i < n[0]; ++i)
+      for (int j = 0; j < n[1]; ++j)
+        for (int k = 0; k < n[2]; ++k) {
+          const uint32_t b = bucket(c0[0] + i, c0[1] + j, c0[2] + k);
+          const uint32_t first = start_[b];
+          if (first == kEmpty) continue;
+          for (uint32_t s = first; s < end_[b]; ++s) visit(order_[s]);
+        }
+  }
+
  private:
   static constexpr uint32_t kEmpty = 0xffffffffu;
   int cell(float x) const;
