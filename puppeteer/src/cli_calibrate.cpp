@@ -1,5 +1,6 @@
 // `puppeteer calibrate`: joint-offset calibration of an armature against a character's calibration pose, from a
 // live device (interactive) or the first milliseconds of a recorded session (non-interactive). docs/calibration.md.
+#include "calibration_flow.h"
 #include "cli.h"
 #include "device_opener.h"
 
@@ -9,7 +10,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <ctime>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -143,33 +143,6 @@ void waitForEnter(const std::string& instruction, bool noWait) {
   if (!::isatty(STDIN_FILENO)) std::printf("\n");
 }
 
-// A JSON string literal (the calibration's "info" fields are paths and names).
-std::string jsonString(const std::string& text) {
-  std::string out = "\"";
-  for (char c : text) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(c));
-      out += buf;
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
-}
-
-std::string utcNow() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
-
 int runCalibrate(const CalibrateArgs& a) {
   if (a.session.empty() == a.device.empty()) {
     std::fprintf(stderr, "puppeteer calibrate: error: give exactly one of --session SESSION or --device SPEC\n");
@@ -251,11 +224,8 @@ int runCalibrate(const CalibrateArgs& a) {
   if (noisiest != average.channels.end())
     std::printf("Noise: at most %.3f deg (%s)\n", noisiest->stdDevRadians / kDegree, noisiest->label.c_str());
 
-  std::string infoJson = "{\"created\":" + jsonString(utcNow()) + ",\"scene\":" + jsonString(a.scene) +
-                         ",\"rig\":" + jsonString(a.rig) + ",\"source\":" + jsonString(session ? a.session : a.device) +
-                         ",\"window_ms\":" + std::to_string(a.windowMs) + ",\"samples\":" + std::to_string(window.size());
-  if (!info.serialNumber.empty()) infoJson += ",\"serial\":" + jsonString(info.serialNumber);
-  calibrated->info = infoJson + "}";
+  calibrated->info =
+      calibrationInfoJson(a.scene, a.rig, session ? a.session : a.device, a.windowMs, window.size(), info.serialNumber);
   calibrated->device = info.name;
   auto cal = calibration::Calibration::create(std::move(*calibrated), &*character, &info);
   if (!cal) {

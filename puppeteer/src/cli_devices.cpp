@@ -2,6 +2,7 @@
 // pseudo-terminal, and recording a live device to a session file. docs/devices.md.
 #include "cli.h"
 #include "device_opener.h"
+#include "session_recorder.h"
 
 #include <CLI/CLI.hpp>
 
@@ -214,9 +215,8 @@ int runRecord(const RecordArgs& a) {
   drivers::DeviceSession session(*opener, mailbox, drivers::sessionOptionsFor(*spec));
   session.start();
 
-  std::optional<sim::SessionWriter> writer;
+  std::optional<app::SessionRecorder> recorder;
   std::vector<drivers::Sample> batch;
-  uint64_t mismatched = 0;
   std::string lastState;
   const auto start = std::chrono::steady_clock::now();
   auto lastReport = start;
@@ -225,28 +225,22 @@ int runRecord(const RecordArgs& a) {
     batch.clear();
     mailbox.drain(batch);
     if (batch.empty()) return true;
-    if (!writer) {
+    if (!recorder) {
       auto info = session.deviceInfo();
       if (!info) return true;  // cannot happen: samples come after the handshake
-      auto created = sim::SessionWriter::create(a.output, *info);
+      auto created = app::SessionRecorder::create(a.output, *info, /*calibration=*/nullptr);
       if (!created) {
         std::fprintf(stderr, "%s\n", created.error().c_str());
         exitCode = kExitIoError;
         return false;
       }
-      writer.emplace(std::move(*created));
+      recorder.emplace(std::move(*created));
       for (const std::string& w : session.warnings()) std::fprintf(stderr, "%s\n", w.c_str());
     }
-    for (const drivers::Sample& s : batch) {
-      if (auto r = writer->append(s); !r) {
-        if (s.channelCount != session.deviceInfo()->channelCount) {
-          ++mismatched;  // a different device came back on reconnect; its samples do not fit this session
-          continue;
-        }
-        std::fprintf(stderr, "%s\n", r.error().c_str());
-        exitCode = kExitIoError;
-        return false;
-      }
+    if (auto r = recorder->append(batch); !r) {
+      std::fprintf(stderr, "%s\n", r.error().c_str());
+      exitCode = kExitIoError;
+      return false;
     }
     return true;
   };
@@ -270,21 +264,22 @@ int runRecord(const RecordArgs& a) {
   session.stop();
   if (exitCode == kExitOk) drainInto();
   std::fprintf(stderr, "\n");
-  if (!writer) {
+  if (!recorder) {
     std::fprintf(stderr, "puppeteer record: error: no samples from %s: %s\n", a.device.c_str(),
                  session.lastError().empty() ? "the device never started streaming" : session.lastError().c_str());
     return exitCode == kExitOk ? kExitIoError : exitCode;
   }
-  if (auto r = writer->close(); !r) {
+  if (auto r = recorder->close(); !r) {
     std::fprintf(stderr, "%s\n", r.error().c_str());
     return kExitIoError;
   }
   const drivers::DeviceSessionStats st = session.stats();
+  const uint64_t skipped = recorder->skipped();  // a different device came back on reconnect: its samples do not fit
   std::printf("Recorded %llu samples to %s (dropped by the device link: %llu, queue overflows: %llu%s)\n",
-              static_cast<unsigned long long>(writer->samplesWritten()), a.output.c_str(),
+              static_cast<unsigned long long>(recorder->samples()), a.output.c_str(),
               static_cast<unsigned long long>(st.samplesDropped),
               static_cast<unsigned long long>(mailbox.stats().queueOverflows),
-              mismatched ? (", " + std::to_string(mismatched) + " from a different device skipped").c_str() : "");
+              skipped ? (", " + std::to_string(skipped) + " from a different device skipped").c_str() : "");
   return exitCode;
 }
 

@@ -30,6 +30,8 @@
 #include "viewer_live.h"
 #include "viewer_pipeline.h"
 #include "viewer_replay.h"
+#include "calibration_flow.h"
+#include "scripted_input.h"
 
 namespace imps::app {
 namespace {
@@ -47,6 +49,10 @@ struct LiveArgs {
   int msaa = -1;
   std::vector<std::string> poses;
   std::string save;
+  std::string keys;
+  std::vector<std::string> drags;
+  bool syncPhases = false;
+  bool overlap = false;
   // replay
   std::string session;
   std::string rig, calibration;
@@ -55,6 +61,9 @@ struct LiveArgs {
   std::string exportSession;
   // live
   std::string device;
+  std::string record, recordDir = ".";
+  std::string calibrationOut;
+  CalibrationFlowOptions calibrate;
 };
 
 void addCommonOptions(CLI::App* cmd, LiveArgs& a) {
@@ -76,6 +85,14 @@ void addCommonOptions(CLI::App* cmd, LiveArgs& a) {
                   "JOINT=AX,AY,AZ,ANGLE: turn a joint by ANGLE radians about axis (AX,AY,AZ) of its parent's frame, "
                   "on top of its rest rotation (repeatable)");
   cmd->add_option("--save-as", a.save, "Where the s key saves the posed scene (default: SCENE with .posed.wrl)");
+  cmd->add_option("--keys", a.keys,
+                  "Scripted key presses KEY@FRAME,... (e.g. \"o@5,k@10,p@20\"; keys a-z 0-9 [ ] F12 Esc Backspace)");
+  cmd->add_option("--drag", a.drags,
+                  "Scripted left-button drag X0,Y0,X1,Y1@FRAME[+shift] in window pixels (repeatable)");
+  cmd->add_flag("--overlap", a.overlap,
+                "Polygonize the next frame on a worker thread while the GL draws this one");
+  cmd->add_flag("--sync-phases", a.syncPhases,
+                "glFinish after every phase so the per-phase times include the GL's work (profiling)");
 }
 
 // Parses "NAME=ax,ay,az,angle".
@@ -143,6 +160,8 @@ ViewerOptions viewerOptions(const LiveArgs& a, const std::string& title) {
   v.msaaSamples = a.msaa;
   v.printMeshHashes = a.printHashes;
   v.title = title;
+  v.syncPhases = a.syncPhases;
+  v.overlap = a.overlap;
   if (!a.save.empty()) {
     v.savePath = a.save;
   } else {
@@ -160,12 +179,38 @@ bool checkScreenshotArgs(const LiveArgs& a) {
   return true;
 }
 
+// --keys and --drag as scripted events; nullopt after printing the error.
+std::optional<std::vector<ScriptedEvent>> parseScript(const LiveArgs& a) {
+  std::vector<ScriptedEvent> script;
+  if (!a.keys.empty()) {
+    auto keys = parseScriptedKeys(a.keys);
+    if (!keys) {
+      std::fprintf(stderr, "puppeteer: error: %s\n", keys.error().c_str());
+      return std::nullopt;
+    }
+    script = std::move(*keys);
+  }
+  for (const std::string& d : a.drags) {
+    auto drag = parseScriptedDrag(d);
+    if (!drag) {
+      std::fprintf(stderr, "puppeteer: error: %s\n", drag.error().c_str());
+      return std::nullopt;
+    }
+    script.push_back(std::move(*drag));
+  }
+  return script;
+}
+
 int runView(const LiveArgs& a) {
   if (!checkScreenshotArgs(a)) return kExitUsage;
+  auto script = parseScript(a);
+  if (!script) return kExitUsage;
   int code = kExitOk;
   auto pipeline = makePipeline(a, &code);
   if (!pipeline) return code;
-  return runViewer(*pipeline, nullptr, viewerOptions(a, "IMPS Puppeteer: " + a.scene));
+  ViewerOptions v = viewerOptions(a, "IMPS Puppeteer: " + a.scene);
+  v.script = std::move(*script);
+  return runViewer(*pipeline, nullptr, v);
 }
 
 // A .bvh clip is converted in memory (bvhToSession); anything else is read as a session file.
@@ -220,6 +265,8 @@ std::optional<SampleMapper> readCalibration(const std::string& path, const Chara
 
 int runReplay(const LiveArgs& a) {
   if (!checkScreenshotArgs(a) || !checkRigArgs(a)) return kExitUsage;
+  auto script = parseScript(a);
+  if (!script) return kExitUsage;
   std::optional<sim::Session> session = loadSession(a.session);
   if (!session) return kExitInvalidInput;
   if (!a.exportSession.empty()) {
@@ -270,11 +317,37 @@ int runReplay(const LiveArgs& a) {
     source = std::make_unique<SteppedReplayPoseSource>(*session, std::move(*mapper), name);
   else
     source = std::make_unique<ReplayPoseSource>(*session, std::move(*mapper), a.speed, name);
-  return runViewer(*pipeline, source.get(), viewerOptions(a, "IMPS Puppeteer: replay " + name));
+  ViewerOptions v = viewerOptions(a, "IMPS Puppeteer: replay " + name);
+  v.script = std::move(*script);
+  return runViewer(*pipeline, source.get(), v);
 }
 
 int runLive(const LiveArgs& a) {
-  if (!checkScreenshotArgs(a) || !checkRigArgs(a)) return kExitUsage;
+  if (!checkScreenshotArgs(a)) return kExitUsage;
+  // --rig alone is allowed here: key k calibrates it (and saves to --calibration-out); until then channels map by
+  // name.
+  if (!a.rig.empty() && a.calibration.empty() && a.calibrationOut.empty()) {
+    std::fprintf(stderr,
+                 "puppeteer: error: --rig %s: a rig map has no offsets; pass --calibration FILE, or "
+                 "--calibration-out FILE and press k to calibrate it\n",
+                 a.rig.c_str());
+    return kExitUsage;
+  }
+  if (!a.rig.empty() && !a.calibration.empty())
+    std::fprintf(stderr, "puppeteer: note: --rig is ignored: the calibration %s contains its rig map\n",
+                 a.calibration.c_str());
+  if (!a.record.empty() && std::filesystem::exists(a.record)) {
+    std::fprintf(stderr, "puppeteer: error: --record %s: the file exists; recordings never overwrite a file\n",
+                 a.record.c_str());
+    return kExitIoError;
+  }
+  if (!(a.calibrate.windowMs > 0) || !(a.calibrate.delayMs >= 0) || !(a.calibrate.maxNoiseDeg > 0)) {
+    std::fprintf(stderr, "puppeteer: error: --window-ms and --max-noise-deg must be positive, --calibrate-delay-ms "
+                         "not negative\n");
+    return kExitUsage;
+  }
+  auto script = parseScript(a);
+  if (!script) return kExitUsage;
   auto spec = drivers::parseDeviceSpec(a.device);
   if (!spec) {
     std::fprintf(stderr, "%s\n", spec.error().c_str());
@@ -291,9 +364,19 @@ int runLive(const LiveArgs& a) {
     mapper = readCalibration(a.calibration, pipeline->character(), nullptr);
     if (!mapper) return kExitInvalidInput;
   }
+  LiveSourceOptions live;
+  live.recordPath = a.record;
+  live.recordDir = a.recordDir;
+  live.scenePath = a.scene;
+  live.rigPath = a.rig;
+  live.calibrationPath = a.calibration;
+  live.calibrationOut = a.calibrationOut;
+  live.calibrate = a.calibrate;
   LivePoseSource source(*opener, drivers::sessionOptionsFor(*spec), pipeline->character(), a.device,
-                        std::move(mapper));
-  return runViewer(*pipeline, &source, viewerOptions(a, "IMPS Puppeteer: live " + a.device));
+                        std::move(mapper), std::move(live));
+  ViewerOptions v = viewerOptions(a, "IMPS Puppeteer: live " + a.device);
+  v.script = std::move(*script);
+  return runViewer(*pipeline, &source, v);
 }
 
 }  // namespace
@@ -330,7 +413,22 @@ void addLiveCommands(CLI::App& app, Commands& commands) {
       ->required();
   liveCmd->add_option("--calibration", live->calibration,
                       "Calibration file (puppeteer calibrate); without one, channels map to joints by name");
-  liveCmd->add_option("--rig", live->rig, "Rig map (only together with --calibration, which contains it)");
+  liveCmd->add_option("--rig", live->rig,
+                      "Rig map for key k when no --calibration is given (with --calibration-out); ignored with "
+                      "--calibration, which contains its rig map");
+  liveCmd->add_option("--record", live->record, "Start recording every raw sample into this new session file at once");
+  liveCmd->add_option("--record-dir", live->recordDir, "Where key o creates take-YYYYMMDD-HHMMSS.session")
+      ->capture_default_str();
+  liveCmd->add_option("--calibration-out", live->calibrationOut,
+                      "Where key k saves the new calibration (default: the --calibration file, replaced atomically)");
+  liveCmd->add_option("--calibrate-delay-ms", live->calibrate.delayMs,
+                      "Key k: time to get into the calibration pose before averaging")
+      ->capture_default_str();
+  liveCmd->add_option("--window-ms", live->calibrate.windowMs, "Key k: how long to average the calibration pose")
+      ->capture_default_str();
+  liveCmd->add_option("--max-noise-deg", live->calibrate.maxNoiseDeg,
+                      "Key k: reject the window above this per-channel standard deviation")
+      ->capture_default_str();
   addCommonOptions(liveCmd, *live);
   commands.push_back({liveCmd, [live] { return runLive(*live); }});
 }

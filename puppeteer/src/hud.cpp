@@ -25,42 +25,66 @@ Hud::~Hud() {
 bool Hud::wantsMouse() const { return ImGui::GetIO().WantCaptureMouse; }
 
 void Hud::draw(const HudInfo& info) {
+  const ImVec4 kDim(0.78f, 0.80f, 0.84f, 1.0f);  // secondary text, readable over the grey panel
   ImGui_ImplOpenGL3_NewFrame();
   ImGui_ImplGlfw_NewFrame();
   ImGui::NewFrame();
-  ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_Always);
-  ImGui::SetNextWindowBgAlpha(0.55f);
   const ImGuiWindowFlags flags = ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_AlwaysAutoResize |
                                  ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoFocusOnAppearing |
                                  ImGuiWindowFlags_NoNav | ImGuiWindowFlags_NoMove;
+  // A compact panel in the top-left corner, at most 390 pixels wide (long lines wrap), so the character framed in
+  // the middle of a 1280x720 window stays clear of it; the key help sits on one line at the bottom.
+  ImGui::SetNextWindowPos(ImVec2(6, 6), ImGuiCond_Always);
+  ImGui::SetNextWindowSizeConstraints(ImVec2(0, 0), ImVec2(390, 10000));
+  ImGui::SetNextWindowBgAlpha(0.72f);
+  ImGui::PushStyleVar(ImGuiStyleVar_WindowPadding, ImVec2(6, 4));
+  ImGui::PushStyleVar(ImGuiStyleVar_ItemSpacing, ImVec2(6, 1));
   if (ImGui::Begin("IMPS Puppeteer", &visible_, flags)) {
-    ImGui::Text("%.1f FPS  (%.1f ms/frame)", info.fps, info.frameMs);
-    ImGui::Separator();
-    ImGui::Text("polygonizer: %s", info.polygonizer.c_str());
+    ImGui::PushTextWrapPos(380.0f);
+    ImGui::Text("%.1f FPS  %.1f ms/frame", info.fps, info.frameMs);
+    ImGui::TextColored(kDim, "pose %.1f poly %.1f up %.1f draw %.1f hud %.1f swap %.1f", info.poseMs,
+                        info.polygonizeMs, info.uploadMs, info.drawMs, info.hudMs, info.swapMs);
     if (info.polygonizer == "particles")
-      ImGui::Text("simulate %.2f  add/delete %.2f ms (x%d)  mesh %.2f ms", info.simulateMs, info.addDeleteMs,
+      ImGui::Text("particles: sim %.1f add/del %.1f (x%d) mesh %.1f ms", info.simulateMs, info.addDeleteMs,
                   info.updatesPerRender, info.meshMs);
     else
-      ImGui::Text("Marching Cubes %.2f ms", info.marchingCubesMs);
-    ImGui::Text("particles %zu  triangles %zu", info.particles, info.triangles);
+      ImGui::Text("Marching Cubes: %.2f ms", info.marchingCubesMs);
+    ImGui::Text("%zu particles  %zu triangles", info.particles, info.triangles);
     ImGui::Separator();
-    ImGui::Text("source: %s  [%s]", info.source.c_str(), info.state.c_str());
-    if (!info.mapping.empty()) ImGui::Text("mapping: %s", info.mapping.c_str());
+    ImGui::TextWrapped("source: %s [%s]", info.source.c_str(), info.state.c_str());
+    if (!info.mapping.empty()) ImGui::TextWrapped("mapping: %s", info.mapping.c_str());
     if (info.sampleRateHz >= 0.0) {
-      ImGui::Text("sample rate %.0f Hz  dropped %llu  corrupt %llu  not shown %llu", info.sampleRateHz,
+      ImGui::Text("%.0f Hz  dropped %llu  corrupt %llu  not shown %llu", info.sampleRateHz,
                   static_cast<unsigned long long>(info.dropped), static_cast<unsigned long long>(info.corrupt),
                   static_cast<unsigned long long>(info.overwritten));
-      if (info.sampleAgeMs >= 0.0) ImGui::Text("sample age %.1f ms", info.sampleAgeMs);
       if (info.latencyMedianMs >= 0.0)
-        ImGui::Text("sample-to-screen %.1f ms median, %.1f ms p99", info.latencyMedianMs, info.latencyP99Ms);
+        ImGui::Text("age %.1f ms  to screen %.1f / %.1f ms (p50/p99)", info.sampleAgeMs, info.latencyMedianMs,
+                    info.latencyP99Ms);
+      else if (info.sampleAgeMs >= 0.0)
+        ImGui::Text("sample age %.1f ms", info.sampleAgeMs);
     }
-    if (!info.selectedJoint.empty()) ImGui::Text("joint: %s (drag to rotate)", info.selectedJoint.c_str());
-    if (!info.message.empty()) ImGui::TextUnformatted(info.message.c_str());
-    ImGui::Separator();
-    ImGui::TextDisabled("drag: orbit / rotate picked joint   wheel: zoom   1-9,[,]: pick joint");
-    ImGui::TextDisabled("r reset  s save  p particles  m MC/particles  F12 screenshot  Esc quit");
+    if (info.recording) {
+      const int minutes = static_cast<int>(info.recordSeconds / 60.0);
+      ImGui::TextColored(ImVec4(1.0f, 0.38f, 0.32f, 1.0f), "REC %d:%04.1f  %llu samples", minutes,
+                         info.recordSeconds - 60.0 * minutes, static_cast<unsigned long long>(info.recordSamples));
+      ImGui::TextWrapped("%s", info.recordPath.c_str());
+    }
+    if (!info.calibrationProgress.empty())
+      ImGui::TextColored(ImVec4(1.0f, 0.85f, 0.3f, 1.0f), "%s", info.calibrationProgress.c_str());
+    if (!info.selectedJoint.empty()) ImGui::Text("joint: %s (drag: turn, shift: twist)", info.selectedJoint.c_str());
+    if (!info.message.empty()) ImGui::TextWrapped("%s", info.message.c_str());
+    ImGui::PopTextWrapPos();
   }
   ImGui::End();
+  const ImVec2 display = ImGui::GetIO().DisplaySize;
+  ImGui::SetNextWindowPos(ImVec2(6, display.y - 6), ImGuiCond_Always, ImVec2(0, 1));
+  ImGui::SetNextWindowBgAlpha(0.6f);
+  if (ImGui::Begin("IMPS Puppeteer keys", nullptr, flags)) {
+    ImGui::TextColored(kDim, "drag: turn joint/orbit  r reset  s save  p particles  m MC  o record  k calibrate  "
+                        "F12 shot  Esc quit");
+  }
+  ImGui::End();
+  ImGui::PopStyleVar(2);
   ImGui::Render();
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
 }

@@ -25,6 +25,15 @@ struct HudInfo {
   uint64_t dropped = 0, corrupt = 0, overwritten = 0;
   double sampleAgeMs = -1.0;
   double latencyMedianMs = -1.0, latencyP99Ms = -1.0;
+  // Recording (key `o`): shown as "REC m:ss.s  N samples  FILE" while active.
+  bool recording = false;
+  double recordSeconds = 0.0;
+  uint64_t recordSamples = 0;
+  std::string recordPath;
+  std::string calibrationProgress;  // re-calibration (key `k`) in progress; "" otherwise
+  // Where a frame's time goes (ms, averaged like fps): pose (poll + skeleton update), polygonize, upload, draw,
+  // HUD (previous frame's), swap (glfwSwapBuffers + glFinish).
+  double poseMs = 0, polygonizeMs = 0, uploadMs = 0, drawMs = 0, hudMs = 0, swapMs = 0;
   std::string selectedJoint;  // "" when none
   std::string message;        // the last key's result ("saved …", "not available yet")
 };

@@ -9,9 +9,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <memory>
+#include <mutex>
 #include <string>
+#include <thread>
+#include <utility>
 #include <vector>
 
 #include <glm/gtc/quaternion.hpp>
@@ -19,9 +23,10 @@
 
 #include "cli.h"
 #include "imps/scene_writer.h"
+#include "manipulator.h"
+#include "png.h"
 #include "renderer.h"
 #include "snapshot.h"
-#include "png.h"
 
 namespace imps::app {
 namespace {
@@ -42,16 +47,21 @@ struct Orbit {
   }
 };
 
-// Everything the GLFW callbacks touch (reached through the window's user pointer).
+// Everything the GLFW callbacks (and the scripted input) touch, reached through the window's user pointer.
 struct ViewerState {
   ViewerPipeline* pipeline = nullptr;
+  PoseSource* source = nullptr;
   Hud* hud = nullptr;
   Orbit orbit;
+  float sceneRadius = 2.0f;
   int width = 0, height = 0;
   bool showParticles = false;
   bool poseDirty = false;
   int selectedJoint = -1;
-  enum class Drag { None, Orbit, Joint } drag = Drag::None;
+  // Orbit: turn the camera. Arcball: turn the picked joint with an arcball centred on it (manipulator.h). Twist:
+  // turn it about the view axis (Shift).
+  enum class Drag { None, Orbit, Arcball, Twist } drag = Drag::None;
+  float arcballRadius = 60.0f;  // pixels, set at the press
   double lastX = 0, lastY = 0;
   bool screenshotRequested = false;
   bool resetRequested = false;
@@ -61,79 +71,87 @@ struct ViewerState {
 
 ViewerState& state(GLFWwindow* w) { return *static_cast<ViewerState*>(glfwGetWindowUserPointer(w)); }
 
-// Window pixel position of a world point, y down; false when behind the camera.
-bool project(const ViewerState& s, const glm::vec3& world, glm::vec2* out) {
-  const Camera cam = s.orbit.camera();
-  const glm::vec4 clip = Renderer::projectionMatrix(cam, float(s.width) / float(std::max(1, s.height)), 2.0f) *
-                         Renderer::viewMatrix(cam) * glm::vec4(world, 1.0f);
-  if (clip.w <= 0.0f) return false;
-  *out = glm::vec2((clip.x / clip.w * 0.5f + 0.5f) * float(s.width), (0.5f - clip.y / clip.w * 0.5f) * float(s.height));
-  return true;
+ScreenView currentView(const ViewerState& s) {
+  return screenView(s.orbit.camera(), s.width, s.height, s.sceneRadius);
 }
 
-// The joint whose origin is drawn nearest to the cursor, within 24 pixels, or -1.
-int pickJoint(const ViewerState& s, double x, double y) {
+// The joint whose bone passes within 24 pixels of the cursor (nearest first), or -1.
+int pickJointAt(const ViewerState& s, double x, double y) {
   const SkeletonCache& skeleton = s.pipeline->skeleton();
-  int best = -1;
-  float bestDistance = 24.0f;
-  for (size_t j = 0; j < skeleton.character().joints().size(); ++j) {
-    glm::vec2 p;
-    if (!project(s, skeleton.world(int(j)).translation, &p)) continue;
-    const float d = glm::length(p - glm::vec2(float(x), float(y)));
-    if (d < bestDistance) bestDistance = d, best = int(j);
-  }
-  return best;
+  const auto& joints = skeleton.character().joints();
+  std::vector<int> parents(joints.size());
+  std::vector<glm::vec3> world(joints.size());
+  for (size_t j = 0; j < joints.size(); ++j) parents[j] = joints[j].parent, world[j] = skeleton.world(int(j)).translation;
+  const ScreenView view = currentView(s);
+  const std::vector<Bone> bones = skeletonBones(parents, world);
+  return pickJoint(pickRay(view, glm::vec2(float(x), float(y))), bones,
+                   pixelsToAngle(24.0f, s.height, s.orbit.verticalFov));
 }
 
-// The manipulator: turns the picked joint about the view axis through its origin by the angle the cursor swept
-// around the joint's position on screen (counter-clockwise on screen = counter-clockwise seen from the camera).
+// The manipulators: the picked joint turns about its own origin, by the arcball (the grabbed limb follows the
+// cursor; near the joint, dragging right/down turns the side facing the viewer right/down) or by the twist (the
+// angle swept around the joint on screen, about the view axis).
 void rotateJoint(ViewerState& s, double x0, double y0, double x1, double y1) {
   SkeletonCache& skeleton = s.pipeline->skeleton();
   const int j = s.selectedJoint;
-  const glm::vec3 origin = skeleton.world(j).translation;
+  const ScreenView view = currentView(s);
   glm::vec2 c;
-  if (!project(s, origin, &c)) return;
-  const float a0 = std::atan2(-(float(y0) - c.y), float(x0) - c.x);
-  const float a1 = std::atan2(-(float(y1) - c.y), float(x1) - c.x);
-  const float angle = a1 - a0;
-  const glm::vec3 axis = glm::normalize(s.orbit.camera().eye - origin);  // towards the viewer
+  if (!projectToWindow(view, skeleton.world(j).translation, &c)) return;
+  const glm::vec2 from{float(x0), float(y0)}, to{float(x1), float(y1)};
+  const glm::quat q = s.drag == ViewerState::Drag::Twist ? twistRotation(c, from, to, view)
+                                                         : arcballRotation(c, s.arcballRadius, from, to, view);
   const int parent = skeleton.character().joints()[size_t(j)].parent;
   const glm::quat parentWorld = parent >= 0 ? skeleton.world(parent).rotation : glm::quat(1, 0, 0, 0);
-  // world(j) = parentWorld * local(j); turning world(j) by q gives local' = parentWorld^-1 * q * parentWorld * local.
-  const glm::quat q = glm::angleAxis(angle, axis);
-  skeleton.setRotation(j, glm::normalize(glm::inverse(parentWorld) * q * parentWorld * skeleton.local(j).rotation));
+  skeleton.setRotation(j, rotateJointLocal(skeleton.local(j).rotation, parentWorld, q));
   s.poseDirty = true;
 }
 
-void onMouseButton(GLFWwindow* w, int button, int action, int /*mods*/) {
+// Left press at (x, y): pick a joint (its bone under the cursor) and turn it; Shift: twist the picked joint from
+// anywhere; elsewhere (or any other button): orbit.
+void pressButton(ViewerState& s, int button, double x, double y, bool shift) {
+  s.lastX = x, s.lastY = y;
+  if (button != GLFW_MOUSE_BUTTON_LEFT) {
+    s.drag = ViewerState::Drag::Orbit;
+    return;
+  }
+  const int j = pickJointAt(s, x, y);
+  if (j >= 0) s.selectedJoint = j;
+  if (s.selectedJoint >= 0) {
+    // The arcball through the press point: the grabbed limb follows the cursor around its joint.
+    glm::vec2 c;
+    s.arcballRadius = projectToWindow(currentView(s), s.pipeline->skeleton().world(s.selectedJoint).translation, &c)
+                          ? arcballRadius(c, glm::vec2(float(x), float(y)), 0.03f * float(s.height))
+                          : 0.03f * float(s.height);
+  }
+  if (j >= 0 || (shift && s.selectedJoint >= 0))
+    s.drag = shift ? ViewerState::Drag::Twist : ViewerState::Drag::Arcball;
+  else
+    s.drag = ViewerState::Drag::Orbit;
+}
+
+void moveCursor(ViewerState& s, double x, double y) {
+  if (s.drag == ViewerState::Drag::Orbit) {
+    s.orbit.yaw -= float(x - s.lastX) * 0.008f;
+    s.orbit.pitch = std::clamp(s.orbit.pitch + float(y - s.lastY) * 0.008f, -1.5f, 1.5f);
+  } else if ((s.drag == ViewerState::Drag::Arcball || s.drag == ViewerState::Drag::Twist) && s.selectedJoint >= 0) {
+    rotateJoint(s, s.lastX, s.lastY, x, y);
+  }
+  s.lastX = x, s.lastY = y;
+}
+
+void onMouseButton(GLFWwindow* w, int button, int action, int mods) {
   ViewerState& s = state(w);
   if (action == GLFW_RELEASE) {
     s.drag = ViewerState::Drag::None;
     return;
   }
   if (s.hud && s.hud->wantsMouse()) return;
-  glfwGetCursorPos(w, &s.lastX, &s.lastY);
-  if (button == GLFW_MOUSE_BUTTON_LEFT) {
-    const int j = pickJoint(s, s.lastX, s.lastY);
-    if (j >= 0) s.selectedJoint = j;
-    s.drag = j >= 0 || (s.selectedJoint >= 0 && (glfwGetKey(w, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS))
-                 ? ViewerState::Drag::Joint
-                 : ViewerState::Drag::Orbit;
-  } else {
-    s.drag = ViewerState::Drag::Orbit;
-  }
+  double x = 0, y = 0;
+  glfwGetCursorPos(w, &x, &y);
+  pressButton(s, button, x, y, (mods & GLFW_MOD_SHIFT) != 0);
 }
 
-void onCursor(GLFWwindow* w, double x, double y) {
-  ViewerState& s = state(w);
-  if (s.drag == ViewerState::Drag::Orbit) {
-    s.orbit.yaw -= float(x - s.lastX) * 0.008f;
-    s.orbit.pitch = std::clamp(s.orbit.pitch + float(y - s.lastY) * 0.008f, -1.5f, 1.5f);
-  } else if (s.drag == ViewerState::Drag::Joint && s.selectedJoint >= 0) {
-    rotateJoint(s, s.lastX, s.lastY, x, y);
-  }
-  s.lastX = x, s.lastY = y;
-}
+void onCursor(GLFWwindow* w, double x, double y) { moveCursor(state(w), x, y); }
 
 void onScroll(GLFWwindow* w, double /*dx*/, double dy) {
   ViewerState& s = state(w);
@@ -141,9 +159,15 @@ void onScroll(GLFWwindow* w, double /*dx*/, double dy) {
   s.orbit.distance = std::clamp(s.orbit.distance * std::pow(0.9f, float(dy)), 0.05f, 100.0f);
 }
 
-void onKey(GLFWwindow* w, int key, int /*scancode*/, int action, int /*mods*/) {
-  if (action != GLFW_PRESS) return;
-  ViewerState& s = state(w);
+// Shows and prints a key's result.
+void report(ViewerState& s, std::string message) {
+  if (message.empty()) return;
+  std::printf("puppeteer: %s\n", message.c_str());
+  std::fflush(stdout);
+  s.message = std::move(message);
+}
+
+void handleKey(GLFWwindow* w, ViewerState& s, int key) {
   const int joints = int(s.pipeline->character().joints().size());
   switch (key) {
     case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(w, GLFW_TRUE); break;
@@ -161,8 +185,12 @@ void onKey(GLFWwindow* w, int key, int /*scancode*/, int action, int /*mods*/) {
       s.poseDirty = true;
       s.message = "rest pose";
       break;
-    case GLFW_KEY_O: s.message = "recording: not available yet in the app (use `puppeteer record`)"; break;
-    case GLFW_KEY_K: s.message = "re-calibrate: not available yet in the app (use `puppeteer calibrate`)"; break;
+    case GLFW_KEY_O:
+      report(s, s.source ? s.source->toggleRecording() : "recording needs a live device (puppeteer live)");
+      break;
+    case GLFW_KEY_K:
+      report(s, s.source ? s.source->recalibrate() : "re-calibration needs a live device (puppeteer live)");
+      break;
     case GLFW_KEY_LEFT_BRACKET: s.selectedJoint = joints > 0 ? (s.selectedJoint + joints - 1) % joints : -1; break;
     case GLFW_KEY_RIGHT_BRACKET: s.selectedJoint = joints > 0 ? (s.selectedJoint + 1) % joints : -1; break;
     case GLFW_KEY_0: s.selectedJoint = -1; break;
@@ -170,6 +198,33 @@ void onKey(GLFWwindow* w, int key, int /*scancode*/, int action, int /*mods*/) {
       if (key >= GLFW_KEY_1 && key <= GLFW_KEY_9 && key - GLFW_KEY_1 < joints) s.selectedJoint = key - GLFW_KEY_1;
       break;
   }
+}
+
+void onKey(GLFWwindow* w, int key, int /*scancode*/, int action, int /*mods*/) {
+  if (action != GLFW_PRESS) return;
+  handleKey(w, state(w), key);
+}
+
+// Delivers a scripted event through the same handlers as the callbacks.
+void deliver(GLFWwindow* w, ViewerState& s, const ScriptedEvent& e) {
+  if (e.kind == ScriptedEvent::Kind::Key) {
+    std::printf("puppeteer: key %s\n", e.keyName.c_str());
+    handleKey(w, s, e.key);
+    return;
+  }
+  pressButton(s, GLFW_MOUSE_BUTTON_LEFT, e.x0, e.y0, e.shift);
+  const char* mode = s.drag == ViewerState::Drag::Orbit ? "orbit" : s.drag == ViewerState::Drag::Twist ? "twist" : "arcball";
+  std::printf("puppeteer: drag %.0f,%.0f -> %.0f,%.0f: %s%s%s\n", double(e.x0), double(e.y0), double(e.x1),
+              double(e.y1), mode, s.selectedJoint >= 0 && s.drag != ViewerState::Drag::Orbit ? " " : "",
+              s.selectedJoint >= 0 && s.drag != ViewerState::Drag::Orbit
+                  ? s.pipeline->character().joints()[size_t(s.selectedJoint)].name.c_str()
+                  : "");
+  const int steps = std::max(1, e.steps);
+  for (int i = 1; i <= steps; ++i) {
+    const float t = float(i) / float(steps);
+    moveCursor(s, e.x0 + t * (e.x1 - e.x0), e.y0 + t * (e.y1 - e.y0));
+  }
+  s.drag = ViewerState::Drag::None;
 }
 
 void onFramebufferSize(GLFWwindow* w, int width, int height) {
@@ -188,6 +243,51 @@ std::pair<double, double> medianP99(std::vector<double> values) {
   const double median = at(0.5);
   return {median, at(0.99)};
 }
+
+// Runs ViewerPipeline::frame() on its own thread, one job at a time (--overlap): start() hands it the current
+// skeleton, wait() returns once the mesh is done. Between wait() and start() the caller owns the pipeline.
+class PolygonizeWorker {
+ public:
+  explicit PolygonizeWorker(ViewerPipeline& pipeline) : pipeline_(pipeline), thread_([this] { run(); }) {}
+  ~PolygonizeWorker() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    changed_.notify_all();
+    thread_.join();
+  }
+  void start() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      busy_ = true;
+    }
+    changed_.notify_all();
+  }
+  void wait() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    changed_.wait(lock, [this] { return !busy_; });
+  }
+
+ private:
+  void run() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (;;) {
+      changed_.wait(lock, [this] { return busy_ || stop_; });
+      if (stop_) return;
+      lock.unlock();
+      pipeline_.frame();
+      lock.lock();
+      busy_ = false;
+      changed_.notify_all();
+    }
+  }
+  ViewerPipeline& pipeline_;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  bool busy_ = false, stop_ = false;
+  std::thread thread_;
+};
 
 struct GlfwSession {
   bool ok = false;
@@ -237,6 +337,7 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
 
   ViewerState s;
   s.pipeline = &pipeline;
+  s.source = source;
   s.showParticles = options.showParticles;
   glfwGetFramebufferSize(window, &s.width, &s.height);
   glfwSetWindowUserPointer(window, &s);
@@ -271,24 +372,49 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
       s.orbit.yaw = std::atan2(d.x, d.z);
       s.orbit.pitch = std::asin(std::clamp(d.y, -1.0f, 1.0f));
       s.orbit.verticalFov = cam.verticalFov;
-      renderer->setSceneRadius(box.empty() ? 1.0f : 0.5f * glm::length(box.max - box.min));
+      s.sceneRadius = box.empty() ? 1.0f : 0.5f * glm::length(box.max - box.min);
+      renderer->setSceneRadius(s.sceneRadius);
     }
 
     HudInfo info;
     std::vector<double> latencies, frameTimes;  // ms
     std::vector<double> allLatencies;
+    latencies.reserve(2048);
+    frameTimes.reserve(options.frames > 0 ? size_t(options.frames) : 1 << 16);
+    allLatencies.reserve(options.frames > 0 ? size_t(options.frames) : 1 << 16);
+    // Per-phase times (ms): summed over the HUD's half-second window, and every frame's for the exit summary.
+    enum Phase { kPose, kPolygonize, kUpload, kDraw, kHud, kSwap, kPhases };
+    double phaseSum[kPhases] = {};
+    std::vector<double> phaseTimes[kPhases];
+    for (auto& v : phaseTimes) v.reserve(options.frames > 0 ? size_t(options.frames) : 1 << 16);
+    int64_t phaseStart = 0;
+    auto lap = [&](Phase p) {
+      if (options.syncPhases) glFinish();  // charge the GL's deferred work to the phase that queued it
+      const int64_t t = steadyNowNs();
+      const double ms = double(t - phaseStart) * 1e-6;
+      phaseSum[p] += ms;
+      phaseTimes[p].push_back(ms);
+      phaseStart = t;
+    };
     const int64_t loopStart = steadyNowNs();
     int64_t windowStart = loopStart, lastFrameEnd = loopStart;
     int framesInWindow = 0, frame = 0, screenshotCount = 0;
-    bool havePendingArrival = false;
-    while (!glfwWindowShouldClose(window)) {
-      glfwPollEvents();
-      // 1. Newest pose: never waits for the source.
+    // --overlap: the worker polygonizes frame N+1 while this thread draws frame N. The pipeline and the skeleton
+    // are touched here only while the worker is idle (after wait(), before start()).
+    std::unique_ptr<PolygonizeWorker> worker = options.overlap ? std::make_unique<PolygonizeWorker>(pipeline) : nullptr;
+    int64_t inFlightArrival = 0;  // arrival of the sample whose pose is being polygonized (0: none new)
+    int64_t meshArrival = 0;      // arrival of the sample whose mesh is about to be drawn
+    uint64_t uploadedVersion = ~uint64_t{0};
+    // 1. Newest pose: never waits for the source.
+    auto pollPose = [&] {
       int64_t newArrival = 0;
       if (source && source->poll(pipeline.skeleton(), &newArrival)) {
         s.poseDirty = true;
-        arrivalNs = newArrival;
-        havePendingArrival = newArrival > 0;
+        inFlightArrival = newArrival;
+      }
+      if (source) {
+        // Already printed by the source, in order with its details.
+        if (std::string m = source->takeMessage(); !m.empty()) s.message = std::move(m);
       }
       if (s.poseDirty) {
         pipeline.skeleton().update();
@@ -299,15 +425,34 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
         s.resetRequested = false;
         s.message = "polygonizer reset";
       }
-      // 2. Polygonize, 3. upload, 4. draw.
-      pipeline.frame();
-      renderer->uploadMesh(pipeline.mesh());
-      if (s.showParticles && pipeline.polygonizer() == Polygonizer::Particles)
-        renderer->uploadParticles(pipeline.tesselator().particles().positions);
+    };
+    while (!glfwWindowShouldClose(window)) {
+      phaseStart = steadyNowNs();
+      if (worker) {
+        worker->wait();  // frame N's mesh (its time is the polygonize phase's: what the draw did not hide)
+        lap(kPolygonize);
+        meshArrival = std::exchange(inFlightArrival, 0);
+      }
+      glfwPollEvents();
+      for (const ScriptedEvent& e : eventsAt(options.script, frame)) deliver(window, s, e);
+      phaseStart = steadyNowNs();
+      if (!worker) {
+        // 2. Polygonize.
+        pollPose();
+        lap(kPose);
+        pipeline.frame();
+        lap(kPolygonize);
+        meshArrival = std::exchange(inFlightArrival, 0);
+      }
+      // 3. Upload, only a new mesh.
       const bool drawParticles = s.showParticles && pipeline.polygonizer() == Polygonizer::Particles;
-      renderer->draw(s.orbit.camera(), s.width, s.height, drawParticles);
-
-      // HUD.
+      if (pipeline.meshVersion() != uploadedVersion) {
+        renderer->uploadMesh(pipeline.mesh());
+        uploadedVersion = pipeline.meshVersion();
+      }
+      if (drawParticles) renderer->uploadParticles(pipeline.tesselator().particles().positions);
+      lap(kUpload);
+      // What the HUD and the hashes say about this mesh, read before the worker rewrites it.
       const TesselatorStats& ts = pipeline.tesselator().stats();
       info.polygonizer = pipeline.polygonizer() == Polygonizer::Particles ? "particles" : "Marching Cubes";
       info.simulateMs = ts.simulateMs, info.addDeleteMs = ts.addDeleteMs, info.meshMs = ts.meshMs;
@@ -315,24 +460,40 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
       info.updatesPerRender = pipeline.updatesPerRender();
       info.particles = pipeline.polygonizer() == Polygonizer::Particles ? ts.particles : 0;
       info.triangles = pipeline.mesh().triangleCount();
-      if (source) {
-        source->describe(info);
-      } else {
-        info.source = "hand";
-        info.mapping.clear();
-        info.state = "posing";
+      if (options.printMeshHashes)
+        std::printf("frame %d hash %016llx triangles %zu\n", frame, static_cast<unsigned long long>(meshHash(pipeline.mesh())),
+                    pipeline.mesh().triangleCount());
+      if (worker) {
+        phaseStart = steadyNowNs();
+        pollPose();
+        lap(kPose);
+        worker->start();  // frame N+1's mesh, from the pose just taken
       }
-      info.selectedJoint =
-          s.selectedJoint >= 0 ? pipeline.character().joints()[size_t(s.selectedJoint)].name : std::string();
-      info.message = s.message;
-      if (hud) hud->draw(info);
+      // 4. Draw.
+      renderer->draw(s.orbit.camera(), s.width, s.height, drawParticles);
+      lap(kDraw);
+
+      // HUD.
+      if (hud) {
+        if (source) {
+          source->describe(info);
+        } else {
+          info.source = "hand";
+          info.mapping.clear();
+          info.state = "posing";
+        }
+        info.selectedJoint =
+            s.selectedJoint >= 0 ? pipeline.character().joints()[size_t(s.selectedJoint)].name : std::string();
+        info.message = s.message;
+        hud->draw(info);
+      }
+      lap(kHud);
 
       if (s.saveRequested) {
         s.saveRequested = false;
         std::string error;
-        s.message = saveSceneFile(pipeline.posedScene(), options.savePath, &error) ? "saved " + options.savePath
-                                                                                     : "save failed: " + error;
-        std::printf("puppeteer: %s\n", s.message.c_str());
+        report(s, saveSceneFile(pipeline.posedScene(), options.savePath, &error) ? "saved " + options.savePath
+                                                                                  : "save failed: " + error);
       }
       const bool lastFrame = headless && frame + 1 >= options.frames;
       if (s.screenshotRequested || (lastFrame && !options.screenshot.empty())) {
@@ -347,21 +508,20 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
           std::fprintf(stderr, "puppeteer: error: %s\n", error.c_str());
           if (lastFrame) exitCode = kExitIoError;
         }
+        phaseStart = steadyNowNs();  // not part of the swap
       }
       // 5. Swap; the frame is on screen once the GL has finished it.
       glfwSwapBuffers(window);
       if (source) glFinish();
-      const int64_t now = steadyNowNs();
-      if (havePendingArrival) {
-        const double latency = double(now - arrivalNs) * 1e-6;
+      lap(kSwap);
+      const int64_t now = phaseStart;
+      if (meshArrival > 0) {
+        const double latency = double(now - meshArrival) * 1e-6;
         latencies.push_back(latency);
         allLatencies.push_back(latency);
-        havePendingArrival = false;
+        meshArrival = 0;
       }
       if (source) source->frameDone();
-      if (options.printMeshHashes)
-        std::printf("frame %d hash %016llx triangles %zu\n", frame, static_cast<unsigned long long>(meshHash(pipeline.mesh())),
-                    pipeline.mesh().triangleCount());
       frameTimes.push_back(double(now - lastFrameEnd) * 1e-6);
       if (info.fps == 0.0 && frameTimes.back() > 0.0) info.frameMs = frameTimes.back(), info.fps = 1e3 / info.frameMs;
       lastFrameEnd = now;
@@ -370,6 +530,8 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
       if (now - windowStart >= 500'000'000) {
         info.fps = framesInWindow / (double(now - windowStart) * 1e-9);
         info.frameMs = double(now - windowStart) * 1e-6 / framesInWindow;
+        double* fields[kPhases] = {&info.poseMs, &info.polygonizeMs, &info.uploadMs, &info.drawMs, &info.hudMs, &info.swapMs};
+        for (int p = 0; p < kPhases; ++p) *fields[p] = phaseSum[p] / framesInWindow, phaseSum[p] = 0.0;
         const auto [median, p99] = medianP99(latencies);
         info.latencyMedianMs = median, info.latencyP99Ms = p99;
         if (latencies.size() > 2000) latencies.erase(latencies.begin(), latencies.end() - 1000);
@@ -377,6 +539,8 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
       }
       if (lastFrame) break;
     }
+    if (worker) worker->wait();
+    if (source) report(s, source->finish());
 
     // Summary: frame rate over the whole loop (the settle before it excluded).
     const double seconds = double(lastFrameEnd - loopStart) * 1e-9;
@@ -384,6 +548,10 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
     std::printf("puppeteer: %d frames in %.2f s: %.1f FPS (frame time median %.1f ms, p99 %.1f ms), %zu triangles, %dx%d\n",
                 frame, seconds, seconds > 0 ? frame / seconds : 0.0, frameMedian, frameP99,
                 pipeline.mesh().triangleCount(), s.width, s.height);
+    static const char* const kPhaseNames[kPhases] = {"pose", "polygonize", "upload", "draw", "hud", "swap"};
+    std::printf("puppeteer: median ms per phase%s:", options.syncPhases ? " (GL finished after each)" : "");
+    for (int p = 0; p < kPhases; ++p) std::printf(" %s %.2f", kPhaseNames[p], medianP99(phaseTimes[p]).first);
+    std::printf("\n");
     if (!allLatencies.empty()) {
       const auto [median, p99] = medianP99(allLatencies);
       std::printf("puppeteer: sample-to-screen latency over %zu frames: median %.1f ms, p99 %.1f ms\n",

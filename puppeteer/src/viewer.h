@@ -5,7 +5,10 @@
 #include <cstdint>
 #include <string>
 
+#include <vector>
+
 #include "hud.h"
+#include "scripted_input.h"
 #include "viewer_pipeline.h"
 
 namespace imps::app {
@@ -21,6 +24,17 @@ class PoseSource {
   virtual void describe(HudInfo& info) = 0;
   // Called once per frame after the frame is on screen (for per-frame bookkeeping such as deterministic replay).
   virtual void frameDone() {}
+  // Key `o`: starts or stops recording the raw samples to a session file. Returns the message to show (the viewer
+  // also prints it). Sources that cannot record say so.
+  virtual std::string toggleRecording() { return "recording needs a live device (puppeteer live)"; }
+  // Key `k`: starts re-calibration (countdown, averaging window, offsets, save); progress and result reach the HUD
+  // through describe() and takeMessage().
+  virtual std::string recalibrate() { return "re-calibration needs a live device (puppeteer live)"; }
+  // A message produced on the source's own schedule (a calibration finished, a recording failed), once; "" if none.
+  // The source prints it itself; the viewer shows it in the HUD.
+  virtual std::string takeMessage() { return {}; }
+  // Called once after the last frame: closes what is open (a recording). Returns a message to print, or "".
+  virtual std::string finish() { return {}; }
 };
 
 struct ViewerOptions {
@@ -37,7 +51,15 @@ struct ViewerOptions {
   bool vsync = true;          // ignored (off) when frames > 0
   std::string savePath;       // target of the `s` key
   bool printMeshHashes = false;  // print "frame N hash H triangles T" per frame to stdout
+  // glFinish after every phase so the per-phase times include the GL's deferred work (profiling; slower).
+  bool syncPhases = false;
+  // Polygonize frame N+1 on a worker thread while this thread draws frame N: more frames per second when the
+  // polygonizer and the GL do not already share every core, at up to one frame more sample-to-screen latency.
+  bool overlap = false;
   std::string title = "IMPS Puppeteer";
+  // Scripted input (scripted_input.h): key presses and mouse drags delivered at given frames, through the same
+  // handlers as the window's callbacks.
+  std::vector<ScriptedEvent> script;
 };
 
 // Opens the window and runs until Esc / close / `frames` are done. `source` may be null (hand posing only).

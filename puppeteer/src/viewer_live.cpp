@@ -1,7 +1,10 @@
-// The live device pose source: device session → pose mailbox → joints by channel name.
+// The live device pose source: device session → pose mailbox → joints; recording and re-calibration.
 #include "viewer_live.h"
 
 #include <chrono>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
 #include <utility>
 
 namespace imps::app {
@@ -10,35 +13,187 @@ int64_t steadyNowNs() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
       .count();
 }
+
+drivers::PoseMailboxOptions mailboxOptions() {
+  drivers::PoseMailboxOptions o;
+  o.queueCapacity = 1 << 14;  // 16 s at 1 kHz for the recorder and the calibration window
+  return o;
+}
 }  // namespace
 
 LivePoseSource::LivePoseSource(drivers::TransportOpener opener, const drivers::DeviceSessionOptions& options,
-                               const Character& character, std::string spec, std::optional<SampleMapper> calibration)
-    : character_(character), spec_(std::move(spec)), map_(std::move(calibration)) {
+                               const Character& character, std::string spec, std::optional<SampleMapper> calibration,
+                               LiveSourceOptions live)
+    : character_(character),
+      spec_(std::move(spec)),
+      live_(std::move(live)),
+      mailbox_(mailboxOptions()),
+      map_(std::move(calibration)),
+      flow_(live_.calibrate) {
+  batch_.reserve(1024);
   session_ = std::make_unique<drivers::DeviceSession>(std::move(opener), mailbox_, options);
   session_->start();
   rateWindowStartNs_ = steadyNowNs();
+  if (!live_.recordPath.empty()) startRecording(live_.recordPath);
 }
 
-LivePoseSource::~LivePoseSource() { session_->stop(); }
+LivePoseSource::~LivePoseSource() {
+  session_->stop();
+  finish();
+}
+
+void LivePoseSource::say(std::string message) {
+  std::printf("puppeteer: %s\n", message.c_str());
+  std::fflush(stdout);
+  message_ = std::move(message);
+}
 
 bool LivePoseSource::poll(SkeletonCache& skeleton, int64_t* arrivalNs) {
-  if (deviceName_.empty()) {
+  if (!device_) {
     // The channel names arrive with the handshake; build the by-name map once (deviceInfo() takes a mutex: not
     // per frame once known).
-    std::optional<drivers::DeviceInfo> info = session_->deviceInfo();
-    if (!info) return false;
+    device_ = session_->deviceInfo();
+    if (!device_) return false;
     if (!map_) {
       sim::Session names;
-      names.devices.push_back(*info);
+      names.devices.push_back(*device_);
       map_.emplace(names, character_);
     }
-    deviceName_ = info->name.empty() ? "device" : info->name;
+    deviceName_ = device_->name.empty() ? "device" : device_->name;
   }
+
+  // Every sample, in order: the recording and the calibration window.
+  batch_.clear();
+  mailbox_.drain(batch_);
+  if (recordingWanted_ && !recorder_ && !batch_.empty()) {
+    auto created = SessionRecorder::create(recordPath_, *device_, calibration());
+    if (created) {
+      recorder_.emplace(std::move(*created));
+      recordStartNs_ = steadyNowNs();
+    } else {
+      recordingWanted_ = false;
+      say("recording failed: " + created.error());
+    }
+  }
+  if (recorder_) {
+    if (auto r = recorder_->append(batch_); !r) {
+      recorder_.reset();
+      recordingWanted_ = false;
+      say("recording stopped: " + r.error());
+    }
+  }
+  if (flow_.active() && flow_.update(batch_, steadyNowNs())) finishCalibration();
+
   if (!mailbox_.latest(sample_)) return false;
   map_->apply(0, sample_, skeleton);
   if (arrivalNs) *arrivalNs = sample_.arrivalTimeNs;
   return true;
+}
+
+void LivePoseSource::startRecording(std::string path) {
+  recordPath_ = std::move(path);
+  recordingWanted_ = true;
+}
+
+std::string LivePoseSource::stopRecording() {
+  recordingWanted_ = false;
+  if (!recorder_) return "recording stopped: no samples arrived, nothing was written";
+  // What the device sent up to now.
+  batch_.clear();
+  mailbox_.drain(batch_);
+  auto appended = recorder_->append(batch_);
+  const double seconds = double(steadyNowNs() - recordStartNs_) * 1e-9;
+  const uint64_t samples = recorder_->samples(), skipped = recorder_->skipped();
+  const std::string path = recorder_->path().string();
+  auto closed = recorder_->close();
+  recorder_.reset();
+  if (!appended) return "recording failed: " + appended.error();
+  if (!closed) return "recording failed: " + closed.error();
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "recorded %llu samples (%.1f s) to ", static_cast<unsigned long long>(samples),
+                seconds);
+  std::string message = buf + path;
+  if (skipped) message += " (" + std::to_string(skipped) + " from a different device skipped)";
+  return message;
+}
+
+std::string LivePoseSource::toggleRecording() {
+  if (recordingWanted_) return stopRecording();
+  startRecording(newTakePath(live_.recordDir, std::time(nullptr)).string());
+  return "recording to " + recordPath_;
+}
+
+std::string LivePoseSource::recalibrate() {
+  if (flow_.active()) {
+    flow_.reset();
+    return "re-calibration cancelled";
+  }
+  if (!device_) return "re-calibration: the device has not described itself yet";
+  if (!calibration() && live_.rigPath.empty())
+    return "re-calibration needs a rig map: start with --calibration FILE or --rig RIG --calibration-out FILE";
+  if (live_.calibrationOut.empty() && live_.calibrationPath.empty())
+    return "re-calibration: nowhere to save it: pass --calibration-out FILE";
+  flow_.start(steadyNowNs());
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "re-calibrating: hold the calibration pose still (averaging %.0f ms in %.1fs; k cancels)",
+                live_.calibrate.windowMs, live_.calibrate.delayMs * 1e-3);
+  return buf;
+}
+
+void LivePoseSource::finishCalibration() {
+  // The rig map: the calibration in force (its offsets are replaced), else --rig against this device.
+  std::optional<calibration::RigMap> rig;
+  std::string rigName;
+  if (const calibration::Calibration* c = calibration()) {
+    rig = c->rigMap();
+    rigName = live_.calibrationPath.empty() ? "the calibration in force" : live_.calibrationPath;
+  } else {
+    Diagnostics warnings;
+    auto read = calibration::readRigMapFile(live_.rigPath, {&character_, &*device_, false}, &warnings);
+    if (!read) {
+      flow_.reset();
+      say("re-calibration failed: " + read.error().str());
+      return;
+    }
+    rig = std::move(*read);
+    rigName = live_.rigPath;
+  }
+  const std::vector<drivers::Sample>& window = flow_.window();
+  auto result = calibrateWindow(*rig, window, *device_, character_, live_.calibrate.maxNoiseDeg,
+                                calibrationInfoJson(live_.scenePath, rigName, spec_, live_.calibrate.windowMs,
+                                                    window.size(), device_->serialNumber));
+  const size_t samples = window.size();
+  flow_.reset();
+  if (!result) {
+    std::string message = "calibration rejected (" + std::to_string(samples) + " samples): ";
+    message += result.error().empty() ? "unknown reason" : result.error().front();
+    if (result.error().size() > 1) message += " (+" + std::to_string(result.error().size() - 1) + " more)";
+    say(message + "; hold still and press k again");
+    for (size_t i = 1; i < result.error().size(); ++i) std::printf("  %s\n", result.error()[i].c_str());
+    return;
+  }
+  const std::string out = live_.calibrationOut.empty() ? live_.calibrationPath : live_.calibrationOut;
+  if (auto saved = result->calibration.save(out); !saved) {
+    say("calibration not saved: " + saved.error() + " (not applied)");
+    return;
+  }
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "calibrated %zu channels from %zu samples (noise at most %.3f deg), saved ",
+                result->calibration.rigMap().channels.size(), samples, result->maxNoiseDeg);
+  std::string message = buf + out;
+  if (recorder_) {
+    if (auto r = recorder_->appendCalibration(result->calibration); !r) message += "; not recorded: " + r.error();
+  }
+  map_.emplace(std::move(result->calibration), std::filesystem::path(out).filename().string());
+  live_.calibrationPath = out;
+  say(message);
+}
+
+std::string LivePoseSource::takeMessage() { return std::exchange(message_, std::string()); }
+
+std::string LivePoseSource::finish() {
+  if (!recordingWanted_) return {};
+  return stopRecording();
 }
 
 void LivePoseSource::describe(HudInfo& info) {
@@ -58,6 +213,11 @@ void LivePoseSource::describe(HudInfo& info) {
   const drivers::PoseMailboxStats ms = mailbox_.stats();
   info.overwritten = ms.overwritten;
   info.sampleAgeMs = double(ms.lastAgeNs) * 1e-6;
+  info.recording = recordingWanted_;
+  info.recordSeconds = recorder_ ? double(now - recordStartNs_) * 1e-9 : 0.0;
+  info.recordSamples = recorder_ ? recorder_->samples() : 0;
+  info.recordPath = recordPath_;
+  info.calibrationProgress = flow_.progress(now);
 }
 
 }  // namespace imps::app

@@ -67,14 +67,20 @@ void ViewerPipeline::resetPolygonizer() {
 void ViewerPipeline::frame() {
   const auto start = std::chrono::steady_clock::now();
   if (options_.polygonizer == Polygonizer::Particles) {
+    mcValid_ = false;
     if (!settled_) {
       tesselator_->settle(*skeleton_, mesh_, std::max(1, options_.settleUpdates));
       settled_ = true;
     } else {
       tesselator_->frame(*skeleton_, mesh_);
     }
-  } else {
+    ++meshVersion_;
+  } else if (!mcValid_ || mcGeneration_ != skeleton_->generation()) {
+    // Marching Cubes is a function of the pose alone: an unchanged skeleton gives the same mesh.
     marchingCubes_.polygonize(skeleton_->field(), mcOptions_, mesh_, &mcStats_);
+    mcGeneration_ = skeleton_->generation();
+    mcValid_ = true;
+    ++meshVersion_;
   }
   lastFrameMs_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }

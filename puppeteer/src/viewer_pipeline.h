@@ -45,6 +45,9 @@ class ViewerPipeline {
   // the pose changed): updatesPerRender particle updates and a triangulation, or one Marching Cubes pass.
   void frame();
   const Mesh& mesh() const { return mesh_; }
+  // Incremented whenever frame() rewrites mesh(): the renderer re-uploads only a new mesh. Marching Cubes skips its
+  // pass (and keeps the version) while the skeleton cache's generation has not changed.
+  uint64_t meshVersion() const { return meshVersion_; }
 
   Polygonizer polygonizer() const { return options_.polygonizer; }
   void setPolygonizer(Polygonizer p);
@@ -74,6 +77,9 @@ class ViewerPipeline {
   Mesh mesh_;
   MeshBounds restBounds_;
   bool settled_ = false;
+  uint64_t meshVersion_ = 0;
+  uint64_t mcGeneration_ = 0;  // skeleton generation of the last Marching Cubes pass
+  bool mcValid_ = false;       // mesh_ holds that pass
   double lastFrameMs_ = 0.0;
 };
 

@@ -68,6 +68,10 @@ class SampleMapper {
   // "calibration LABEL, N joints" or "channel names, N joints".
   std::string describe() const;
   const ChannelPoseMap* byName() const { return byName_ ? &*byName_ : nullptr; }
+  // The calibration in use, or null when mapping by channel names.
+  const calibration::Calibration* calibration() const {
+    return calibrator_ ? &calibrator_->calibration() : nullptr;
+  }
 
  private:
   std::optional<ChannelPoseMap> byName_;

@@ -131,6 +131,37 @@ TEST(ViewerPipeline, SteppedReplayGivesTheSameMeshesEveryRun) {
   EXPECT_NE(first[1], first[2]);  // the pose changes between frames, so do the meshes
 }
 
+TEST(ViewerPipeline, MeshVersionChangesOnlyWithANewMesh) {
+  Biped b = loadBiped();
+  PipelineOptions o;
+  o.polygonizer = Polygonizer::MarchingCubes;
+  o.mcResolution = 24;
+  ViewerPipeline pipeline(std::move(b.scene), std::move(b.character), o);
+  pipeline.frame();
+  const uint64_t first = pipeline.meshVersion();
+  const uint64_t hash = meshHash(pipeline.mesh());
+  // Marching Cubes: an unchanged pose is not polygonized (nor re-uploaded) again.
+  pipeline.frame();
+  EXPECT_EQ(pipeline.meshVersion(), first);
+  EXPECT_EQ(meshHash(pipeline.mesh()), hash);
+  const int arm = pipeline.character().findJoint("L_UpperArm");
+  pipeline.skeleton().setRotation(arm, glm::angleAxis(-1.2f, glm::vec3(0, 0, 1)));
+  pipeline.skeleton().update();
+  pipeline.frame();
+  EXPECT_GT(pipeline.meshVersion(), first);
+  EXPECT_NE(meshHash(pipeline.mesh()), hash);
+  // The particle tesselator moves its particles every frame: every frame is a new mesh.
+  pipeline.setPolygonizer(Polygonizer::Particles);
+  const uint64_t beforeParticles = pipeline.meshVersion();
+  pipeline.frame();
+  pipeline.frame();
+  EXPECT_EQ(pipeline.meshVersion(), beforeParticles + 2);
+  // Back to Marching Cubes: polygonized again even though the pose did not change.
+  pipeline.setPolygonizer(Polygonizer::MarchingCubes);
+  pipeline.frame();
+  EXPECT_EQ(pipeline.meshVersion(), beforeParticles + 3);
+}
+
 TEST(ViewerPipeline, PosedSceneWritesJointRotations) {
   Biped b = loadBiped();
   ViewerPipeline pipeline(std::move(b.scene), std::move(b.character), PipelineOptions{});

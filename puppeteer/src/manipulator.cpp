@@ -1,0 +1,134 @@
+// The hand-posing manipulators' maths (see manipulator.h).
+#include "manipulator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include <glm/geometric.hpp>
+#include <glm/mat4x4.hpp>
+
+#include "renderer.h"
+
+namespace imps::app {
+
+ScreenView screenView(const Camera& camera, int width, int height, float sceneRadius) {
+  ScreenView v;
+  v.width = std::max(1, width), v.height = std::max(1, height);
+  v.viewProjection = Renderer::projectionMatrix(camera, float(v.width) / float(v.height), sceneRadius) *
+                     Renderer::viewMatrix(camera);
+  const glm::vec3 forward = glm::normalize(camera.target - camera.eye);
+  v.right = glm::normalize(glm::cross(forward, camera.up));
+  v.up = glm::cross(v.right, forward);
+  v.towardsViewer = -forward;
+  v.eye = camera.eye;
+  return v;
+}
+
+bool projectToWindow(const ScreenView& view, const glm::vec3& world, glm::vec2* pixel) {
+  const glm::vec4 clip = view.viewProjection * glm::vec4(world, 1.0f);
+  if (clip.w <= 0.0f) return false;
+  *pixel = glm::vec2((clip.x / clip.w * 0.5f + 0.5f) * float(view.width),
+                     (0.5f - clip.y / clip.w * 0.5f) * float(view.height));
+  return true;
+}
+
+PickRay pickRay(const ScreenView& view, const glm::vec2& pixel) {
+  // The pixel at the near and far planes, unprojected; the ray starts at the eye.
+  const glm::mat4 inverse = glm::inverse(view.viewProjection);
+  const float ndcX = pixel.x / float(view.width) * 2.0f - 1.0f;
+  const float ndcY = 1.0f - pixel.y / float(view.height) * 2.0f;
+  glm::vec4 nearPoint = inverse * glm::vec4(ndcX, ndcY, -1.0f, 1.0f);
+  glm::vec4 farPoint = inverse * glm::vec4(ndcX, ndcY, 1.0f, 1.0f);
+  nearPoint /= nearPoint.w;
+  farPoint /= farPoint.w;
+  return PickRay{view.eye, glm::normalize(glm::vec3(farPoint - nearPoint))};
+}
+
+std::vector<Bone> skeletonBones(std::span<const int> parents, std::span<const glm::vec3> world) {
+  std::vector<Bone> bones;
+  std::vector<bool> hasChild(parents.size(), false);
+  for (size_t c = 0; c < parents.size(); ++c) {
+    const int p = parents[c];
+    if (p < 0 || size_t(p) >= parents.size()) continue;
+    bones.push_back(Bone{p, world[size_t(p)], world[c]});
+    hasChild[size_t(p)] = true;
+  }
+  for (size_t j = 0; j < parents.size(); ++j)
+    if (!hasChild[j]) bones.push_back(Bone{int(j), world[j], world[j]});
+  return bones;
+}
+
+int pickJoint(const PickRay& ray, std::span<const Bone> bones, float maxAngle) {
+  int best = -1;
+  float bestScore = std::numeric_limits<float>::infinity();
+  for (const Bone& bone : bones) {
+    // The segment point (a + s (b - a), s in [0, 1]) seen at the smallest angle from the ray: for each s on a
+    // 33-point grid the angle follows from the point's projection onto the ray (bones are few, and a grid is
+    // exact enough at pixel precision).
+    const glm::vec3 ab = bone.b - bone.a;
+    const int steps = glm::length(ab) > 0.0f ? 32 : 0;
+    float boneBest = std::numeric_limits<float>::infinity();
+    float boneS = 0.0f;
+    for (int i = 0; i <= steps; ++i) {
+      const float s = steps ? float(i) / float(steps) : 0.0f;
+      const glm::vec3 p = bone.a + s * ab - ray.origin;
+      const float t = glm::dot(p, ray.direction);
+      if (t <= 0.0f) continue;  // behind the eye
+      const float angle = std::atan2(glm::length(p - t * ray.direction), t);
+      if (angle < boneBest) boneBest = angle, boneS = s;
+    }
+    if (boneBest > maxAngle) continue;
+    // Ties where bones meet: prefer the bone whose nearest point is nearest its start (its joint's origin).
+    const float score = boneBest + 0.05f * maxAngle * boneS;
+    if (score < bestScore) bestScore = score, best = bone.joint;
+  }
+  return best;
+}
+
+float pixelsToAngle(float pixels, int windowHeight, float verticalFov) {
+  return std::atan(pixels / (0.5f * float(std::max(1, windowHeight))) * std::tan(0.5f * verticalFov));
+}
+
+namespace {
+// A window point on the arcball, in view coordinates (x right, y up, z towards the viewer).
+glm::vec3 onArcball(const glm::vec2& center, float radius, const glm::vec2& p) {
+  const glm::vec2 s((p.x - center.x) / radius, -(p.y - center.y) / radius);
+  const float r2 = glm::dot(s, s);
+  if (r2 <= 1.0f) return glm::vec3(s, std::sqrt(1.0f - r2));
+  return glm::vec3(s / std::sqrt(r2), 0.0f);
+}
+}  // namespace
+
+glm::quat arcballRotation(const glm::vec2& center, float radius, const glm::vec2& from, const glm::vec2& to,
+                          const ScreenView& view) {
+  if (!(radius > 0.0f)) return glm::quat(1, 0, 0, 0);
+  const glm::vec3 v0 = onArcball(center, radius, from), v1 = onArcball(center, radius, to);
+  const glm::vec3 axis = glm::cross(v0, v1);
+  const float sinAngle = glm::length(axis);
+  if (!(sinAngle > 1e-7f)) return glm::quat(1, 0, 0, 0);
+  const float angle = std::atan2(sinAngle, glm::dot(v0, v1));
+  const glm::vec3 worldAxis = view.right * axis.x + view.up * axis.y + view.towardsViewer * axis.z;
+  return glm::angleAxis(angle, glm::normalize(worldAxis));
+}
+
+float arcballRadius(const glm::vec2& center, const glm::vec2& press, float minRadius) {
+  return std::max(glm::length(press - center), minRadius);
+}
+
+glm::quat twistRotation(const glm::vec2& center, const glm::vec2& from, const glm::vec2& to, const ScreenView& view) {
+  // Window y points down: negate it for counter-clockwise-positive angles.
+  const float a0 = std::atan2(-(from.y - center.y), from.x - center.x);
+  const float a1 = std::atan2(-(to.y - center.y), to.x - center.x);
+  float angle = a1 - a0;
+  if (angle > std::numbers::pi_v<float>) angle -= 2.0f * std::numbers::pi_v<float>;
+  if (angle < -std::numbers::pi_v<float>) angle += 2.0f * std::numbers::pi_v<float>;
+  return glm::angleAxis(angle, view.towardsViewer);
+}
+
+glm::quat rotateJointLocal(const glm::quat& local, const glm::quat& parentWorld, const glm::quat& worldRotation) {
+  return glm::normalize(glm::inverse(parentWorld) * worldRotation * parentWorld * local);
+}
+
+}  // namespace imps::app

@@ -1,0 +1,90 @@
+// The hand-posing manipulators' maths, free of any window or GL: projecting world points to window pixels, the pick
+// ray through a pixel, the joint whose bone a ray passes nearest, and a screen drag turned into a joint rotation
+// (an arcball centred on the joint — a two-axis trackball about the screen's up/right axes near its centre — or a
+// twist about the view axis).
+// Based on: K. Shoemake, "ARCBALL: A User Interface for Specifying Three-Dimensional Orientation Using a Mouse",
+// 1992; M. Chen, S. J. Mountford, A. Sellen, "A Study in Interactive 3-D Rotation Using 2-D Control Devices", 1988
+// (the "virtual trackball": horizontal drag turns about the vertical screen axis, vertical about the horizontal).
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include <glm/gtc/quaternion.hpp>
+#include <glm/mat4x4.hpp>
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include "snapshot.h"
+
+namespace imps::app {
+
+// A camera's view of a window: world → clip (projection * view) and the window size in pixels. Window pixels have
+// their origin at the top-left corner, x to the right, y down (GLFW's cursor convention).
+struct ScreenView {
+  glm::mat4 viewProjection{1.0f};
+  int width = 1, height = 1;
+  // The camera's world-space basis: right, up (both unit, orthogonal) and the unit direction towards the viewer.
+  glm::vec3 right{1, 0, 0}, up{0, 1, 0}, towardsViewer{0, 0, 1};
+  glm::vec3 eye{0, 0, 3};
+};
+
+// The view of `camera` (Renderer::viewMatrix / projectionMatrix with `sceneRadius`) in a width x height window.
+ScreenView screenView(const Camera& camera, int width, int height, float sceneRadius);
+
+// Window pixel position of a world point; false (and *pixel untouched) when the point is behind the camera.
+bool projectToWindow(const ScreenView& view, const glm::vec3& world, glm::vec2* pixel);
+
+// A ray from the eye through a window pixel (world space, unit direction).
+struct PickRay {
+  glm::vec3 origin{0.0f};
+  glm::vec3 direction{0, 0, -1};
+};
+PickRay pickRay(const ScreenView& view, const glm::vec2& pixel);
+
+// A pickable piece of the skeleton: the segment from joint `joint`'s origin to one of its children's origins (world
+// space, metres), or a single point (a == b) for a joint without children. Picking a bone picks the joint that
+// turns it.
+struct Bone {
+  int joint = -1;
+  glm::vec3 a{0.0f}, b{0.0f};
+};
+
+// The bones of a posed skeleton: one per (joint, child) pair and one point per leaf joint. `parents[j]` is joint
+// j's parent (-1 for a root), `world[j]` its world origin; both have one entry per joint.
+std::vector<Bone> skeletonBones(std::span<const int> parents, std::span<const glm::vec3> world);
+
+// The joint whose bone passes nearest the ray, measured as the angle (radians) between the ray and the bone's
+// nearest point seen from the ray's origin; -1 when none is within `maxAngle` or lies in front of the origin. Where
+// two bones meet (an elbow), the bone that starts there wins, so a click on a joint picks that joint.
+int pickJoint(const PickRay& ray, std::span<const Bone> bones, float maxAngle);
+
+// The angle (radians) that `pixels` pixels subtend at the centre of `view` (for pickJoint's maxAngle); needs the
+// camera's vertical field of view.
+float pixelsToAngle(float pixels, int windowHeight, float verticalFov);
+
+// The arcball (Shoemake), centred on the picked joint's window position `center` with radius `radius` pixels: the
+// window points `from` and `to` are lifted onto the ball's front hemisphere (or its rim, outside the ball) and the
+// result is the world-space rotation that carries the first onto the second (single angle, so the point under the
+// cursor follows it). Near the centre it is the two-axis trackball: dragging right turns about the screen's up axis,
+// dragging down about the screen's right axis (the side facing the viewer follows the cursor). A press on a limb
+// with the radius set to the press's distance from the joint (see arcballRadius) makes the limb follow the cursor
+// around the joint on screen; the identity when the points coincide.
+glm::quat arcballRotation(const glm::vec2& center, float radius, const glm::vec2& from, const glm::vec2& to,
+                          const ScreenView& view);
+
+// The arcball radius for a press at `press` on a joint drawn at `center`: the press's distance, so a limb grabbed
+// anywhere follows the cursor, but at least `minRadius` pixels, so a press on the joint itself turns it like a
+// trackball.
+float arcballRadius(const glm::vec2& center, const glm::vec2& press, float minRadius);
+
+// The twist: the angle the cursor swept around `center` (window pixels) from `from` to `to`, as a world rotation
+// about the view axis; counter-clockwise on screen turns counter-clockwise as seen from the camera.
+glm::quat twistRotation(const glm::vec2& center, const glm::vec2& from, const glm::vec2& to, const ScreenView& view);
+
+// A joint's new local rotation (relative to its parent) after turning its world frame by `worldRotation` about its
+// own origin: world = parentWorld * local, so local' = parentWorld^-1 * worldRotation * parentWorld * local. The
+// world rotation is thereby expressed in the parent's frame. Normalised.
+glm::quat rotateJointLocal(const glm::quat& local, const glm::quat& parentWorld, const glm::quat& worldRotation);
+
+}  // namespace imps::app

@@ -1,0 +1,104 @@
+// Scripted input for the headless app (see scripted_input.h).
+#include "scripted_input.h"
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+
+namespace imps::app {
+namespace {
+
+std::string lower(std::string_view s) {
+  std::string out(s);
+  for (char& c : out) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+// GLFW key code of a key name, or 0.
+int keyCode(std::string_view name) {
+  if (name.size() == 1) {
+    const char c = char(std::tolower(static_cast<unsigned char>(name[0])));
+    if (c >= 'a' && c <= 'z') return GLFW_KEY_A + (c - 'a');
+    if (c >= '0' && c <= '9') return GLFW_KEY_0 + (c - '0');
+    if (c == '[') return GLFW_KEY_LEFT_BRACKET;
+    if (c == ']') return GLFW_KEY_RIGHT_BRACKET;
+    return 0;
+  }
+  const std::string n = lower(name);
+  if (n == "f12") return GLFW_KEY_F12;
+  if (n == "esc" || n == "escape") return GLFW_KEY_ESCAPE;
+  if (n == "backspace") return GLFW_KEY_BACKSPACE;
+  return 0;
+}
+
+bool parseInt(std::string_view s, int* out) {
+  if (s.empty()) return false;
+  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), *out);
+  return ec == std::errc() && end == s.data() + s.size() && *out >= 0;
+}
+
+bool parseFloat(std::string_view s, float* out) {
+  if (s.empty()) return false;
+  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), *out);
+  return ec == std::errc() && end == s.data() + s.size() && std::isfinite(*out) && *out >= 0.0f;
+}
+
+}  // namespace
+
+std::expected<std::vector<ScriptedEvent>, std::string> parseScriptedKeys(std::string_view text) {
+  std::vector<ScriptedEvent> events;
+  size_t start = 0;
+  while (start <= text.size()) {
+    size_t end = text.find(',', start);
+    if (end == std::string_view::npos) end = text.size();
+    const std::string_view item = text.substr(start, end - start);
+    // "[" and "]" cannot be confused with '@'; split at the last '@'.
+    const size_t at = item.rfind('@');
+    ScriptedEvent e;
+    if (at == std::string_view::npos || at == 0 || !parseInt(item.substr(at + 1), &e.frame) ||
+        (e.key = keyCode(item.substr(0, at))) == 0)
+      return std::unexpected("--keys: '" + std::string(item) +
+                             "': expected KEY@FRAME (KEY: a-z, 0-9, [, ], F12, Esc, Backspace; FRAME >= 0)");
+    e.keyName = std::string(item.substr(0, at));
+    events.push_back(std::move(e));
+    start = end + 1;
+  }
+  return events;
+}
+
+std::expected<ScriptedEvent, std::string> parseScriptedDrag(std::string_view text) {
+  auto fail = [&] {
+    return std::unexpected("--drag: '" + std::string(text) + "': expected X0,Y0,X1,Y1@FRAME[+shift] (window pixels)");
+  };
+  ScriptedEvent e;
+  e.kind = ScriptedEvent::Kind::Drag;
+  std::string_view rest = text;
+  if (const size_t plus = rest.rfind('+'); plus != std::string_view::npos) {
+    if (lower(rest.substr(plus + 1)) != "shift") return fail();
+    e.shift = true;
+    rest = rest.substr(0, plus);
+  }
+  const size_t at = rest.rfind('@');
+  if (at == std::string_view::npos || !parseInt(rest.substr(at + 1), &e.frame)) return fail();
+  float* coords[4] = {&e.x0, &e.y0, &e.x1, &e.y1};
+  std::string_view list = rest.substr(0, at);
+  for (int i = 0; i < 4; ++i) {
+    const size_t comma = i < 3 ? list.find(',') : list.size();
+    if (comma == std::string_view::npos || !parseFloat(list.substr(0, comma), coords[i])) return fail();
+    list = i < 3 ? list.substr(comma + 1) : std::string_view();
+  }
+  return e;
+}
+
+std::vector<ScriptedEvent> eventsAt(const std::vector<ScriptedEvent>& events, int frame) {
+  std::vector<ScriptedEvent> out;
+  for (const ScriptedEvent& e : events)
+    if (e.frame == frame) out.push_back(e);
+  return out;
+}
+
+}  // namespace imps::app

@@ -1,0 +1,270 @@
+// The live pose source's recording (key o) and re-calibration (key k) against a simulated armature through the real
+// driver stack (in-process transport, device session, pose mailbox), without a window: a recording holds the
+// device, the calibration in force and every sample the simulator sent, bit for bit; a still armature calibrates
+// (offsets = its counts, saved atomically, applied, recorded); a noisy one is rejected and nothing is written.
+#include "viewer_live.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <filesystem>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "calibration_flow.h"
+#include "drivers/device_spec.h"
+#include "examples.h"
+#include "imps/skeleton_cache.h"
+#include "sim/session_file.h"
+#include "sim/simulated_armature.h"
+
+namespace imps::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    path = fs::temp_directory_path() / ("imps_live_test_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~TempDir() { fs::remove_all(path); }
+};
+
+// A 32-channel, 12-bit session for the simulator to play (the example calibration's device): `moving` samples of
+// pseudo-random counts, or one still pose repeated.
+fs::path writeSourceSession(const fs::path& dir, bool moving, size_t samples = 700) {
+  sim::Session session;
+  session.devices.push_back(sim::ArmatureOptions::defaultInfo(32, 12));
+  std::mt19937 rng(7);
+  for (size_t i = 0; i < samples; ++i) {
+    drivers::Sample s;
+    s.channelCount = 32;
+    s.sequence = uint32_t(i);
+    s.deviceTimeNs = int64_t(i) * 1'000'000;
+    for (int c = 0; c < 32; ++c) s.counts[c] = moving ? rng() % 4096 : uint32_t(1500 + 37 * c);
+    session.samples.push_back(s);
+    session.sampleDevice.push_back(0);
+  }
+  const fs::path path = dir / (moving ? "moving.session" : "still.session");
+  auto saved = sim::saveSession(path, session);
+  EXPECT_TRUE(saved) << saved.error();
+  return path;
+}
+
+const fs::path kCalibration = fs::path(IMPS_SOURCE_DIR) / "examples/simple_biped.calibration.json";
+
+struct Rig {
+  sim::SteadyClock clock;
+  std::unique_ptr<LivePoseSource> source;
+  SkeletonCache skeleton;
+
+  Rig(const std::string& specText, std::optional<SampleMapper> mapper, LiveSourceOptions live)
+      : skeleton(test::exampleCharacter("simple_biped")) {
+    auto spec = drivers::parseDeviceSpec(specText);
+    EXPECT_TRUE(spec) << spec.error();
+    auto options = sim::armatureOptionsFromSpec(*spec);
+    EXPECT_TRUE(options) << options.error();
+    source = std::make_unique<LivePoseSource>(sim::simulatedOpener(*options, clock), drivers::sessionOptionsFor(*spec),
+                                              test::exampleCharacter("simple_biped"), specText, std::move(mapper),
+                                              std::move(live));
+  }
+  // Runs the "frame loop" for `ms` milliseconds (or until `until` says stop), polling every 5 ms.
+  template <class Until>
+  void run(int ms, Until until) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(ms);
+    while (std::chrono::steady_clock::now() < end && !until()) {
+      int64_t arrival = 0;
+      if (source->poll(skeleton, &arrival)) skeleton.update();
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  }
+  void run(int ms) {
+    run(ms, [] { return false; });
+  }
+};
+
+std::optional<SampleMapper> exampleCalibration() {
+  auto c = calibration::Calibration::readFile(kCalibration, &test::exampleCharacter("simple_biped"));
+  EXPECT_TRUE(c) << c.error().str();
+  return SampleMapper(std::move(*c), "simple_biped.calibration.json");
+}
+
+TEST(LiveRecording, RecordsEverySampleBitExactWithDeviceAndCalibration) {
+  TempDir dir;
+  const fs::path source = writeSourceSession(dir.path, true);
+  auto sent = sim::readSession(source);
+  ASSERT_TRUE(sent) << sent.error();
+  LiveSourceOptions live;
+  live.recordPath = (dir.path / "take.session").string();
+  Rig rig("sim:" + source.string() + "?rate=1000", exampleCalibration(), live);
+  EXPECT_TRUE(rig.source->recording());
+  rig.run(600);
+  const std::string message = rig.source->finish();
+  EXPECT_NE(message.find("recorded"), std::string::npos) << message;
+  EXPECT_NE(message.find("take.session"), std::string::npos) << message;
+
+  auto take = sim::readSession(live.recordPath);
+  ASSERT_TRUE(take) << take.error();
+  EXPECT_TRUE(take->recovery.closedCleanly);
+  ASSERT_EQ(take->devices.size(), 1u);
+  EXPECT_EQ(take->devices[0].channelCount, 32);
+  EXPECT_EQ(take->devices[0].bitsPerChannel, 12);
+  // The calibration in force, from the first sample on, exactly the file's.
+  ASSERT_EQ(take->calibrations.size(), 1u);
+  EXPECT_EQ(take->calibrations[0].firstSample, 0u);
+  auto recorded = calibration::Calibration::parse(take->calibrations[0].json, "recorded");
+  ASSERT_TRUE(recorded) << recorded.error().str();
+  EXPECT_EQ(recorded->toJson(), rig.source->calibration()->toJson());
+  // Every sample the simulator sent (~1 kHz for 0.6 s), in order, bit for bit: sample k of the stream is the
+  // source session's sample k (mod its length), and no sequence number is missing.
+  ASSERT_GT(take->samples.size(), 200u);
+  const size_t n = sent->samples.size();
+  for (size_t i = 0; i < take->samples.size(); ++i) {
+    const drivers::Sample& got = take->samples[i];
+    const drivers::Sample& want = sent->samples[got.sequence % n];
+    ASSERT_EQ(got.channelCount, 32);
+    for (int c = 0; c < 32; ++c) ASSERT_EQ(got.counts[c], want.counts[c]) << "sample " << i << " channel " << c;
+    if (i > 0) {
+      ASSERT_EQ(got.sequence, take->samples[i - 1].sequence + 1) << "a sample is missing before " << i;
+    }
+  }
+}
+
+TEST(LiveRecording, KeyStartsAndStopsATakeInTheRecordDirectory) {
+  TempDir dir;
+  const fs::path source = writeSourceSession(dir.path, true);
+  LiveSourceOptions live;
+  live.recordDir = dir.path.string();
+  Rig rig("sim:" + source.string() + "?rate=1000", std::nullopt, live);
+  rig.run(100);
+  EXPECT_FALSE(rig.source->recording());
+  const std::string started = rig.source->toggleRecording();
+  EXPECT_NE(started.find("recording to"), std::string::npos) << started;
+  EXPECT_NE(started.find("take-"), std::string::npos) << started;
+  rig.run(300);
+  HudInfo info;
+  rig.source->describe(info);
+  EXPECT_TRUE(info.recording);
+  EXPECT_GT(info.recordSamples, 0u);
+  EXPECT_GT(info.recordSeconds, 0.0);
+  const std::string stopped = rig.source->toggleRecording();
+  EXPECT_NE(stopped.find("recorded"), std::string::npos) << stopped;
+  EXPECT_FALSE(rig.source->recording());
+  size_t takes = 0;
+  for (const auto& e : fs::directory_iterator(dir.path)) {
+    if (e.path().filename().string().rfind("take-", 0) != 0) continue;
+    ++takes;
+    EXPECT_EQ(e.path().extension(), ".session");
+    auto take = sim::readSession(e.path());
+    ASSERT_TRUE(take) << take.error();
+    EXPECT_TRUE(take->recovery.closedCleanly);
+    EXPECT_GT(take->samples.size(), 100u);
+    EXPECT_TRUE(take->calibrations.empty());  // mapped by channel names: no calibration in force
+  }
+  EXPECT_EQ(takes, 1u);
+}
+
+TEST(LiveCalibration, StillArmatureCalibratesSavesAppliesAndRecords) {
+  TempDir dir;
+  const fs::path source = writeSourceSession(dir.path, false);
+  LiveSourceOptions live;
+  live.recordPath = (dir.path / "take.session").string();
+  live.calibrationPath = kCalibration.string();
+  live.calibrationOut = (dir.path / "new.calibration.json").string();
+  live.calibrate.delayMs = 0;
+  live.calibrate.windowMs = 150;
+  Rig rig("sim:" + source.string() + "?rate=1000", exampleCalibration(), live);
+  rig.run(3000, [&] { return rig.source->recording() && rig.skeleton.generation() > 2; });
+  const std::string started = rig.source->recalibrate();
+  EXPECT_NE(started.find("averaging"), std::string::npos) << started;
+  std::string message;
+  rig.run(5000, [&] { return !(message = rig.source->takeMessage()).empty(); });
+  ASSERT_NE(message.find("calibrated 32 channels"), std::string::npos) << message;
+  EXPECT_NE(message.find("new.calibration.json"), std::string::npos) << message;
+  // Saved: offsets are the still pose's counts; and in force.
+  auto saved = calibration::Calibration::readFile(live.calibrationOut, &test::exampleCharacter("simple_biped"));
+  ASSERT_TRUE(saved) << saved.error().str();
+  for (const calibration::ChannelMap& ch : saved->rigMap().channels) {
+    ASSERT_TRUE(ch.offset.has_value());
+    EXPECT_NEAR(*ch.offset, 1500 + 37 * ch.channel, 1e-6) << "channel " << ch.channel;
+  }
+  EXPECT_NE(saved->rigMap().info.find("\"window_ms\""), std::string::npos);
+  ASSERT_NE(rig.source->calibration(), nullptr);
+  EXPECT_EQ(rig.source->calibration()->toJson(), saved->toJson());
+  // The take records both calibrations, the new one from the samples after the re-calibration.
+  rig.source->finish();
+  auto take = sim::readSession(live.recordPath);
+  ASSERT_TRUE(take) << take.error();
+  ASSERT_EQ(take->calibrations.size(), 2u);
+  EXPECT_GT(take->calibrations[1].firstSample, 0u);
+  EXPECT_EQ(take->calibrations[1].json, saved->toJson());
+}
+
+TEST(LiveCalibration, NoisyWindowIsRejectedAndNothingIsWritten) {
+  TempDir dir;
+  const fs::path source = writeSourceSession(dir.path, false);
+  LiveSourceOptions live;
+  live.calibrationPath = kCalibration.string();
+  live.calibrationOut = (dir.path / "new.calibration.json").string();
+  live.calibrate.delayMs = 0;
+  live.calibrate.windowMs = 150;
+  // ±60 counts of 4096 is about ±5 degrees: far above the 0.5 degree limit.
+  Rig rig("sim:" + source.string() + "?rate=1000&noise=60", exampleCalibration(), live);
+  rig.run(3000, [&] { return rig.skeleton.generation() > 2; });
+  rig.source->recalibrate();
+  std::string message;
+  rig.run(5000, [&] { return !(message = rig.source->takeMessage()).empty(); });
+  EXPECT_NE(message.find("calibration rejected"), std::string::npos) << message;
+  EXPECT_NE(message.find("press k again"), std::string::npos) << message;
+  EXPECT_FALSE(fs::exists(live.calibrationOut));
+  // The calibration in force is unchanged.
+  auto original = calibration::Calibration::readFile(kCalibration, &test::exampleCharacter("simple_biped"));
+  ASSERT_TRUE(original);
+  EXPECT_EQ(rig.source->calibration()->toJson(), original->toJson());
+}
+
+TEST(LiveCalibration, KeyNeedsARigMapAndSomewhereToSave) {
+  TempDir dir;
+  const fs::path source = writeSourceSession(dir.path, false, 50);
+  Rig rig("sim:" + source.string() + "?rate=1000", std::nullopt, {});
+  rig.run(3000, [&] { return rig.skeleton.generation() > 1; });
+  EXPECT_NE(rig.source->recalibrate().find("needs a rig map"), std::string::npos);
+}
+
+TEST(CalibrationFlow, CollectsTheWindowAfterTheCountdown) {
+  CalibrationFlow flow({.delayMs = 1000, .windowMs = 500, .maxNoiseDeg = 0.5});
+  EXPECT_EQ(flow.phase(), CalibrationFlow::Phase::Idle);
+  flow.start(0);
+  EXPECT_EQ(flow.phase(), CalibrationFlow::Phase::Countdown);
+  EXPECT_NE(flow.progress(400'000'000).find("averaging in 0.6s"), std::string::npos) << flow.progress(400'000'000);
+  auto at = [](int64_t ms) {
+    drivers::Sample s;
+    s.channelCount = 1;
+    s.arrivalTimeNs = ms * 1'000'000;
+    return s;
+  };
+  const std::vector<drivers::Sample> early = {at(100), at(999)};
+  EXPECT_FALSE(flow.update(early, 999'000'000));
+  EXPECT_TRUE(flow.window().empty());
+  const std::vector<drivers::Sample> inside = {at(1000), at(1200), at(1499)};
+  EXPECT_FALSE(flow.update(inside, 1'300'000'000));
+  EXPECT_EQ(flow.phase(), CalibrationFlow::Phase::Averaging);
+  EXPECT_NE(flow.progress(1'300'000'000).find("3 samples"), std::string::npos);
+  const std::vector<drivers::Sample> late = {at(1500), at(1600)};
+  EXPECT_TRUE(flow.update(late, 1'600'000'000));
+  EXPECT_EQ(flow.phase(), CalibrationFlow::Phase::Complete);
+  EXPECT_EQ(flow.window().size(), 3u);
+  EXPECT_FALSE(flow.update(late, 1'700'000'000));  // only once
+  flow.reset();
+  EXPECT_EQ(flow.phase(), CalibrationFlow::Phase::Idle);
+  EXPECT_TRUE(flow.window().empty());
+}
+
+}  // namespace
+}  // namespace imps::app
