@@ -284,7 +284,10 @@ std::expected<HidInputLayout, std::string> hidArmatureLayout(const HidReportDesc
   size_t ignored = 0;
   for (const HidField& f : d.fields) {
     if (f.kind == HidReportKind::Feature && !layout.infoReportId) {
-      for (uint32_t e = 0; e < std::max<uint32_t>(f.count, 1); ++e)
+      // Elements past the last usage repeat it: look at most at one element per usage (Report Count may be
+      // 2^32 − 1 with a Report Size of 0, which makes no bytes but must not make 4 billion iterations).
+      const size_t distinct = std::min<size_t>(std::max<uint32_t>(f.count, 1), std::max<size_t>(f.usages.size(), 1));
+      for (uint32_t e = 0; e < distinct; ++e)
         if (f.usageOf(e) == hidUsage(kImpsHidUsagePage, kImpsUsageInfo)) {
           layout.infoReportId = f.reportId;
           layout.infoReportSize = d.report(HidReportKind::Feature, f.reportId)->bytes(d.usesReportIds);
@@ -292,6 +295,9 @@ std::expected<HidInputLayout, std::string> hidArmatureLayout(const HidReportDesc
         }
     }
     if (f.kind != HidReportKind::Input || f.reportId != *best) continue;
+    // Only 1..32-bit elements can be channels or counters. This also bounds the loop: the report size limit
+    // caps Report Count at 32760 for them, while a 0-bit field may declare 2^32 − 1 elements.
+    if (f.bitSize < 1 || f.bitSize > 32) continue;
     for (uint32_t e = 0; e < f.count; ++e) {
       const uint32_t usage = f.usageOf(e);
       const uint32_t offset = f.bitOffset + e * f.bitSize;

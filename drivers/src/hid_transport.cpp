@@ -169,7 +169,10 @@ std::expected<std::unique_ptr<HidTransport>, std::string> HidTransport::open(uin
                                                                         hex4(productId);
   DeviceInfo info = hidFallbackInfo(*layout, name, entry.serialNumber, bcdVersion(entry.releaseNumber));
   if (layout->infoReportId) {
-    std::vector<uint8_t> report(std::max<size_t>(layout->infoReportSize, 2), 0);
+    // hidapi's feature-report buffer always starts with the report number, 0 for a device without report IDs
+    // (whose layout size does not count that byte).
+    const size_t bytes = layout->infoReportSize + (layout->usesReportIds ? 0 : 1);
+    std::vector<uint8_t> report(std::max<size_t>(bytes, 2), 0);
     report[0] = *layout->infoReportId;
     const int n = hid_get_feature_report(t->impl_->device, report.data(), report.size());
     if (n < 0) {
@@ -177,7 +180,7 @@ std::expected<std::unique_ptr<HidTransport>, std::string> HidTransport::open(uin
                                  hidError(t->impl_->device), "); using the USB strings"));
     } else {
       report.resize(static_cast<size_t>(n));
-      auto fromDevice = parseHidInfoReport(report, layout->usesReportIds);
+      auto fromDevice = parseHidInfoReport(report, /*usesReportIds=*/true);  // the number byte is always there
       if (!fromDevice) {
         t->warnings_.push_back(cat(entry.path, ": warning: ", fromDevice.error(), "; using the USB strings"));
       } else if (fromDevice->channelCount != static_cast<int>(layout->channels.size())) {

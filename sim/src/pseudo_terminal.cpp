@@ -18,8 +18,8 @@ std::expected<PseudoTerminal, std::string> PseudoTerminal::open() {
   pty.master_ = ::posix_openpt(O_RDWR | O_NOCTTY | O_CLOEXEC);
   if (pty.master_ < 0) return fail("cannot create a pseudo-terminal");
   if (::grantpt(pty.master_) != 0 || ::unlockpt(pty.master_) != 0) return fail("cannot unlock the pseudo-terminal");
-  const char* name = ::ptsname(pty.master_);
-  if (name == nullptr) return fail("cannot name the pseudo-terminal");
+  char name[128];
+  if (::ptsname_r(pty.master_, name, sizeof name) != 0) return fail("cannot name the pseudo-terminal");
   pty.slavePath_ = name;
   pty.holder_ = ::open(name, O_RDWR | O_NOCTTY | O_CLOEXEC);
   if (pty.holder_ < 0) return fail("cannot open the pseudo-terminal's slave end");

@@ -308,6 +308,21 @@ TEST(HidReportDescriptor, MoreThan64ChannelsKeepsTheFirst64AndWarns) {
   EXPECT_NE(l.warnings[0].find("70 channels"), std::string::npos) << l.warnings[0];
 }
 
+// A 0-bit field may declare 2^32 - 1 elements (it takes no bytes, so the size limit does not stop it). Laying out
+// the report must not visit them one by one: that took minutes per 24-byte descriptor (fuzz seeds
+// hid_report/zero_size_huge_count_*). Ignored like any other non-channel field; a Feature one holds no INFO usage.
+TEST(HidReportDescriptor, ZeroSizeFieldsWithHugeCountsAreSkippedQuickly) {
+  for (const uint8_t main : {uint8_t{0x81}, uint8_t{0xB1}}) {  // Input, Feature
+    const std::vector<uint8_t> desc = {0x05, 0x01, 0x09, 0x30, 0x15, 0x00, 0x26, 0xFF, 0x00, 0x75, 0x08, 0x95,
+                                       0x01, 0x81, 0x02, 0x75, 0x00, 0x97, 0xFF, 0xFF, 0xFF, 0xFF, main, 0x02};
+    HidInputLayout l = layoutOf(desc);
+    ASSERT_EQ(l.channels.size(), 1u);
+    EXPECT_EQ(l.channels[0].name, "X");
+    EXPECT_EQ(l.reportSize, 1u);
+    EXPECT_FALSE(l.infoReportId);
+  }
+}
+
 TEST(HidReportCodec, InfoFeatureReportRoundTrips) {
   DeviceInfo info;
   info.name = "IMPS Monkey HID";

@@ -404,7 +404,11 @@ TEST(UsbSession, UnplugMidStreamKeepsTheLastPoseAndReconnectsOnReplug) {
   ASSERT_TRUE(hotplug->waitForPresent(5'000));
 
   PoseMailbox mailbox;
-  DeviceSession session(usbOpener(transportOptions(), hotplug), mailbox, usbSessionOptions("usb:1209:0001?rate=200"));
+  DeviceSessionOptions o = usbSessionOptions("usb:1209:0001?rate=200");
+  // lastError() is checked after the loss, before the first reopen attempt replaces it with "not attached": with
+  // the suite's 50 ms interval a loaded machine (sanitizers, parallel jobs) missed that window.
+  o.reconnectIntervalMs = 500;
+  DeviceSession session(usbOpener(transportOptions(), hotplug), mailbox, o);
   session.start();
   ASSERT_TRUE(session.waitForState(ConnectionState::Streaming, 10'000)) << session.lastError();
   ASSERT_TRUE(eventually([&] { return session.stats().samples >= 50; })) << session.lastError();
