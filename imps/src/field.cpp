@@ -222,46 +222,57 @@ inline float kernelDistance(const Primitive& p, float x, float y, float z) {
   return 0.0f;
 }
 
+inline float metaballDistanceGradient(const Primitive& p, float x, float y, float z, float& gx, float& gy, float& gz) {
+  const float vx = x - p.center.x, vy = y - p.center.y, vz = z - p.center.z;
+  const float inv = 2.0f / (p.radius * p.radius);
+  gx = inv * vx;
+  gy = inv * vy;
+  gz = inv * vz;
+  return (vx * vx + vy * vy + vz * vz) / (p.radius * p.radius);
+}
+
+inline float ellipsoidDistanceGradient(const Primitive& p, float x, float y, float z, float& gx, float& gy, float& gz) {
+  const glm::mat3& w = p.worldToLocal;
+  const float vx = x - p.center.x, vy = y - p.center.y, vz = z - p.center.z;
+  const float qx = w[0][0] * vx + w[1][0] * vy + w[2][0] * vz;
+  const float qy = w[0][1] * vx + w[1][1] * vy + w[2][1] * vz;
+  const float qz = w[0][2] * vx + w[1][2] * vy + w[2][2] * vz;
+  gx = 2.0f * (w[0][0] * qx + w[0][1] * qy + w[0][2] * qz);
+  gy = 2.0f * (w[1][0] * qx + w[1][1] * qy + w[1][2] * qz);
+  gz = 2.0f * (w[2][0] * qx + w[2][1] * qy + w[2][2] * qz);
+  return qx * qx + qy * qy + qz * qz;
+}
+
+inline float lineSegDistanceGradient(const Primitive& p, float x, float y, float z, float& gx, float& gy, float& gz) {
+  const float vx = x - p.p1.x, vy = y - p.p1.y, vz = z - p.p1.z;
+  const float vv = vx * vx + vy * vy + vz * vz;
+  const float t = vx * p.axis.x + vy * p.axis.y + vz * p.axis.z;
+  const float rho2 = std::max(0.0f, vv - t * t);
+  const float a = p.r1 + p.slope * t;
+  const float safeA = a > 0.0f ? a : 1.0f;
+  const float sInside = std::min(std::max(t + p.slope * rho2 / safeA, 0.0f), p.length);
+  const float wx = x - p.p2.x, wy = y - p.p2.y, wz = z - p.p2.z;
+  const float sApex = vv / (p.r1 * p.r1) <= (wx * wx + wy * wy + wz * wz) / (p.r2 * p.r2) ? 0.0f : p.length;
+  const float s = a > 0.0f ? sInside : sApex;
+  const float ux = x - (p.p1.x + s * p.axis.x), uy = y - (p.p1.y + s * p.axis.y), uz = z - (p.p1.z + s * p.axis.z);
+  const float r = p.r1 + p.slope * s;
+  const float inv = 2.0f / (r * r);
+  gx = inv * ux;
+  gy = inv * uy;
+  gz = inv * uz;
+  return (ux * ux + uy * uy + uz * uz) / (r * r);
+}
+
 // kernelDistance() (the very same arithmetic, so the same bits) and its gradient in x, for sample() and samples().
 // Line segment: by the envelope theorem the gradient is that of the sphere at the closest parameter s.
 inline float kernelDistanceGradient(const Primitive& p, const glm::vec3& x, glm::vec3& gradient) {
+  float d = 0.0f;
   switch (p.kind) {
-    case PrimitiveKind::Metaball: {
-      const float vx = x.x - p.center.x, vy = x.y - p.center.y, vz = x.z - p.center.z;
-      const float inv = 2.0f / (p.radius * p.radius);
-      gradient = glm::vec3(inv * vx, inv * vy, inv * vz);
-      return (vx * vx + vy * vy + vz * vz) / (p.radius * p.radius);
-    }
-    case PrimitiveKind::Ellipsoid: {
-      const glm::mat3& w = p.worldToLocal;
-      const float vx = x.x - p.center.x, vy = x.y - p.center.y, vz = x.z - p.center.z;
-      const float qx = w[0][0] * vx + w[1][0] * vy + w[2][0] * vz;
-      const float qy = w[0][1] * vx + w[1][1] * vy + w[2][1] * vz;
-      const float qz = w[0][2] * vx + w[1][2] * vy + w[2][2] * vz;
-      gradient = 2.0f * glm::vec3(w[0][0] * qx + w[0][1] * qy + w[0][2] * qz, w[1][0] * qx + w[1][1] * qy + w[1][2] * qz,
-                                  w[2][0] * qx + w[2][1] * qy + w[2][2] * qz);
-      return qx * qx + qy * qy + qz * qz;
-    }
-    case PrimitiveKind::LineSeg: {
-      const float vx = x.x - p.p1.x, vy = x.y - p.p1.y, vz = x.z - p.p1.z;
-      const float vv = vx * vx + vy * vy + vz * vz;
-      const float t = vx * p.axis.x + vy * p.axis.y + vz * p.axis.z;
-      const float rho2 = std::max(0.0f, vv - t * t);
-      const float a = p.r1 + p.slope * t;
-      const float safeA = a > 0.0f ? a : 1.0f;
-      const float sInside = std::min(std::max(t + p.slope * rho2 / safeA, 0.0f), p.length);
-      const float wx = x.x - p.p2.x, wy = x.y - p.p2.y, wz = x.z - p.p2.z;
-      const float sApex = vv / (p.r1 * p.r1) <= (wx * wx + wy * wy + wz * wz) / (p.r2 * p.r2) ? 0.0f : p.length;
-      const float s = a > 0.0f ? sInside : sApex;
-      const float ux = x.x - (p.p1.x + s * p.axis.x), uy = x.y - (p.p1.y + s * p.axis.y), uz = x.z - (p.p1.z + s * p.axis.z);
-      const float r = p.r1 + p.slope * s;
-      const float inv = 2.0f / (r * r);
-      gradient = glm::vec3(inv * ux, inv * uy, inv * uz);
-      return (ux * ux + uy * uy + uz * uz) / (r * r);
-    }
+    case PrimitiveKind::Metaball: d = metaballDistanceGradient(p, x.x, x.y, x.z, gradient.x, gradient.y, gradient.z); break;
+    case PrimitiveKind::Ellipsoid: d = ellipsoidDistanceGradient(p, x.x, x.y, x.z, gradient.x, gradient.y, gradient.z); break;
+    case PrimitiveKind::LineSeg: d = lineSegDistanceGradient(p, x.x, x.y, x.z, gradient.x, gradient.y, gradient.z); break;
   }
-  gradient = glm::vec3(0.0f);
-  return 0.0f;
+  return d;
 }
 
 // Blend term kernels (blend.h's BlendFunction::term, written for vectorisation).
@@ -315,6 +326,44 @@ IMPS_VECTOR_CLONES void distanceLoop(const Primitive& p, const float* xs, const 
 template <float (*Term)(float, float)>
 IMPS_VECTOR_CLONES void termLoop(float param, size_t n, float* t) {
   for (size_t i = 0; i < n; ++i) t[i] = Term(param, t[i]);
+}
+
+template <float (*DistanceGradient)(const Primitive&, float, float, float, float&, float&, float&)>
+IMPS_VECTOR_CLONES void distanceGradientLoop(const Primitive& p, const float* __restrict xs, const float* __restrict ys,
+                                             const float* __restrict zs, size_t n, float* __restrict d,
+                                             float* __restrict gx, float* __restrict gy, float* __restrict gz) {
+  const Primitive local = p;  // a local copy: the stores below cannot alias its fields, so the loop vectorises
+  for (size_t i = 0; i < n; ++i) {
+    float x, y, z;
+    d[i] = DistanceGradient(local, xs[i], ys[i], zs[i], x, y, z);
+    gx[i] = x;
+    gy[i] = y;
+    gz[i] = z;
+  }
+}
+
+// samples()' per-candidate step: the points flagged in `use` add the candidate's gradient (slope x distance
+// gradient), colour and weight, and take it as owner where its term is the largest so far. Selects, not branches.
+IMPS_VECTOR_CLONES void accumulateGradientColour(size_t n, const uint8_t* __restrict use, const float* __restrict t,
+                                                 const float* __restrict slope, const float* __restrict dgx,
+                                                 const float* __restrict dgy, const float* __restrict dgz,
+                                                 glm::vec3 c, int32_t candidate, float* __restrict gx,
+                                                 float* __restrict gy, float* __restrict gz, float* __restrict cr,
+                                                 float* __restrict cg, float* __restrict cb, float* __restrict weight,
+                                                 float* __restrict bestWeight, int32_t* __restrict owner) {
+  for (size_t i = 0; i < n; ++i) {
+    const bool u = use[i] != 0;
+    gx[i] = u ? gx[i] + slope[i] * dgx[i] : gx[i];
+    gy[i] = u ? gy[i] + slope[i] * dgy[i] : gy[i];
+    gz[i] = u ? gz[i] + slope[i] * dgz[i] : gz[i];
+    cr[i] = u ? cr[i] + t[i] * c.x : cr[i];
+    cg[i] = u ? cg[i] + t[i] * c.y : cg[i];
+    cb[i] = u ? cb[i] + t[i] * c.z : cb[i];
+    weight[i] = u ? weight[i] + t[i] : weight[i];
+    const bool better = u & (t[i] > bestWeight[i]);
+    bestWeight[i] = better ? t[i] : bestWeight[i];
+    owner[i] = better ? candidate : owner[i];
+  }
 }
 
 }  // namespace
@@ -529,33 +578,61 @@ void Field::samples(std::span<const glm::vec3> points, std::span<FieldSample> ou
     out[i].value = std::max(best, 0.0f);
     out[i].color = glm::vec3(0.0f);
   }
-  // Pass 2: gradient, colour and owner from the members of each point's winning set.
-  std::vector<float>& weightSum = scratch.term;  // reused: per-point total weight
-  std::fill(weightSum.begin(), weightSum.begin() + long(n), 0.0f);
-  thread_local std::vector<float> bestWeight;
+  // Pass 2: gradient, colour and owner from the members of each point's winning set, one candidate at a time over
+  // every point (vectorised): its distance gradient everywhere, then the points where it is a member of the
+  // winning set with a positive term take its contribution. Per point this is sample()'s arithmetic in sample()'s
+  // order (candidates ascending), so the bits are the same.
+  thread_local std::vector<float> d, dgx, dgy, dgz, gx, gy, gz, cr, cg, cb, weight, bestWeight;
+  thread_local std::vector<int32_t> owner;
+  thread_local std::vector<uint8_t> use, isMember;
+  for (auto* v : {&d, &dgx, &dgy, &dgz}) v->resize(n);
+  for (auto* v : {&gx, &gy, &gz, &cr, &cg, &cb, &weight}) v->assign(n, 0.0f);
   bestWeight.assign(n, -1.0f);
+  owner.assign(n, -1);
+  use.resize(n);
+  isMember.resize(sets);
+  const float *xs = scratch.xs.data(), *ys = scratch.ys.data(), *zs = scratch.zs.data();  // accumulate()'s SoA copy
   for (size_t k = 0; k < cand.size(); ++k) {
     const uint32_t first = scratch.memberOffsets[k], last = scratch.memberOffsets[k + 1];
     if (first == last) continue;
     const uint32_t p = cand[k];
     const float* t = scratch.terms.data() + k * n;
+    std::fill(isMember.begin(), isMember.end(), uint8_t(0));
+    for (uint32_t m = first; m < last; ++m) isMember[scratch.memberSets[m]] = 1;
+    bool any = false;
     for (size_t i = 0; i < n; ++i) {
-      if (t[i] <= 0.0f) continue;
-      bool member = false;
-      for (uint32_t m = first; m < last && !member; ++m) member = scratch.memberSets[m] == scratch.winner[i];
-      if (!member) continue;
-      glm::vec3 gd;
-      const float d = kernelDistanceGradient(primitives_[p], points[i], gd);  // sample()'s arithmetic: same bits
-      out[i].gradient += kernelTermSlope(blend_, params_[p], d, t[i]) * gd;
-      out[i].color += t[i] * colors_[p];
-      weightSum[i] += t[i];
-      if (t[i] > bestWeight[i]) {
-        bestWeight[i] = t[i];
-        out[i].owner = int(p);
-      }
+      use[i] = t[i] > 0.0f && isMember[scratch.winner[i]];
+      any |= use[i] != 0;
     }
+    if (!any) continue;
+    const Primitive& prim = primitives_[p];
+    switch (prim.kind) {
+      case PrimitiveKind::Metaball:
+        distanceGradientLoop<metaballDistanceGradient>(prim, xs, ys, zs, n, d.data(), dgx.data(), dgy.data(), dgz.data());
+        break;
+      case PrimitiveKind::Ellipsoid:
+        distanceGradientLoop<ellipsoidDistanceGradient>(prim, xs, ys, zs, n, d.data(), dgx.data(), dgy.data(), dgz.data());
+        break;
+      case PrimitiveKind::LineSeg:
+        distanceGradientLoop<lineSegDistanceGradient>(prim, xs, ys, zs, n, d.data(), dgx.data(), dgy.data(), dgz.data());
+        break;
+    }
+    const float param = params_[p];
+    const glm::vec3 c = colors_[p];
+    if (blend_.kind == BlendKind::Exponential) {
+      for (size_t i = 0; i < n; ++i) d[i] = param * t[i];  // kernelTermSlope(): no second exponential
+    } else {
+      for (size_t i = 0; i < n; ++i) d[i] = kernelTermSlope(blend_, param, d[i], t[i]);
+    }
+    accumulateGradientColour(n, use.data(), t, d.data(), dgx.data(), dgy.data(), dgz.data(), c, int32_t(p), gx.data(),
+                             gy.data(), gz.data(), cr.data(), cg.data(), cb.data(), weight.data(), bestWeight.data(),
+                             owner.data());
   }
-  for (size_t i = 0; i < n; ++i) out[i].color = weightSum[i] > 0.0f ? out[i].color / weightSum[i] : glm::vec3(0.8f);
+  for (size_t i = 0; i < n; ++i) {
+    out[i].gradient = glm::vec3(gx[i], gy[i], gz[i]);
+    out[i].color = weight[i] > 0.0f ? glm::vec3(cr[i], cg[i], cb[i]) / weight[i] : glm::vec3(0.8f);
+    out[i].owner = owner[i];
+  }
 }
 
 float Field::upperBound(const Box& box, const FieldScratch& scratch) const {
