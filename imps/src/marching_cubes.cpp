@@ -299,6 +299,7 @@ inline int ownedEdgeIndex(int axis, int i, int j, int k) { return axis * kBlock 
 struct MarchingCubes::State {
   std::vector<BlockResult> blocks;
   std::vector<uint32_t> binOffsets, binMembers;
+  std::vector<uint32_t> work;  // the blocks a parallel phase visits
 };
 
 MarchingCubes::MarchingCubes() : state_(std::make_unique<State>()) {}
@@ -473,9 +474,18 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
   // of squared distances), so the first interpolation is already near the root. F is exactly 0 beyond every
   // support; clamping at the smallest non-zero term keeps ln F finite.
   auto transform = [&](float v) { return logSpace ? lnPositive(std::max(v, kExponentialCutoff)) - logIso : v - iso; };
-  parallelFor(blockCount, threads, [&](size_t b) {
+  // Only blocks with candidates (or thin-feature vertices) can hold surface; spreading just those over the threads
+  // balances the load (surface blocks cluster in index order).
+  std::vector<uint32_t>& work = st.work;
+  work.clear();
+  for (size_t b = 0; b < blockCount; ++b) {
+    if (st.binOffsets[b + 1] > st.binOffsets[b] || forced[b]) work.push_back(uint32_t(b));
+    else st.blocks[b].sampled = st.blocks[b].hasSurface = false;
+  }
+  parallelFor(work.size(), threads, [&](size_t w) {
     thread_local FieldScratch scratch;
     thread_local std::vector<glm::vec3> points;
+    const size_t b = work[w];
     BlockResult& r = st.blocks[b];
     r.sampled = r.hasSurface = false;
     r.positions.clear();
@@ -661,16 +671,20 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
   phaseMs[2] = lap();
   // 4. Global vertex numbering in block order.
   uint32_t total = 0;
-  for (BlockResult& r : st.blocks) {
+  work.clear();  // now: the blocks with surface
+  for (size_t b = 0; b < blockCount; ++b) {
+    BlockResult& r = st.blocks[b];
     r.base = total;
-    if (r.hasSurface) total += uint32_t(r.positions.size() / 3);
+    if (!r.hasSurface) continue;
+    total += uint32_t(r.positions.size() / 3);
+    work.push_back(uint32_t(b));
   }
 
   // 5. Triangles: each cell's case, ambiguous faces decided from their four samples, edges mapped to the owning
   // block's vertex.
-  parallelFor(blockCount, threads, [&](size_t b) {
+  parallelFor(work.size(), threads, [&](size_t w) {
+    const size_t b = work[w];
     BlockResult& r = st.blocks[b];
-    if (!r.hasSurface) return;
     const int bx = int(b % size_t(g.blocks.x)), by = int((b / size_t(g.blocks.x)) % size_t(g.blocks.y)),
               bz = int(b / (size_t(g.blocks.x) * size_t(g.blocks.y)));
     r.centrePositions.clear();
