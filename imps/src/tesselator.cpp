@@ -79,6 +79,7 @@ void findNeighbours(Tesselator::State& s, const TesselatorOptions& o) {
     permute(s.owner, s.tmpI);
     permute(s.id, s.tmpU);
     s.hash.adoptOrder();
+    s.cacheValid = false;
   }
   // Everything within the list radius, in the hash's visiting order (deterministic); only when more than
   // kMaxNeighbours are found are they sorted by (distance, index) and the nearest kept.
@@ -214,6 +215,7 @@ Tesselator::~Tesselator() = default;
 void Tesselator::reset() {
   s_->resizeParticles(0);
   s_->nbrValid = false;
+  s_->cacheValid = false;
   s_->lastGeneration = ~0ull;
   stats_ = {};
 }
@@ -235,14 +237,17 @@ void Tesselator::update(const SkeletonCache& skeleton) {
     for (size_t i = 0; i < s.size(); ++i)
       if (s.owner[i] >= 0 && size_t(s.owner[i]) < prims) s.pos[i] = d[size_t(s.owner[i])].apply(s.pos[i]);
     s.nbrValid = false;
+    s.cacheValid = false;
   }
   s.lastGeneration = skeleton.generation();
+  s.fieldStamp = skeleton.generation();
   stats_.simulateMs = msSince(t0);
   step(skeleton.field(), &skeleton);
 }
 
 void Tesselator::update(const Field& field) {
   s_->character = nullptr;
+  s_->fieldStamp = ~0ull;
   stats_.simulateMs = 0.0;
   step(field, nullptr);
 }
@@ -252,11 +257,11 @@ void Tesselator::step(const Field& field, const SkeletonCache*) {
   const TesselatorOptions& o = options_;
   const float h = o.desiredRadius, invH = 1.0f / h;
   const float iso = field.iso();
-  s.field = &field;
   auto t0 = Clock::now();
 
   if (s.size() == 0) {
     s.nbrValid = false;
+    s.cacheValid = false;
     seedParticles(s, field, o);
     if (s.size() > 0) ++stats_.reseeds;
   }
@@ -264,6 +269,11 @@ void Tesselator::step(const Field& field, const SkeletonCache*) {
   // 2. Spatial sort and neighbour list (unless nothing moved since the last triangulation built them).
   if (!s.nbrValid) findNeighbours(s, o);
   const size_t n = s.size();
+  // The vertex pass of the last triangulate() sampled the field at exactly these positions (nothing moved since) and
+  // the field is the same: reuse its samples.
+  const bool cached = s.cacheValid && s.field == &field && s.fieldStamp != ~0ull && s.cacheStamp == s.fieldStamp &&
+                      s.cacheValue.size() == n;
+  s.field = &field;
   s.vel.resize(n);
   s.fuse.resize(n * kMaxFuse);
   s.fuseCount.resize(n);
@@ -283,7 +293,7 @@ void Tesselator::step(const Field& field, const SkeletonCache*) {
   parallelFor(chunks, o.numThreads, [&](size_t c) {
     const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
     FieldScratch& scratch = s.scratch[c];
-    field.prepare(chunkBox(s.pos, begin, end, 0.0f), scratch);
+    if (!cached) field.prepare(chunkBox(s.pos, begin, end, 0.0f), scratch);
     float nd2[kMaxNeighbours];
     uint32_t ni[kMaxNeighbours];
     for (size_t i = begin; i < end; ++i) {
@@ -295,7 +305,14 @@ void Tesselator::step(const Field& field, const SkeletonCache*) {
         s.dead[i] = 1;
         continue;
       }
-      const FieldSample fs = field.sample(p, scratch);
+      FieldSample fs;
+      if (cached) {
+        fs.value = s.cacheValue[i];
+        fs.gradient = s.cacheGrad[i];
+        fs.owner = s.cacheOwner[i];
+      } else {
+        fs = field.sample(p, scratch);
+      }
       const glm::vec3 g = fs.gradient;
       const float g2 = glm::dot(g, g);
       if (!(g2 > 1e-20f) || !std::isfinite(fs.value) ||
@@ -417,6 +434,7 @@ void Tesselator::step(const Field& field, const SkeletonCache*) {
     }
   });
   s.nbrValid = false;  // particles moved
+  s.cacheValid = false;
   stats_.simulateMs += msSince(t0);
 
   // 5. Additions and deletions (sequential, particle order): strays, fusion, death, fission.

@@ -31,14 +31,25 @@ namespace {
 // Newton steps, is no vertex this render: it was carried into a limb it does not blend with and dies as a stray.
 constexpr float kVertexOff = 0.5f;
 constexpr size_t kFanCandidates = 32;  // the nearest this many agreeing neighbours cut a particle's cell
+constexpr float kNearFan = 1.5f;       // fan candidates nearer than this (desiredRadius) are sorted up front
 
 // The Voronoi cell of the origin among 2D points (halfplane clipping), as the cyclic list of the labels of its
 // edges, counter-clockwise; label -1 marks the initial bounding octagon.
 struct Cell {
   static constexpr int kMax = 64;
-  float x[kMax], y[kMax];
-  int32_t lab[kMax];
+  // Two buffers, swapped by each cutting clip (no copy back); x, y, lab point at the current one.
+  float bx[2][kMax], by[2][kMax];
+  int32_t bl[2][kMax];
+  float* x = bx[0];
+  float* y = by[0];
+  int32_t* lab = bl[0];
+  int cur = 0;
   int n = 0;
+  float rad2 = 0.0f;  // the largest squared corner distance (maintained by init and clip)
+
+  Cell() = default;
+  Cell(const Cell&) = delete;
+  Cell& operator=(const Cell&) = delete;
 
   void init(float r) {
     // The unit octagon's corners, computed once.
@@ -54,6 +65,7 @@ struct Cell {
       y[k] = r * octagon.s[k];
       lab[k] = -1;
     }
+    rad2 = radius2();
   }
   float radius2() const {
     float m = 0.0f;
@@ -64,7 +76,7 @@ struct Cell {
   // Returns whether anything was cut.
   bool clip(float qx, float qy, int32_t label) {
     const float h = 0.5f * (qx * qx + qy * qy);
-    // Most candidates do not reach the cell: test every corner first, and copy only when something is cut.
+    // Most candidates do not reach the cell: test every corner first, and write only when something is cut.
     float dist[kMax];
     bool cuts = false;
     for (int k = 0; k < n; ++k) {
@@ -72,27 +84,33 @@ struct Cell {
       cuts |= dist[k] > 0.0f;
     }
     if (!cuts) return false;
-    float ox[kMax], oy[kMax];
-    int32_t ol[kMax];
+    float* ox = bx[1 - cur];
+    float* oy = by[1 - cur];
+    int32_t* ol = bl[1 - cur];
     int m = 0;
+    float r2 = 0.0f;  // the new corners' largest squared distance, as they are written
+    auto put = [&](float px, float py, int32_t l) {
+      ox[m] = px, oy[m] = py, ol[m++] = l;
+      r2 = std::max(r2, px * px + py * py);
+    };
     for (int k = 0; k < n && m < kMax - 2; ++k) {
       const int k1 = k + 1 == n ? 0 : k + 1;
       const float dc = dist[k], dn = dist[k1];
       if (dc <= 0.0f) {
-        ox[m] = x[k], oy[m] = y[k], ol[m++] = lab[k];
+        put(x[k], y[k], lab[k]);
         if (dn > 0.0f) {
           const float t = dc / (dc - dn);
-          ox[m] = x[k] + t * (x[k1] - x[k]), oy[m] = y[k] + t * (y[k1] - y[k]), ol[m++] = label;
+          put(x[k] + t * (x[k1] - x[k]), y[k] + t * (y[k1] - y[k]), label);
         }
       } else if (dn <= 0.0f) {
         const float t = dc / (dc - dn);
-        ox[m] = x[k] + t * (x[k1] - x[k]), oy[m] = y[k] + t * (y[k1] - y[k]), ol[m++] = lab[k];
+        put(x[k] + t * (x[k1] - x[k]), y[k] + t * (y[k1] - y[k]), lab[k]);
       }
     }
     n = m;
-    std::copy(ox, ox + m, x);
-    std::copy(oy, oy + m, y);
-    std::copy(ol, ol + m, lab);
+    cur = 1 - cur;
+    x = ox, y = oy, lab = ol;
+    rad2 = r2;
     return true;
   }
 };
@@ -127,31 +145,39 @@ bool fanHas(const Tesselator::State& s, uint32_t a, uint32_t b, uint32_t c) {
   return false;
 }
 
-// Collects the boundary loops' directed edges: b -> a for every used a -> b whose twin is missing.
+// Collects the boundary loops' directed edges: b -> a for every used a -> b whose twin is missing. Only vertices that
+// countBoundary() flagged (s.openOut) have such edges; they are visited in particle order.
 size_t collectHoles(Tesselator::State& s) {
   const size_t n = s.size();
   s.holeCount.assign(n, 0);
   size_t count = 0;
-  for (uint32_t a = 0; a < n; ++a)
+  for (uint32_t a = 0; a < n; ++a) {
+    if (!s.openOut[a]) continue;
     for (size_t k = 0; k < s.heCount[a]; ++k) {
       const uint32_t b = s.heTo[size_t(a) * kMaxHalfEdges + k];
       if (hasHalfEdge(s, b, a)) continue;
       ++count;
       if (s.holeCount[b] < 4) s.holeTo[size_t(b) * 4 + s.holeCount[b]++] = a;
     }
+  }
   return count;
 }
 
 // The number of directed edges whose twin is missing (boundary edges), counted in parallel: the common case, a
-// closed mesh, then needs no sequential pass.
-size_t countBoundary(const Tesselator::State& s, int threads) {
+// closed mesh, then needs no sequential pass. Flags in s.openOut the vertices with such an outgoing edge.
+size_t countBoundary(Tesselator::State& s, int threads) {
   const size_t n = s.size(), chunks = (n + kChunk - 1) / kChunk;
   std::vector<size_t> counts(chunks, 0);
+  s.openOut.resize(n);
   parallelFor(chunks, threads, [&](size_t c) {
     const uint32_t begin = uint32_t(c * kChunk), end = uint32_t(std::min(n, (c + 1) * kChunk));
     size_t count = 0;
-    for (uint32_t a = begin; a < end; ++a)
-      for (size_t k = 0; k < s.heCount[a]; ++k) count += hasHalfEdge(s, s.heTo[size_t(a) * kMaxHalfEdges + k], a) ? 0 : 1;
+    for (uint32_t a = begin; a < end; ++a) {
+      size_t open = 0;
+      for (size_t k = 0; k < s.heCount[a]; ++k) open += hasHalfEdge(s, s.heTo[size_t(a) * kMaxHalfEdges + k], a) ? 0 : 1;
+      s.openOut[a] = open > 0 ? 1 : 0;
+      count += open;
+    }
     counts[c] = count;
   });
   size_t total = 0;
@@ -201,6 +227,9 @@ void Tesselator::triangulate(Mesh& mesh) {
   s.vpos.resize(n);
   s.vcol.resize(n);
   s.vok.resize(n);
+  s.cacheValue.resize(n);
+  s.cacheGrad.resize(n);
+  s.cacheOwner.resize(n);
 
   // A. Vertices, normals, colours.
   const float colorExp = 1.0f / o.colorWidth;
@@ -219,6 +248,11 @@ void Tesselator::triangulate(Mesh& mesh) {
       bool converged = false;
       for (int it = 0; it < 3; ++it) {
         fs = field.sample(v, scratch);
+        if (it == 0) {  // at the particle itself: the next compute phase reuses it if nothing moves before it
+          s.cacheValue[i] = fs.value;
+          s.cacheGrad[i] = fs.gradient;
+          s.cacheOwner[i] = fs.owner;
+        }
         const float g2 = glm::dot(fs.gradient, fs.gradient);
         // A particle this far off (carried into a limb it does not blend with, about to die as a stray) would
         // make a spike: it is left out of this render's triangulation and the gap is filled around it.
@@ -264,6 +298,9 @@ void Tesselator::triangulate(Mesh& mesh) {
     }
   });
 
+  s.cacheValid = true;
+  s.cacheStamp = s.fieldStamp;
+
   // B. Fans: Voronoi cells in each tangent plane. Candidates come from the neighbour list (built at the particles,
   // at least kFanRadius desiredRadius wide); distances are re-measured between the projected vertices.
   s.fan.resize(n * kMaxFan);
@@ -272,15 +309,19 @@ void Tesselator::triangulate(Mesh& mesh) {
   parallelFor(chunks, o.numThreads, [&](size_t c) {
     const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
     Cell cell;
-    float nd2[kFanCandidates];
-    uint32_t ni[kFanCandidates];
+    uint64_t keys[kMaxNeighbours], farKeys[kMaxNeighbours];
+    const float nearT2 = kNearFan * kNearFan * h * h;
     for (size_t i = begin; i < end; ++i) {
       const glm::vec3 p = s.vpos[i], nn = s.nrm[i];
       if (!s.vok[i]) {
         s.fanCount[i] = 0;
         continue;
       }
-      size_t cnt = 0;
+      // Candidates: agreeing neighbours within rT, by (distance, index) (one 64-bit key: d2 > 0 orders like its
+      // bits), the nearest kFanCandidates. Only the near ones (within kNearFan) are sorted up front; the far ones
+      // are sorted only if the cell is still large enough for them to cut it (rarely: the cell shrinks to about
+      // 0.6 desiredRadius once the first ring is clipped). The processing order is the full sort's.
+      size_t nearCnt = 0, farCnt = 0;
       const uint32_t* nl = &s.nbr[i * kMaxNeighbours];
       for (size_t k = 0; k < s.nbrCount[i]; ++k) {
         const uint32_t j = nl[k];
@@ -288,30 +329,41 @@ void Tesselator::triangulate(Mesh& mesh) {
         const glm::vec3 d = s.vpos[j] - p;
         const float d2 = d.x * d.x + d.y * d.y + d.z * d.z;
         if (d2 > rT2 || d2 <= 0.0f || glm::dot(s.nrm[j], nn) < 0.3f) continue;
-        // Nearest first, by (distance, index), keeping kFanCandidates.
-        if (cnt == kFanCandidates && !(d2 < nd2[cnt - 1] || (d2 == nd2[cnt - 1] && j < ni[cnt - 1]))) continue;
-        size_t q = cnt < kFanCandidates ? cnt++ : cnt - 1;
-        while (q > 0 && (nd2[q - 1] > d2 || (nd2[q - 1] == d2 && ni[q - 1] > j))) {
-          nd2[q] = nd2[q - 1];
-          ni[q] = ni[q - 1];
-          --q;
+        const uint64_t key = sortKey(d2, j);
+        if (d2 <= nearT2) {
+          size_t q = nearCnt++;
+          for (; q > 0 && keys[q - 1] > key; --q) keys[q] = keys[q - 1];
+          keys[q] = key;
+        } else {
+          farKeys[farCnt++] = key;
         }
-        nd2[q] = d2;
-        ni[q] = j;
       }
+      bool farSorted = false;
       glm::vec3 b0, b1;
       tangentBasis(nn, b0, b1);
       cell.init(0.5f * rT);
-      float r2 = cell.radius2();
-      for (size_t k = 0; k < cnt; ++k) {
-        if (nd2[k] > 4.0f * r2) break;  // sorted by distance: no farther point can cut the cell
-        const glm::vec3 d = s.vpos[ni[k]] - p;
+      float r2 = cell.rad2;
+      const size_t total = std::min(nearCnt + farCnt, kFanCandidates);
+      for (size_t k = 0; k < total; ++k) {
+        if (k == nearCnt && !farSorted) {
+          // The near ones are used up: the far ones are needed only if they can still cut the cell.
+          if (nearT2 > 4.0f * r2) break;
+          std::sort(farKeys, farKeys + farCnt);
+          std::copy(farKeys, farKeys + std::min(farCnt, kFanCandidates - nearCnt), keys + nearCnt);
+          farSorted = true;
+        }
+        const uint32_t j = uint32_t(keys[k]);
+        const uint32_t bits = uint32_t(keys[k] >> 32);
+        float d2;
+        std::memcpy(&d2, &bits, sizeof d2);
+        if (d2 > 4.0f * r2) break;  // sorted by distance: no farther point can cut the cell
+        const glm::vec3 d = s.vpos[j] - p;
         float x = glm::dot(d, b0), y = glm::dot(d, b1);
         const float l2 = x * x + y * y;
         if (l2 < 1e-12f * h * h) continue;
-        const float lift = std::sqrt(nd2[k] / l2);  // keep the 3D distance: a local geodesic-like unfolding
+        const float lift = std::sqrt(d2 / l2);  // keep the 3D distance: a local geodesic-like unfolding
         x *= lift, y *= lift;
-        if (cell.clip(x, y, int32_t(ni[k]))) r2 = cell.radius2();
+        if (cell.clip(x, y, int32_t(j))) r2 = cell.rad2;
       }
       int32_t* f = &s.fan[i * kMaxFan];
       size_t m = 0;
@@ -322,20 +374,34 @@ void Tesselator::triangulate(Mesh& mesh) {
     }
   });
 
-  // C. Votes.
+  // C. Votes. Each fan slot also records whether its triangle is unanimous (in all three corners' fans).
   s.cand.resize(n * kMaxFan * 3);
   s.candCount.resize(n);
+  s.fanUnanimous.resize(n * kMaxFan);
+  s.fanRepeat.resize(n);
   parallelFor(chunks, o.numThreads, [&](size_t c) {
     const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
     for (size_t i = begin; i < end; ++i) {
       const int32_t* f = &s.fan[i * kMaxFan];
+      uint8_t* unanimous = &s.fanUnanimous[i * kMaxFan];
       const size_t m = s.fanCount[i];
       size_t out = 0;
-      for (size_t k = 0; k < m && m >= 2; ++k) {
+      bool repeat = false;
+      uint64_t seen = 0;  // labels of the unanimous slots so far, hashed to 64 bits
+      for (size_t k = 0; k < m; ++k) {
+        unanimous[k] = 0;
+        if (m < 2) continue;
         const int32_t a = f[k], b = f[k + 1 == m ? 0 : k + 1];
         if (a < 0 || b < 0 || a == b) continue;
         const uint32_t ua = uint32_t(a), ub = uint32_t(b), ui = uint32_t(i);
         const bool byA = fanHas(s, ua, ub, ui), byB = fanHas(s, ub, ui, ua);
+        if (byA && byB) {
+          unanimous[k] = 1;
+          const uint64_t bit = uint64_t(1) << (ua & 63u);
+          if (seen & bit)  // maybe a repeat: check exactly
+            for (size_t q = 0; q < k; ++q) repeat = repeat || (unanimous[q] && f[q] == a);
+          seen |= bit;
+        }
         uint32_t minProposer = ui;
         if (byA) minProposer = std::min(minProposer, ua);
         if (byB) minProposer = std::min(minProposer, ub);
@@ -346,19 +412,51 @@ void Tesselator::triangulate(Mesh& mesh) {
         slot[2] = 1u + uint32_t(byA) + uint32_t(byB);
       }
       s.candCount[i] = uint8_t(out);
+      s.fanRepeat[i] = repeat ? 1 : 0;
     }
   });
 
   // D. Assembly: unanimous triangles first, then the rest, never reusing a directed edge.
+  // A unanimous triangle (i, a, b) is the slot (a, b) of i's fan, (b, i) of a's and (i, a) of b's, so a vertex's
+  // outgoing half-edges among unanimous triangles are the first labels of its unanimous slots. Unless a label repeats
+  // among them (a degenerate fan), no two unanimous triangles share a directed edge and the sequential assembly would
+  // accept every one of them: their half-edges are then filled in parallel, each vertex from its own fan.
   s.heTo.resize(n * kMaxHalfEdges);
-  s.heCount.assign(n, 0);
+  s.heCount.resize(n);
   s.tris.clear();
-  for (uint32_t votes = 3; votes >= 2; --votes)
+  bool anyRepeat = false;
+  for (size_t i = 0; i < n && !anyRepeat; ++i) anyRepeat = s.fanRepeat[i] != 0;
+  if (!anyRepeat) {
+    parallelFor(chunks, o.numThreads, [&](size_t c) {
+      const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
+      for (size_t i = begin; i < end; ++i) {
+        const int32_t* f = &s.fan[i * kMaxFan];
+        const uint8_t* unanimous = &s.fanUnanimous[i * kMaxFan];
+        uint32_t* to = &s.heTo[i * kMaxHalfEdges];
+        size_t cnt = 0;
+        for (size_t k = 0; k < s.fanCount[i]; ++k)
+          if (unanimous[k]) to[cnt++] = uint32_t(f[k]);
+        s.heCount[i] = uint8_t(cnt);
+      }
+    });
     for (uint32_t i = 0; i < n; ++i)
       for (size_t k = 0; k < s.candCount[i]; ++k) {
         const uint32_t* slot = &s.cand[(size_t(i) * kMaxFan + k) * 3];
-        if (slot[2] == votes) addTriangle(s, i, slot[0], slot[1]);
+        if (slot[2] == 3) s.tris.insert(s.tris.end(), {i, slot[0], slot[1]});
       }
+  } else {
+    s.heCount.assign(n, 0);
+    for (uint32_t i = 0; i < n; ++i)
+      for (size_t k = 0; k < s.candCount[i]; ++k) {
+        const uint32_t* slot = &s.cand[(size_t(i) * kMaxFan + k) * 3];
+        if (slot[2] == 3) addTriangle(s, i, slot[0], slot[1]);
+      }
+  }
+  for (uint32_t i = 0; i < n; ++i)
+    for (size_t k = 0; k < s.candCount[i]; ++k) {
+      const uint32_t* slot = &s.cand[(size_t(i) * kMaxFan + k) * 3];
+      if (slot[2] == 2) addTriangle(s, i, slot[0], slot[1]);
+    }
 
   // E. Hole repair.
   const size_t assembled = s.tris.size() / 3;

@@ -65,6 +65,14 @@ struct Tesselator::State {
   std::vector<uint32_t> nbr;
   std::vector<uint8_t> nbrCount;
   bool nbrValid = false;
+  // Field samples (value, gradient, owner) taken by triangulate()'s vertex pass at the particles' positions, reused
+  // by the next compute phase when nothing moved in between and the field is the same (skeleton generation).
+  std::vector<float> cacheValue;
+  std::vector<glm::vec3> cacheGrad;
+  std::vector<int32_t> cacheOwner;
+  bool cacheValid = false;
+  uint64_t cacheStamp = ~0ull;
+  uint64_t fieldStamp = ~0ull;  // skeleton generation of the last update's field; ~0 for a bare field (no cache)
   std::vector<uint32_t> fuse;  // per particle its kMaxFuse nearest at the compute phase (the fusion candidates)
   std::vector<uint8_t> fuseCount;
 
@@ -89,12 +97,14 @@ struct Tesselator::State {
   std::vector<uint8_t> vok;  // the particle is close enough to the surface to be a mesh vertex this render
   std::vector<int32_t> fan;
   std::vector<uint8_t> fanCount;
+  std::vector<uint8_t> fanUnanimous;  // per fan slot k: triangle (i, fan[k], fan[k+1]) is in all three corners' fans
+  std::vector<uint8_t> fanRepeat;     // per particle: a label repeats among its unanimous slots (sequential fallback)
   std::vector<uint32_t> cand;  // per particle up to kMaxFan candidate triangles (a, b, votes)
   std::vector<uint8_t> candCount;
   std::vector<uint32_t> heTo;
   std::vector<uint8_t> heCount;
   std::vector<uint32_t> holeTo;
-  std::vector<uint8_t> holeCount, holeUsed, openUp;
+  std::vector<uint8_t> holeCount, holeUsed, openUp, openOut;
   std::vector<uint32_t> loop, tris;
 
   explicit State(const TesselatorOptions& o) : hash(o.cubeSize, o.bitsPerDim) {}

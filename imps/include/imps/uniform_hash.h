@@ -69,7 +69,7 @@ class UniformHashGrid {
   // forEachWithin(). For gathering the candidates of a group of nearby queries once.
   template <class Visit>
   void forEachInBox(const glm::vec3& lo, const glm::vec3& hi, Visit&& visit) const {
-    int c0[3], n[3];
+    int c0[3] = {}, n[3] = {};
     for (int a = 0; a < 3; ++a) {
       c0[a] = cell(lo[a]);
       n[a] = cell(hi[a]) - c0[a] + 1;
