@@ -196,8 +196,9 @@ inline float ellipsoidDistance(const Primitive& p, float x, float y, float z) {
   return qx * qx + qy * qy + qz * qz;
 }
 
-// The arithmetic of lineSegParameter() in primitives.cpp, with selects for its branches.
-inline float lineSegDistance(const Primitive& p, float x, float y, float z) {
+// The segment parameter s of the sphere nearest x: the arithmetic of lineSegParameter() in primitives.cpp, with
+// selects for its branches.
+inline float lineSegClosestParameter(const Primitive& p, float x, float y, float z) {
   const float vx = x - p.p1.x, vy = y - p.p1.y, vz = z - p.p1.z;
   const float vv = vx * vx + vy * vy + vz * vz;
   const float t = vx * p.axis.x + vy * p.axis.y + vz * p.axis.z;
@@ -207,7 +208,11 @@ inline float lineSegDistance(const Primitive& p, float x, float y, float z) {
   const float sInside = std::min(std::max(t + p.slope * rho2 / safeA, 0.0f), p.length);
   const float wx = x - p.p2.x, wy = y - p.p2.y, wz = z - p.p2.z;
   const float sApex = vv / (p.r1 * p.r1) <= (wx * wx + wy * wy + wz * wz) / (p.r2 * p.r2) ? 0.0f : p.length;
-  const float s = a > 0.0f ? sInside : sApex;
+  return a > 0.0f ? sInside : sApex;
+}
+
+inline float lineSegDistance(const Primitive& p, float x, float y, float z) {
+  const float s = lineSegClosestParameter(p, x, y, z);
   const float ux = x - (p.p1.x + s * p.axis.x), uy = y - (p.p1.y + s * p.axis.y), uz = z - (p.p1.z + s * p.axis.z);
   const float r = p.r1 + p.slope * s;
   return (ux * ux + uy * uy + uz * uz) / (r * r);
@@ -244,16 +249,7 @@ inline float ellipsoidDistanceGradient(const Primitive& p, float x, float y, flo
 }
 
 inline float lineSegDistanceGradient(const Primitive& p, float x, float y, float z, float& gx, float& gy, float& gz) {
-  const float vx = x - p.p1.x, vy = y - p.p1.y, vz = z - p.p1.z;
-  const float vv = vx * vx + vy * vy + vz * vz;
-  const float t = vx * p.axis.x + vy * p.axis.y + vz * p.axis.z;
-  const float rho2 = std::max(0.0f, vv - t * t);
-  const float a = p.r1 + p.slope * t;
-  const float safeA = a > 0.0f ? a : 1.0f;
-  const float sInside = std::min(std::max(t + p.slope * rho2 / safeA, 0.0f), p.length);
-  const float wx = x - p.p2.x, wy = y - p.p2.y, wz = z - p.p2.z;
-  const float sApex = vv / (p.r1 * p.r1) <= (wx * wx + wy * wy + wz * wz) / (p.r2 * p.r2) ? 0.0f : p.length;
-  const float s = a > 0.0f ? sInside : sApex;
+  const float s = lineSegClosestParameter(p, x, y, z);
   const float ux = x - (p.p1.x + s * p.axis.x), uy = y - (p.p1.y + s * p.axis.y), uz = z - (p.p1.z + s * p.axis.z);
   const float r = p.r1 + p.slope * s;
   const float inv = 2.0f / (r * r);
