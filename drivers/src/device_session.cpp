@@ -8,6 +8,7 @@
 
 #include "drivers/binary_protocol.h"
 #include "drivers/hid_report.h"
+#include "text.h"
 
 namespace imps::drivers {
 
@@ -352,17 +353,21 @@ struct DeviceSession::Io {
         lastSample = steadyNs();
       }
       syncCounters();
-      // Before the first sample the banner may take a while (boot); afterwards silence is a timeout.
-      const int64_t limit = (haveSample ? o.sampleTimeoutMs : o.bootWaitMs + o.sampleTimeoutMs) * kMs;
-      if (steadyNs() - lastSample >= limit) {
-        bump(s.counters_.timeouts);
-        lastSample = steadyNs();
-        if (++consecutiveTimeouts >= o.timeoutsBeforeLost) {
-          s.setError("no sample lines for " + std::to_string(o.sampleTimeoutMs * o.timeoutsBeforeLost) + " ms");
-          return End::Lost;
-        }
-      }
+      if (silenceLost(lastSample, haveSample, "sample lines")) return End::Lost;
     }
+  }
+
+  // Stream protocols without a handshake (lines, HID reports): before the first sample the device may take a while
+  // to boot; afterwards each sampleTimeoutMs of silence is a timeout, and timeoutsBeforeLost in a row lose the
+  // connection. `lastSample` is the last sample's time (restarted at each timeout). True when lost.
+  bool silenceLost(int64_t& lastSample, bool haveSample, const char* what) {
+    const int64_t limit = (haveSample ? o.sampleTimeoutMs : o.bootWaitMs + o.sampleTimeoutMs) * kMs;
+    if (steadyNs() - lastSample < limit) return false;
+    bump(s.counters_.timeouts);
+    lastSample = steadyNs();
+    if (++consecutiveTimeouts < o.timeoutsBeforeLost) return false;
+    s.setError(cat("no ", what, " for ", o.sampleTimeoutMs * o.timeoutsBeforeLost, " ms"));
+    return true;
   }
 
   // ---- HID input reports
@@ -381,23 +386,14 @@ struct DeviceSession::Io {
       s.info_ = d->info;
     }
     s.setState(ConnectionState::WaitingForHello);
-    int64_t lastCheck = steadyNs();
+    int64_t lastSample = steadyNs();
     for (;;) {
       if (stopping()) return End::Stopped;
       const uint64_t before = s.counters_.samples.load(std::memory_order_relaxed);
       if (!pump(o.ioWaitMs)) return End::Lost;
       syncCounters();
-      if (s.counters_.samples.load(std::memory_order_relaxed) != before) lastCheck = steadyNs();
-      const bool haveSample = s.state() == ConnectionState::Streaming;
-      const int64_t limit = (haveSample ? o.sampleTimeoutMs : o.bootWaitMs + o.sampleTimeoutMs) * kMs;
-      if (steadyNs() - lastCheck >= limit) {
-        bump(s.counters_.timeouts);
-        lastCheck = steadyNs();
-        if (++consecutiveTimeouts >= o.timeoutsBeforeLost) {
-          s.setError("no HID input reports for " + std::to_string(o.sampleTimeoutMs * o.timeoutsBeforeLost) + " ms");
-          return End::Lost;
-        }
-      }
+      if (s.counters_.samples.load(std::memory_order_relaxed) != before) lastSample = steadyNs();
+      if (silenceLost(lastSample, s.state() == ConnectionState::Streaming, "HID input reports")) return End::Lost;
     }
   }
 
