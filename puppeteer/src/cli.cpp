@@ -3,7 +3,28 @@
 
 #include <CLI/CLI.hpp>
 
+#include <cstdio>
+
+#include "imps/diagnostic.h"
+#include "imps/scene_reader.h"
+
 namespace imps::app {
+
+std::optional<LoadedScene> loadScene(const std::string& path) {
+  Diagnostics warnings;
+  auto read = readSceneFile(path, &warnings);
+  std::fputs(warnings.str().c_str(), stderr);
+  if (!read) {
+    std::fputs(read.error().str().c_str(), stderr);
+    return std::nullopt;
+  }
+  auto compiled = Character::fromScene(*read);
+  if (!compiled) {
+    std::fputs(compiled.error().str().c_str(), stderr);
+    return std::nullopt;
+  }
+  return LoadedScene{std::move(*read), std::move(*compiled)};
+}
 
 int runCli(int argc, char** argv) {
   CLI::App app{"IMPS Puppeteer: implicit-surface characters driven by joint-encoder armatures"};

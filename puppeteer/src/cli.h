@@ -2,7 +2,12 @@
 #pragma once
 
 #include <functional>
+#include <optional>
+#include <string>
 #include <vector>
+
+#include "imps/character.h"
+#include "imps/scene.h"
 
 namespace CLI {
 class App;
@@ -17,6 +22,15 @@ enum ExitCode : int {
   kExitUsage = 2,         // bad command line
   kExitIoError = 3,       // an output could not be written (nothing was overwritten), or a device failed
 };
+
+// A scene file read and compiled into its character.
+struct LoadedScene {
+  Scene scene;
+  Character character;
+};
+// Reads and compiles `path`, printing its diagnostics (warnings, then the error) to stderr; nullopt on errors
+// (the command then exits with kExitInvalidInput).
+std::optional<LoadedScene> loadScene(const std::string& path);
 
 // A registered subcommand and what runs it once its arguments are parsed.
 struct Command {

@@ -26,7 +26,7 @@
 #include "drivers/device_spec.h"
 #include "drivers/serial_transport.h"
 #include "imps/character.h"
-#include "imps/scene_reader.h"
+#include "imps/diagnostic.h"
 #include "sim/session_file.h"
 #include "sim/simulated_armature.h"
 
@@ -42,23 +42,6 @@ struct CalibrateArgs {
   double maxNoiseDeg = 0.5;
   bool noWait = false;
 };
-
-bool loadCharacter(const std::string& path, std::optional<Character>& character) {
-  Diagnostics warnings;
-  auto scene = readSceneFile(path, &warnings);
-  std::fputs(warnings.str().c_str(), stderr);
-  if (!scene) {
-    std::fputs(scene.error().str().c_str(), stderr);
-    return false;
-  }
-  auto compiled = Character::fromScene(*scene);
-  if (!compiled) {
-    std::fputs(compiled.error().str().c_str(), stderr);
-    return false;
-  }
-  character = std::move(*compiled);
-  return true;
-}
 
 int64_t timeOf(const drivers::Sample& s, bool deviceTime) { return deviceTime ? s.deviceTimeNs : s.arrivalTimeNs; }
 
@@ -153,8 +136,9 @@ int runCalibrate(const CalibrateArgs& a) {
     return kExitUsage;
   }
   // ---- Inputs: the character, the device description and samples source, the rig map, the check pose.
-  std::optional<Character> character;
-  if (!loadCharacter(a.scene, character)) return kExitInvalidInput;
+  auto loaded = loadScene(a.scene);
+  if (!loaded) return kExitInvalidInput;
+  const Character& character = loaded->character;
 
   drivers::DeviceInfo info;
   std::optional<sim::Session> session;
@@ -177,7 +161,7 @@ int runCalibrate(const CalibrateArgs& a) {
   }
 
   Diagnostics warnings;
-  auto rig = calibration::readRigMapFile(a.rig, {&*character, &info, false}, &warnings);
+  auto rig = calibration::readRigMapFile(a.rig, {&character, &info, false}, &warnings);
   std::fputs(warnings.str().c_str(), stderr);
   if (!rig) {
     std::fputs(rig.error().str().c_str(), stderr);
@@ -185,7 +169,7 @@ int runCalibrate(const CalibrateArgs& a) {
   }
   std::optional<std::vector<calibration::PoseTarget>> targets;
   if (!a.checkPose.empty()) {
-    auto t = calibration::readCheckPoseFile(a.checkPose, &*character);
+    auto t = calibration::readCheckPoseFile(a.checkPose, &character);
     if (!t) {
       std::fputs(t.error().str().c_str(), stderr);
       return kExitInvalidInput;
@@ -227,7 +211,7 @@ int runCalibrate(const CalibrateArgs& a) {
   calibrated->info =
       calibrationInfoJson(a.scene, a.rig, session ? a.session : a.device, a.windowMs, window.size(), info.serialNumber);
   calibrated->device = info.name;
-  auto cal = calibration::Calibration::create(std::move(*calibrated), &*character, &info);
+  auto cal = calibration::Calibration::create(std::move(*calibrated), &character, &info);
   if (!cal) {
     std::fputs(cal.error().str().c_str(), stderr);
     return kExitInvalidInput;

@@ -21,7 +21,6 @@
 #include "drivers/device_session.h"
 #include "drivers/device_spec.h"
 #include "drivers/serial_transport.h"
-#include "imps/scene_reader.h"
 #include "sim/bvh.h"
 #include "sim/bvh_session.h"
 #include "sim/session_file.h"
@@ -116,22 +115,15 @@ bool parsePose(const std::string& text, std::string* joint, glm::vec3* axis, flo
 
 // Loads and compiles the scene, applies --pose; prints diagnostics and returns nullptr on bad input.
 std::unique_ptr<ViewerPipeline> makePipeline(const LiveArgs& a, int* exitCode) {
-  auto read = readSceneFile(a.scene);
-  if (!read) {
-    std::fputs(read.error().str().c_str(), stderr);
-    *exitCode = kExitInvalidInput;
-    return nullptr;
-  }
-  auto compiled = Character::fromScene(*read);
-  if (!compiled) {
-    std::fputs(compiled.error().str().c_str(), stderr);
+  auto loaded = loadScene(a.scene);
+  if (!loaded) {
     *exitCode = kExitInvalidInput;
     return nullptr;
   }
   PipelineOptions o;
   o.polygonizer = a.polygonizer == "mc" ? Polygonizer::MarchingCubes : Polygonizer::Particles;
   o.threads = a.threads;
-  auto pipeline = std::make_unique<ViewerPipeline>(std::move(*read), std::move(*compiled), o);
+  auto pipeline = std::make_unique<ViewerPipeline>(std::move(loaded->scene), std::move(loaded->character), o);
   for (const std::string& p : a.poses) {
     std::string joint;
     glm::vec3 axis;

@@ -12,32 +12,12 @@
 #include "imps/marching_cubes.h"
 #include "imps/mesh_io.h"
 #include "imps/parallel.h"
-#include "imps/scene_reader.h"
 #include "imps/skeleton_cache.h"
 #include "imps/tesselator.h"
 #include "snapshot.h"
 
 namespace imps::app {
 namespace {
-
-// Reads and compiles a scene, printing diagnostics to stderr. Returns false when it has errors.
-bool loadCharacter(const std::string& path, Scene& scene, std::optional<Character>& character) {
-  Diagnostics warnings;
-  auto read = readSceneFile(path, &warnings);
-  std::fputs(warnings.str().c_str(), stderr);
-  if (!read) {
-    std::fputs(read.error().str().c_str(), stderr);
-    return false;
-  }
-  scene = std::move(*read);
-  auto compiled = Character::fromScene(scene);
-  if (!compiled) {
-    std::fputs(compiled.error().str().c_str(), stderr);
-    return false;
-  }
-  character = std::move(*compiled);
-  return true;
-}
 
 struct MeshArgs {
   std::string scene, output;
@@ -86,9 +66,10 @@ int runParticleMesh(const MeshArgs& a, const Scene& scene, const SkeletonCache& 
 }
 
 int runMesh(const MeshArgs& a) {
-  Scene scene;
-  std::optional<Character> character;
-  if (!loadCharacter(a.scene, scene, character)) return kExitInvalidInput;
+  auto loaded = loadScene(a.scene);
+  if (!loaded) return kExitInvalidInput;
+  const Scene& scene = loaded->scene;
+  const Character& character = loaded->character;
 
   // Resolution: the command line, else the scene's MarchingCubes node, else 64 cells along the longest side.
   MarchingCubesOptions options;
@@ -105,7 +86,7 @@ int runMesh(const MeshArgs& a) {
     if (a.res > 0) options.resolution = a.res;
   }
 
-  SkeletonCache skeleton(*character);
+  SkeletonCache skeleton(character);
   if (a.polygonizer == "particles") return runParticleMesh(a, scene, skeleton);
   MarchingCubesStats stats;
   const Mesh mesh = polygonize(skeleton.field(), options, &stats);
@@ -148,10 +129,10 @@ const char* blendName(BlendKind k) {
 }
 
 int runCheck(const std::string& path) {
-  Scene scene;
-  std::optional<Character> character;
-  if (!loadCharacter(path, scene, character)) return kExitInvalidInput;
-  const Character& c = *character;
+  auto loaded = loadScene(path);
+  if (!loaded) return kExitInvalidInput;
+  const Character& character = loaded->character;
+  const Character& c = character;
   std::printf("%s: valid, %s scene, %s, iso-value %g\n", path.c_str(), c.hierarchical() ? "hierarchical" : "flat",
               blendName(c.blend().kind), double(c.isoValue()));
 
@@ -188,10 +169,10 @@ struct RenderArgs {
 
 // Renders the scene's Marching Cubes mesh in software to a PNG: a quick look without a GPU or a display.
 int runRender(const RenderArgs& a) {
-  Scene scene;
-  std::optional<Character> character;
-  if (!loadCharacter(a.scene, scene, character)) return kExitInvalidInput;
-  SkeletonCache skeleton(*character);
+  auto loaded = loadScene(a.scene);
+  if (!loaded) return kExitInvalidInput;
+  const Character& character = loaded->character;
+  SkeletonCache skeleton(character);
   MarchingCubesOptions options;
   options.cellSize = a.cell;
   options.resolution = a.res;

@@ -17,7 +17,6 @@
 #include "imps/character.h"
 #include "imps/marching_cubes.h"
 #include "imps/parallel.h"
-#include "imps/scene_reader.h"
 #include "imps/skeleton_cache.h"
 #include "imps/tesselator.h"
 
@@ -51,19 +50,11 @@ struct Report {
 };
 
 std::optional<Report> benchScene(const std::string& path, double degPerSecond, int frames, int threads) {
-  auto read = readSceneFile(path);
-  if (!read) {
-    std::fputs(read.error().str().c_str(), stderr);
-    return std::nullopt;
-  }
-  auto compiled = Character::fromScene(*read);
-  if (!compiled) {
-    std::fputs(compiled.error().str().c_str(), stderr);
-    return std::nullopt;
-  }
-  const Character& ch = *compiled;
+  const auto loaded = loadScene(path);
+  if (!loaded) return std::nullopt;
+  const Character& ch = loaded->character;
   TesselatorOptions o;
-  if (const auto* node = std::get_if<Tesselator3MPNode>(&read->polygonizer)) o = TesselatorOptions::fromNode(*node);
+  if (const auto* node = std::get_if<Tesselator3MPNode>(&loaded->scene.polygonizer)) o = TesselatorOptions::fromNode(*node);
   if (threads >= 0) o.numThreads = threads;
   SkeletonCache skel(ch);
   Tesselator tess(o);
