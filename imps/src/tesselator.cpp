@@ -137,8 +137,15 @@ void findNeighbours(Tesselator::State& s, const TesselatorOptions& o) {
             const float dx = cx[k] - p.x, dy = cy[k] - p.y, dz = cz[k] - p.z;
             cd2[k] = dx * dx + dy * dy + dz * dz;
           }
-          for (size_t k = 0; k < gathered; ++k)
-            if (cd2[k] <= r2 && cj[k] != i && cnt < kFound) found[cnt++] = sortKey(cd2[k], cj[k]);
+          if (gathered <= kFound) {  // the usual case: every candidate fits, so keep them without a branch
+            for (size_t k = 0; k < gathered; ++k) {
+              found[cnt] = sortKey(cd2[k], cj[k]);
+              cnt += size_t(cd2[k] <= r2) & size_t(cj[k] != i);
+            }
+          } else {
+            for (size_t k = 0; k < gathered; ++k)
+              if (cd2[k] <= r2 && cj[k] != i && cnt < kFound) found[cnt++] = sortKey(cd2[k], cj[k]);
+          }
         } else {
           s.hash.forEachWithin(s.pos[i], radius, s.pos, [&](uint32_t j, float d2) {
             if (j == i || d2 > r2 || cnt == kFound) return;
@@ -342,12 +349,12 @@ void Tesselator::step(const Field& field, const SkeletonCache*) {
       // kMaxRepulsion of them in a crowd).
       const uint32_t* nl = &s.nbr[i * kMaxNeighbours];
       size_t cnt = 0;
-      for (size_t k = 0; k < s.nbrCount[i]; ++k) {
+      for (size_t k = 0; k < s.nbrCount[i]; ++k) {  // branch-free: about half are kept, unpredictably
         const glm::vec3 d = s.pos[nl[k]] - p;
         const float d2 = d.x * d.x + d.y * d.y + d.z * d.z;
-        if (d2 > q2) continue;
         nd2[cnt] = d2;
-        ni[cnt++] = nl[k];
+        ni[cnt] = nl[k];
+        cnt += size_t(d2 <= q2);
       }
       // The kMaxFuse nearest, by (distance, index), for the fusion test of the add/delete phase.
       uint64_t nearest[kMaxFuse];

@@ -101,6 +101,7 @@ struct Tesselator::State {
   std::vector<uint8_t> fanRepeat;     // per particle: a label repeats among its unanimous slots (sequential fallback)
   std::vector<uint32_t> cand;  // per particle up to kMaxFan candidate triangles (a, b, votes)
   std::vector<uint8_t> candCount;
+  std::vector<uint8_t> candVotes;  // per particle: bit v set if one of its candidates has v votes
   std::vector<uint32_t> heTo;
   std::vector<uint8_t> heCount;
   std::vector<uint32_t> holeTo;
