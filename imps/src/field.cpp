@@ -364,10 +364,10 @@ IMPS_VECTOR_CLONES void accumulateGradientColour(size_t n, const uint8_t* __rest
 
 }  // namespace
 
-void Field::terms(size_t i, size_t n, FieldScratch& scratch) const {
-  float* t = scratch.term.data();
+void Field::terms(size_t i, size_t first, size_t n, FieldScratch& scratch) const {
+  float* t = scratch.term.data() + first;
   const Primitive& p = primitives_[i];
-  const float *xs = scratch.xs.data(), *ys = scratch.ys.data(), *zs = scratch.zs.data();
+  const float *xs = scratch.xs.data() + first, *ys = scratch.ys.data() + first, *zs = scratch.zs.data() + first;
   switch (p.kind) {
     case PrimitiveKind::Metaball: distanceLoop<metaballDistance>(p, xs, ys, zs, n, t); break;
     case PrimitiveKind::Ellipsoid: distanceLoop<ellipsoidDistance>(p, xs, ys, zs, n, t); break;
@@ -384,13 +384,31 @@ void Field::terms(size_t i, size_t n, FieldScratch& scratch) const {
   }
 }
 
+namespace {
+
+// Scratch buffers only grow: resizing down and up again between a block's samples and its root-finding batches
+// would zero-fill the regrown part every time.
+void atLeast(std::vector<float>& v, size_t size) {
+  if (v.size() < size) v.resize(size);
+}
+
+// F at n points from their per-set accumulators (sets x points): the maximum over the sets.
+void maxOverSets(bool additive, size_t sets, size_t n, const float* accs, float* out) {
+  for (size_t i = 0; i < n; ++i) out[i] = 0.0f;
+  for (size_t s = 0; s < sets; ++s) {
+    const float* acc = accs + s * n;
+    if (additive) {
+      for (size_t i = 0; i < n; ++i) out[i] = std::max(out[i], acc[i]);
+    } else {
+      for (size_t i = 0; i < n; ++i) out[i] = std::max(out[i], acc[i] > -1.0f ? std::max(1.0f + acc[i], 0.0f) : 0.0f);
+    }
+  }
+}
+
+}  // namespace
+
 void Field::accumulate(std::span<const glm::vec3> points, FieldScratch& scratch, bool keepTerms) const {
   const size_t n = points.size();
-  // Scratch buffers only grow: resizing down and up again between a block's samples and its root-finding batches
-  // would zero-fill the regrown part every time.
-  auto atLeast = [](std::vector<float>& v, size_t size) {
-    if (v.size() < size) v.resize(size);
-  };
   atLeast(scratch.xs, n);
   atLeast(scratch.ys, n);
   atLeast(scratch.zs, n);
@@ -413,7 +431,7 @@ void Field::accumulate(std::span<const glm::vec3> points, FieldScratch& scratch,
       if (keepTerms) std::fill_n(scratch.terms.begin() + long(k * n), n, 0.0f);
       continue;
     }
-    terms(scratch.candidates[k], n, scratch);
+    terms(scratch.candidates[k], 0, n, scratch);
     const float* t = scratch.term.data();
     if (keepTerms) std::copy(t, t + n, scratch.terms.begin() + long(k * n));
     for (uint32_t m = scratch.memberOffsets[k]; m < scratch.memberOffsets[k + 1]; ++m) {
@@ -435,19 +453,64 @@ void Field::accumulate(std::span<const glm::vec3> points, FieldScratch& scratch,
 
 void Field::values(std::span<const glm::vec3> points, std::span<float> out, FieldScratch& scratch) const {
   IMPS_CHECK_EQ(points.size(), out.size());
-  const size_t n = points.size();
-  const size_t sets = scratch.setCount();
-  const bool additive = blend_.additive();
   accumulate(points, scratch, /*keepTerms=*/false);
-  for (size_t i = 0; i < n; ++i) out[i] = 0.0f;
-  for (size_t s = 0; s < sets; ++s) {
-    const float* acc = scratch.acc.data() + s * n;
-    if (additive) {
-      for (size_t i = 0; i < n; ++i) out[i] = std::max(out[i], acc[i]);
-    } else {
-      for (size_t i = 0; i < n; ++i) out[i] = std::max(out[i], acc[i] > -1.0f ? std::max(1.0f + acc[i], 0.0f) : 0.0f);
+  maxOverSets(blend_.additive(), scratch.setCount(), points.size(), scratch.acc.data(), out.data());
+}
+
+void Field::latticeValues(std::span<const float> xs, std::span<const float> ys, std::span<const float> zs,
+                          std::span<float> out, FieldScratch& scratch) const {
+  const size_t nx = xs.size(), ny = ys.size(), nz = zs.size(), n = nx * ny * nz;
+  IMPS_CHECK_EQ(out.size(), n);
+  atLeast(scratch.xs, n);
+  atLeast(scratch.ys, n);
+  atLeast(scratch.zs, n);
+  atLeast(scratch.term, n);
+  for (size_t k = 0; k < nz; ++k) {
+    std::fill_n(scratch.zs.begin() + long(nx * ny * k), nx * ny, zs[k]);
+    for (size_t j = 0; j < ny; ++j) {
+      std::copy(xs.begin(), xs.end(), scratch.xs.begin() + long(nx * (j + ny * k)));
+      std::fill_n(scratch.ys.begin() + long(nx * (j + ny * k)), nx, ys[j]);
     }
   }
+  const bool additive = blend_.additive();
+  const size_t sets = scratch.setCount();
+  atLeast(scratch.acc, sets * n);
+  // Every set starts at "nothing" (0, or -1 for the elliptical fold) and takes each term by value()'s arithmetic,
+  // candidates ascending; a point a candidate's support box misses would only have taken an exact "nothing" from it.
+  std::fill_n(scratch.acc.begin(), sets * n, additive ? 0.0f : -1.0f);
+  // The half-open index range of the axis coordinates in [lo, hi] (Box::contains' test).
+  auto inside = [](std::span<const float> axis, float lo, float hi) {
+    return std::pair{size_t(std::lower_bound(axis.begin(), axis.end(), lo) - axis.begin()),
+                     size_t(std::upper_bound(axis.begin(), axis.end(), hi) - axis.begin())};
+  };
+  for (size_t k = 0; k < scratch.candidates.size(); ++k) {
+    const uint32_t first = scratch.memberOffsets[k], last = scratch.memberOffsets[k + 1];
+    if (first == last) continue;
+    const uint32_t p = scratch.candidates[k];
+    const Box& box = supportBoxes_[p];
+    const auto [i0, i1] = inside(xs, box.lo.x, box.hi.x);
+    const auto [j0, j1] = inside(ys, box.lo.y, box.hi.y);
+    const auto [z0, z1] = inside(zs, box.lo.z, box.hi.z);
+    if (i0 >= i1 || j0 >= j1 || z0 >= z1) continue;
+    // One run of consecutive points per z slice from its first to its last reached point (whole rows along x keep
+    // the loops long enough to vectorise), or a single run when the reached rows span whole slices.
+    const bool wholeSlices = j0 == 0 && j1 == ny;
+    for (size_t z = z0; z < z1; z = wholeSlices ? z1 : z + 1) {
+      const size_t begin = i0 + nx * (j0 + ny * z);
+      const size_t end = i1 + nx * (j1 - 1 + ny * (wholeSlices ? z1 - 1 : z));
+      terms(p, begin, end - begin, scratch);
+      const float* t = scratch.term.data() + begin;
+      for (uint32_t m = first; m < last; ++m) {
+        float* acc = scratch.acc.data() + size_t(scratch.memberSets[m]) * n + begin;
+        if (additive) {
+          for (size_t i = 0; i < end - begin; ++i) acc[i] += t[i];
+        } else {
+          for (size_t i = 0; i < end - begin; ++i) acc[i] = foldElliptical(acc[i], t[i]);
+        }
+      }
+    }
+  }
+  maxOverSets(additive, sets, n, scratch.acc.data(), out.data());
 }
 
 float Field::value(const glm::vec3& x, FieldScratch& scratch) const {

@@ -8,6 +8,7 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 
 #include "imps/check.h"
 #include "imps/parallel.h"
@@ -22,6 +23,9 @@ constexpr int kBlockEdges = 3 * kBlock * kBlock * kBlock;  // edges owned by a b
 constexpr uint32_t kCellBits = (1u << kBlock) - 1;  // the cells (or owned edges) of one row, as bits
 constexpr int kCentre = 12;                        // table code of a cell's first loop-centre vertex
 constexpr uint32_t kProvisional = 0x80000000u;     // triangle index of a centre vertex before final numbering
+
+inline int sampleIndex(int i, int j, int k) { return i + kBlockVerts * (j + kBlockVerts * k); }
+inline int ownedEdgeIndex(int axis, int i, int j, int k) { return axis * kBlock * kBlock * kBlock + i + kBlock * (j + kBlock * k); }
 
 // ---- The case table ------------------------------------------------------------------------------------------
 // Corners: c = x | y << 1 | z << 2. Edge e = axis * 4 + m, starting at the corner with that axis' bit clear, m the
@@ -76,12 +80,17 @@ struct CaseTable {
   std::array<Face, 6> faces = makeFaces();
   std::array<uint8_t, 256> ambiguousFaces{};  // bit f: face f has diagonal inside corners
   std::array<uint8_t, 12> edgeStartCorner{};   // edgeStart(e), looked up on the hot path
+  std::array<int16_t, 12> ownedEdgeOffset{};   // ownedEdgeIndex() of edge e of the block's cell (0, 0, 0)
   // entries[(case << 6) | joinedMask]: triangle count then 3 edge ids per triangle.
   std::vector<std::array<uint8_t, 37>> entries = std::vector<std::array<uint8_t, 37>>(256 * 64);
   std::vector<uint8_t> centreCount = std::vector<uint8_t>(256 * 64, 0);  // loop-centre vertices of each entry
 
   CaseTable() {
-    for (int e = 0; e < 12; ++e) edgeStartCorner[size_t(e)] = uint8_t(edgeStart(e));
+    for (int e = 0; e < 12; ++e) {
+      const int c = edgeStart(e);
+      edgeStartCorner[size_t(e)] = uint8_t(c);
+      ownedEdgeOffset[size_t(e)] = int16_t(ownedEdgeIndex(e / 4, c & 1, (c >> 1) & 1, (c >> 2) & 1));
+    }
     for (int c = 0; c < 256; ++c) {
       for (int f = 0; f < 6; ++f) {
         int changes = 0;
@@ -291,9 +300,6 @@ struct EdgeRoot {
   int side = 0, iterations = 0;
 };
 
-inline int sampleIndex(int i, int j, int k) { return i + kBlockVerts * (j + kBlockVerts * k); }
-inline int ownedEdgeIndex(int axis, int i, int j, int k) { return axis * kBlock * kBlock * kBlock + i + kBlock * (j + kBlock * k); }
-
 }  // namespace
 
 struct MarchingCubes::State {
@@ -484,7 +490,6 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
   }
   parallelFor(work.size(), threads, [&](size_t w) {
     thread_local FieldScratch scratch;
-    thread_local std::vector<glm::vec3> points;
     const size_t b = work[w];
     BlockResult& r = st.blocks[b];
     r.sampled = r.hasSurface = false;
@@ -505,9 +510,18 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
       // are exactly zero here, so every value stays bit-identical (x + 0 = x) with fewer primitives to evaluate.
       thread_local std::vector<uint32_t> reaching;
       reaching.clear();
-      for (uint32_t i : cand)
-        if (field.primitive(i).minDistance(box) <= field.supportDistance(i) * (1.0f + 1e-3f) + 1e-3f) reaching.push_back(i);
+      // For the additive blends, the sum of every reaching candidate's largest term in the block bounds each blend
+      // set's sum from above (float addition of non-negative terms is monotone): most empty blocks stop here,
+      // before the blend sets are prepared for the tighter upperBound().
+      float largestTermsSum = 0.0f;
+      for (uint32_t i : cand) {
+        const float d = field.primitive(i).minDistance(box);
+        if (d > field.supportDistance(i) * (1.0f + 1e-3f) + 1e-3f) continue;
+        reaching.push_back(i);
+        largestTermsSum += field.blend().term(d, field.param(i));
+      }
       if (reaching.empty()) return;
+      if (field.blend().additive() && largestTermsSum < iso * (1.0f - 1e-3f)) return;
       field.prepare(reaching, scratch);
     }
     if (!forced[b]) {
@@ -515,15 +529,15 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
       if (field.lowerBound(box, scratch) > iso * (1.0f + 1e-3f)) return;
     }
     r.sampled = true;
-    points.resize(kBlockSamples);
-    std::array<glm::vec3, kBlockVerts> axes;  // g.vertex()'s coordinates along each axis, computed once
-    for (int v = 0; v < kBlockVerts; ++v) axes[size_t(v)] = g.vertex(bx * kBlock + v, by * kBlock + v, bz * kBlock + v);
-    for (int k = 0; k < kBlockVerts; ++k)
-      for (int j = 0; j < kBlockVerts; ++j)
-        for (int i = 0; i < kBlockVerts; ++i)
-          points[sampleIndex(i, j, k)] = glm::vec3(axes[size_t(i)].x, axes[size_t(j)].y, axes[size_t(k)].z);
+    std::array<float, kBlockVerts> xs, ys, zs;  // the samples' coordinates along each axis (g.vertex()'s)
+    for (int v = 0; v < kBlockVerts; ++v) {
+      const glm::vec3 p = g.vertex(bx * kBlock + v, by * kBlock + v, bz * kBlock + v);
+      xs[size_t(v)] = p.x;
+      ys[size_t(v)] = p.y;
+      zs[size_t(v)] = p.z;
+    }
     r.samples.resize(kBlockSamples);
-    field.values(points, r.samples, scratch);
+    field.latticeValues(xs, ys, zs, r.samples, scratch);
     if (!snaps.empty()) {
       for (int k = 0; k < kBlockVerts; ++k)
         for (int j = 0; j < kBlockVerts; ++j) {
@@ -532,21 +546,35 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
           for (; it != snaps.end() && it->key <= rowKey + kBlock; ++it) {
             const int s = sampleIndex(int(it->key - rowKey), j, k);
             r.samples[s] = it->value;
-            points[s] = it->position;
             r.moved.emplace_back(s, it->position);
           }
         }
     }
 
     // Inside bits, one 9-bit mask per row of samples: rows[j + 9k] bit i is sample (i, j, k).
+    // The comparisons run as one vectorised pass into bytes (0 or 1); a row's first eight bytes, read as a
+    // little-endian word, become bits by one multiplication: byte i (bit 8i) times 2^(56 - 7i) lands on bit 56 + i,
+    // and no two products share a bit, so nothing carries.
+    static_assert(std::endian::native == std::endian::little);
+    std::array<uint8_t, kBlockSamples + 7> inside{};  // padded so the last row's 8-byte read stays inside
+    for (int s = 0; s < kBlockSamples; ++s) inside[size_t(s)] = r.samples[size_t(s)] >= iso;
     std::array<uint32_t, kBlockVerts * kBlockVerts> rows;
     for (int row = 0; row < kBlockVerts * kBlockVerts; ++row) {
-      const float* v = r.samples.data() + row * kBlockVerts;
-      uint32_t m = 0;
-      for (int i = 0; i < kBlockVerts; ++i) m |= uint32_t(v[i] >= iso) << i;
-      rows[size_t(row)] = m;
+      uint64_t bytes;
+      std::memcpy(&bytes, inside.data() + row * kBlockVerts, sizeof bytes);
+      rows[size_t(row)] =
+          uint32_t((bytes * 0x0102040810204080ull) >> 56) | uint32_t(inside[size_t(row * kBlockVerts + 8)]) << 8;
     }
     auto rowMask = [&](int j, int k) { return rows[size_t(j + kBlockVerts * k)]; };
+    // Sample (i, j, k)'s position, and whether it was moved onto a skeleton point.
+    auto samplePosition = [&](int i, int j, int k, bool& moved) -> glm::vec3 {
+      for (const auto& [s, p] : r.moved)
+        if (s == sampleIndex(i, j, k)) {
+          moved = true;
+          return p;
+        }
+      return {xs[size_t(i)], ys[size_t(j)], zs[size_t(k)]};
+    };
 
     // Surface cells (case code and cell index) and the crossing edges this block owns, in the order that numbers
     // their vertices: cells (i, j, k) ascending with i fastest, axes x, y, z within a cell.
@@ -573,8 +601,9 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
             const float f0 = r.samples[s0], f1 = r.samples[s1];
             r.edgeVertex[ownedEdgeIndex(axis, i, j, k)] = int32_t(edges.size());
             EdgeRoot e;
-            e.pa = points[s0];
-            e.pb = points[s1];
+            bool moved = false;
+            e.pa = samplePosition(i, j, k, moved);
+            e.pb = samplePosition(i + (axis == 0), j + (axis == 1), k + (axis == 2), moved);
             e.ga = transform(f0);
             e.gb = transform(f1);
             e.t = e.ga / (e.ga - e.gb);
@@ -582,9 +611,6 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
             // 5e-4 of an edge of the root where g is near linear, which the transform makes it.
             e.tolerance = 5e-4f * std::abs(e.ga - e.gb);
             // Edges from a vertex moved onto a thin limb span a much steeper field: give them more steps.
-            const bool moved = !r.moved.empty() && std::any_of(r.moved.begin(), r.moved.end(), [&](const auto& m) {
-              return m.first == s0 || m.first == s1;
-            });
             e.iterations = moved ? std::max(options.rootIterations, 10) : options.rootIterations;
             edges.push_back(e);
           }
@@ -711,15 +737,13 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
       const int i = int(cell & 0xFFFFu) % kBlock, j = int(cell & 0xFFFFu) / kBlock % kBlock,
                 k = int(cell & 0xFFFFu) / (kBlock * kBlock);
       const int cs = int(cell >> 16);
-      // Each crossing edge is looked up once per cell, however many triangles use it.
-      std::array<EdgeRef, 12> refs;
-      uint32_t known = 0;
-      auto ref = [&](int e) -> const EdgeRef& {
-        if (!((known >> e) & 1u)) {
-          refs[size_t(e)] = edgeVertex(i, j, k, e);
-          known |= 1u << e;
-        }
-        return refs[size_t(e)];
+      // A cell off the block's far faces has every edge owned by this block: a table offset finds its vertex.
+      const bool interior = i < kBlock - 1 && j < kBlock - 1 && k < kBlock - 1;
+      auto ref = [&](int e) -> EdgeRef {
+        if (!interior) return edgeVertex(i, j, k, e);
+        const int32_t local = r.edgeVertex[size_t(int(cell & 0xFFFFu) + table.ownedEdgeOffset[size_t(e)])];
+        IMPS_CHECK(local >= 0);
+        return {&r, uint32_t(local)};
       };
       int joined = 0;
       const uint8_t ambiguous = table.ambiguousFaces[cs];
@@ -804,6 +828,10 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
     out.positions.insert(out.positions.end(), r.centrePositions.begin(), r.centrePositions.end());
     out.normals.insert(out.normals.end(), r.centreNormals.begin(), r.centreNormals.end());
     out.colors.insert(out.colors.end(), r.centreColors.begin(), r.centreColors.end());
+    if (r.centrePositions.empty()) {  // no provisional indices
+      out.indices.insert(out.indices.end(), r.triangles.begin(), r.triangles.end());
+      continue;
+    }
     const size_t at = out.indices.size();
     out.indices.resize(at + r.triangles.size());
     for (size_t q = 0; q < r.triangles.size(); ++q) {

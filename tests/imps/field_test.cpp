@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 namespace imps {
@@ -93,6 +94,47 @@ TEST(Field, BatchedValuesAreBitIdenticalToPointValues) {
     std::vector<float> batched(points.size());
     f.values(points, batched, scratch);
     for (size_t k = 0; k < points.size(); ++k) EXPECT_EQ(batched[k], f.value(points[k]));
+  }
+}
+
+// Lattice evaluation skips each candidate where its support box misses the lattice: the values must still be
+// exactly value()'s, for every blend and with several blend sets (sums, folds and the maximum over sets).
+TEST(Field, LatticeValuesAreBitIdenticalToPointValues) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f), r(0.05f, 0.3f);
+  std::vector<Primitive> prims;
+  for (int i = 0; i < 20; ++i) prims.push_back(Primitive::metaball({u(rng), u(rng), u(rng)}, r(rng)));
+  for (int i = 0; i < 6; ++i) prims.push_back(Primitive::lineSeg({u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, r(rng), r(rng)));
+  BlendSets sets;
+  for (uint32_t first = 0; first < prims.size(); first += 4) {
+    std::vector<uint32_t> members;
+    for (uint32_t i = first; i < std::min<uint32_t>(first + 6, uint32_t(prims.size())); ++i) members.push_back(i);
+    sets.add(members);  // overlapping sets of six
+  }
+  for (BlendKind kind : {BlendKind::Exponential, BlendKind::BlancSchlick, BlendKind::Elliptical}) {
+    BlendFunction blend;
+    blend.kind = kind;
+    blend.defaultParam = kind == BlendKind::Exponential ? -3.0f : 0.7f;
+    const Field f = makeField(prims, blend, sets);
+    FieldScratch scratch;
+    for (int n = 0; n < 20; ++n) {
+      const glm::vec3 lo(u(rng), u(rng), u(rng));
+      std::vector<float> axes[3];
+      for (int a = 0; a < 3; ++a)
+        for (int v = 0; v < 9; ++v) axes[a].push_back(lo[a] + 0.05f * float(v));
+      Box region;
+      region.extend(lo);
+      region.extend({axes[0].back(), axes[1].back(), axes[2].back()});
+      f.prepare(region, scratch);
+      std::vector<float> lattice(9 * 9 * 9);
+      f.latticeValues(axes[0], axes[1], axes[2], lattice, scratch);
+      for (int k = 0; k < 9; ++k)
+        for (int j = 0; j < 9; ++j)
+          for (int i = 0; i < 9; ++i)
+            ASSERT_EQ(lattice[size_t(i + 9 * (j + 9 * k))],
+                      f.value({axes[0][size_t(i)], axes[1][size_t(j)], axes[2][size_t(k)]}))
+                << int(kind) << " lattice " << n << " point " << i << " " << j << " " << k;
+    }
   }
 }
 

@@ -88,6 +88,12 @@ class Field {
   void prepare(const Box& region, FieldScratch& scratch) const;
   void prepare(std::span<const uint32_t> candidates, FieldScratch& scratch) const;
   void values(std::span<const glm::vec3> points, std::span<float> out, FieldScratch& scratch) const;
+  // values() at the points of a lattice inside the prepared region: out[i + nx (j + ny k)] is F at
+  // (xs[i], ys[j], zs[k]), the axis coordinates ascending, out.size() == nx ny nz. Each candidate is evaluated only
+  // on the lattice rows its support box reaches (its term is exactly nothing elsewhere), which is much cheaper than
+  // values() when the primitives are small against the lattice. Bit-identical to value().
+  void latticeValues(std::span<const float> xs, std::span<const float> ys, std::span<const float> zs,
+                     std::span<float> out, FieldScratch& scratch) const;
   float value(const glm::vec3& x, FieldScratch& scratch) const;
   FieldSample sample(const glm::vec3& x, FieldScratch& scratch) const;
   // sample() at many points at once, vectorised; identical results.
@@ -99,8 +105,8 @@ class Field {
 
  private:
   void prepareSets(FieldScratch& scratch) const;
-  // Terms of primitive i at scratch.xs/ys/zs[0, n) into scratch.term.
-  void terms(size_t i, size_t n, FieldScratch& scratch) const;
+  // Terms of primitive i at scratch.xs/ys/zs[first, first + n) into scratch.term[first, first + n).
+  void terms(size_t i, size_t first, size_t n, FieldScratch& scratch) const;
   // Every candidate's terms at the points, combined per local set into scratch.acc (sets x points); with
   // keepTerms, each candidate's terms are also kept in scratch.terms (candidates x points).
   void accumulate(std::span<const glm::vec3> points, FieldScratch& scratch, bool keepTerms) const;
