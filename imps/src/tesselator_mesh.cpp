@@ -18,6 +18,7 @@
 //  E. hole repair (sequential): boundary loops (directed edges whose twin is missing) are walked and closed by ear
 //     clipping, choosing each time the ear with the shortest new edge whose normal agrees with the vertex normals.
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -113,18 +114,48 @@ struct Cell {
     int32_t* ol = bl[1 - cur];
     int m = 0;
     auto put = [&](float px, float py, int32_t l) { ox[m] = px, oy[m] = py, ol[m++] = l; };
-    for (int k = 0; k < n && m < kMax - 2; ++k) {
-      const int k1 = k + 1 == n ? 0 : k + 1;
+    // The point where edge k -> k1 crosses the line.
+    auto cross = [&](int k, int k1, int32_t l) {
       const float dc = dist[k], dn = dist[k1];
-      if (dc <= 0.0f) {
-        put(x[k], y[k], lab[k]);
-        if (dn > 0.0f) {
-          const float t = dc / (dc - dn);
-          put(x[k] + t * (x[k1] - x[k]), y[k] + t * (y[k1] - y[k]), label);
+      const float t = dc / (dc - dn);
+      put(x[k] + t * (x[k1] - x[k]), y[k] + t * (y[k1] - y[k]), l);
+    };
+    auto copy = [&](int from, int to) {  // corners [from, to) unchanged
+      for (int k = from; k < to; ++k) put(x[k], y[k], lab[k]);
+    };
+    // The cell is convex, so the cut-off corners are one cyclic run [o1, o2]: the new cell is the rest, with an exit
+    // point on the edge into the run (labelled by the cut) and an entry point on the edge out of it (labelled by the
+    // edge it lies on), in the corners' order. Only if rounding breaks the run up (or everything is cut) are the
+    // edges walked one by one; both ways give the same corners.
+    uint64_t out = 0;
+    for (int k = 0; k < n; ++k) out |= uint64_t(dist[k] > 0.0f) << k;
+    const uint64_t all = n == 64 ? ~uint64_t(0) : (uint64_t(1) << n) - 1;
+    const uint64_t before = ((out << 1) | (out >> (n - 1))) & all;  // bit k: corner k - 1 is cut
+    const uint64_t after = ((out >> 1) | (out << (n - 1))) & all;   // bit k: corner k + 1 is cut
+    const uint64_t first = out & ~before, last = out & ~after;
+    auto single = [](uint64_t bits) { return bits != 0 && (bits & (bits - 1)) == 0; };
+    if (n < kMax - 3 && single(first) && single(last)) {
+      const int o1 = std::countr_zero(first), o2 = std::countr_zero(last);
+      const int e = o1 == 0 ? n - 1 : o1 - 1, next = o2 + 1 == n ? 0 : o2 + 1;
+      if (e < o2) {  // the run lies inside [0, n)
+        copy(0, e + 1);
+        cross(e, o1, label);
+        cross(o2, next, lab[o2]);
+        copy(o2 + 1, n);
+      } else {  // the run wraps around corner 0
+        cross(o2, next, lab[o2]);
+        copy(o2 + 1, e + 1);
+        cross(e, o1, label);
+      }
+    } else {
+      for (int k = 0; k < n && m < kMax - 2; ++k) {
+        const int k1 = k + 1 == n ? 0 : k + 1;
+        if (dist[k] <= 0.0f) {
+          put(x[k], y[k], lab[k]);
+          if (dist[k1] > 0.0f) cross(k, k1, label);
+        } else if (dist[k1] <= 0.0f) {
+          cross(k, k1, lab[k]);
         }
-      } else if (dn <= 0.0f) {
-        const float t = dc / (dc - dn);
-        put(x[k] + t * (x[k1] - x[k]), y[k] + t * (y[k1] - y[k]), lab[k]);
       }
     }
     n = m;
