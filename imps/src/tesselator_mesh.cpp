@@ -45,7 +45,11 @@ V load4(const T* p) {
   std::memcpy(&v, p, sizeof v);
   return v;
 }
-bool any(I32x4 v) { return (v[0] | v[1] | v[2] | v[3]) != 0; }
+bool any(I32x4 v) {  // as two 64-bit halves: cheaper than four lane extractions
+  uint64_t half[2];
+  std::memcpy(half, &v, sizeof half);
+  return (half[0] | half[1]) != 0;
+}
 constexpr I32x4 kLane = {0, 1, 2, 3};
 
 // The Voronoi cell of the origin among 2D points (halfplane clipping), as the cyclic list of the labels of its
@@ -54,9 +58,10 @@ constexpr I32x4 kLane = {0, 1, 2, 3};
 struct Cell {
   static constexpr int kMax = 64;
   // Two buffers, swapped by each cutting clip (no copy back); x, y, lab point at the current one.
-  alignas(16) float bx[2][kMax + 3];
-  alignas(16) float by[2][kMax + 3];
-  int32_t bl[2][kMax];
+  static constexpr int kSlack = 8;  // room for whole four-lane reads and writes past the last corner
+  alignas(16) float bx[2][kMax + kSlack];
+  alignas(16) float by[2][kMax + kSlack];
+  alignas(16) int32_t bl[2][kMax + kSlack];
   float* x = bx[0];
   float* y = by[0];
   int32_t* lab = bl[0];
@@ -100,7 +105,7 @@ struct Cell {
   bool clip(float qx, float qy, int32_t label) {
     const float h = 0.5f * (qx * qx + qy * qy);
     // Most candidates do not reach the cell: test every corner first, and write only when something is cut.
-    alignas(16) float dist[kMax + 3];
+    alignas(16) float dist[kMax + kSlack];
     const F32x4 vqx = F32x4{} + qx, vqy = F32x4{} + qy, vh = F32x4{} + h;
     I32x4 cuts = {};
     for (int k = 0; k < n; k += 4) {
@@ -120,8 +125,20 @@ struct Cell {
       const float t = dc / (dc - dn);
       put(x[k] + t * (x[k1] - x[k]), y[k] + t * (y[k1] - y[k]), l);
     };
-    auto copy = [&](int from, int to) {  // corners [from, to) unchanged
-      for (int k = from; k < to; ++k) put(x[k], y[k], lab[k]);
+    auto copy = [&](int from, int to) {  // corners [from, to) unchanged; up to eight as whole lanes (slack)
+      if (to - from <= 8) {
+        auto lanes = [&](auto* dst, const auto* src) {  // 32-bit lanes, copied as bits
+          const I32x4 a = load4<I32x4>(src + from), b = load4<I32x4>(src + from + 4);
+          std::memcpy(dst + m, &a, sizeof a);
+          std::memcpy(dst + m + 4, &b, sizeof b);
+        };
+        lanes(ox, x);
+        lanes(oy, y);
+        lanes(ol, lab);
+        m += to - from;
+      } else {
+        for (int k = from; k < to; ++k) put(x[k], y[k], lab[k]);
+      }
     };
     // The cell is convex, so the cut-off corners are one cyclic run [o1, o2]: the new cell is the rest, with an exit
     // point on the edge into the run (labelled by the cut) and an entry point on the edge out of it (labelled by the
