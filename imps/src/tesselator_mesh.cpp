@@ -198,7 +198,8 @@ bool hasHalfEdge(const Tesselator::State& s, uint32_t a, uint32_t b) {
 }
 
 // Adds triangle (a, b, c) if none of its directed edges exists yet (and there is room): manifold by construction.
-// With `boundary`, keeps that count of directed edges without a twin up to date.
+// With `boundary`, keeps that count of directed edges without a twin up to date, and flags the corners in s.openOut
+// (they may have an open outgoing edge now).
 bool addTriangle(Tesselator::State& s, uint32_t a, uint32_t b, uint32_t c, size_t* boundary = nullptr) {
   if (a == b || b == c || c == a) return false;
   if (hasHalfEdge(s, a, b) || hasHalfEdge(s, b, c) || hasHalfEdge(s, c, a)) return false;
@@ -206,6 +207,7 @@ bool addTriangle(Tesselator::State& s, uint32_t a, uint32_t b, uint32_t c, size_
   if (boundary) {  // each new edge either closes its twin's boundary or opens one of its own
     const size_t twins = size_t(hasHalfEdge(s, b, a)) + size_t(hasHalfEdge(s, c, b)) + size_t(hasHalfEdge(s, a, c));
     *boundary = *boundary + (3 - twins) - twins;
+    s.openOut[a] = s.openOut[b] = s.openOut[c] = 1;
   }
   s.heTo[size_t(a) * kMaxHalfEdges + s.heCount[a]++] = b;
   s.heTo[size_t(b) * kMaxHalfEdges + s.heCount[b]++] = c;
@@ -237,8 +239,8 @@ bool fanHas(const Tesselator::State& s, uint32_t a, uint32_t b, uint32_t c) {
   return false;
 }
 
-// Collects the boundary loops' directed edges: b -> a for every used a -> b whose twin is missing. Only vertices that
-// countBoundary() flagged (s.openOut) have such edges; they are visited in particle order.
+// Collects the boundary loops' directed edges: b -> a for every used a -> b whose twin is missing. Only vertices
+// flagged in s.openOut can have such edges; they are visited in particle order.
 void collectHoles(Tesselator::State& s) {
   const size_t n = s.size();
   s.holeCount.assign(n, 0);
@@ -522,21 +524,42 @@ void Tesselator::triangulate(Mesh& mesh) {
   s.tris.clear();
   bool anyRepeat = false;
   for (size_t i = 0; i < n && !anyRepeat; ++i) anyRepeat = s.fanRepeat[i] != 0;
+  // The boundary (directed edges without a twin) is counted here and kept up to date by every later addTriangle;
+  // s.openOut flags (a superset of) the vertices with an open outgoing edge, for the repair's loop collection.
+  size_t boundary = 0;
+  s.openOut.resize(n);
   if (!anyRepeat) {
-    // Each chunk writes its triangles at its offset: the same particle order as the sequential assembly.
+    // Each chunk writes its triangles at its offset: the same particle order as the sequential assembly. The
+    // unanimous triangles at i are exactly i's unanimous slots (i, f[q], f[q + 1]), so i's outgoing edge i -> f[k]
+    // has its twin f[k] -> i iff some unanimous slot q has f[q + 1] == f[k]: i's own fan tells.
     for (size_t c = 0; c < chunks; ++c) chunkUnanimous[c + 1] += chunkUnanimous[c];
     s.tris.resize(3 * chunkUnanimous[chunks]);
+    std::vector<size_t> chunkOpen(chunks, 0);
     parallelFor(chunks, o.numThreads, [&](size_t c) {
       const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
       uint32_t* tri = s.tris.data() + 3 * chunkUnanimous[c];
+      size_t chunkBoundary = 0;
       for (size_t i = begin; i < end; ++i) {
         const int32_t* f = &s.fan[i * kMaxFan];
         const uint8_t* unanimous = &s.fanUnanimous[i * kMaxFan];
+        const size_t m = s.fanCount[i];
         uint32_t* to = &s.heTo[i * kMaxHalfEdges];
+        uint32_t from[kMaxHalfEdges];  // the twins' start vertices: f[q + 1] of each unanimous slot q
         size_t cnt = 0;
-        for (size_t k = 0; k < s.fanCount[i]; ++k)
-          if (unanimous[k]) to[cnt++] = uint32_t(f[k]);
+        for (size_t k = 0; k < m; ++k)
+          if (unanimous[k]) {
+            from[cnt] = uint32_t(f[k + 1 == m ? 0 : k + 1]);
+            to[cnt++] = uint32_t(f[k]);
+          }
         s.heCount[i] = uint8_t(cnt);
+        size_t open = 0;
+        for (size_t k = 0; k < cnt; ++k) {
+          bool twin = false;
+          for (size_t q = 0; q < cnt; ++q) twin |= from[q] == to[k];
+          open += twin ? 0 : 1;
+        }
+        s.openOut[i] = open > 0 ? 1 : 0;
+        chunkBoundary += open;
         for (size_t k = 0; k < s.candCount[i]; ++k) {
           const uint32_t* slot = &s.cand[(i * kMaxFan + k) * 3];
           if (slot[2] != 3) continue;
@@ -544,13 +567,16 @@ void Tesselator::triangulate(Mesh& mesh) {
           tri += 3;
         }
       }
+      chunkOpen[c] = chunkBoundary;
     });
+    for (size_t open : chunkOpen) boundary += open;
   } else {
     s.heCount.assign(n, 0);
+    s.openOut.assign(n, 0);
     for (uint32_t i = 0; i < n; ++i)
       for (size_t k = 0; k < s.candCount[i]; ++k) {
         const uint32_t* slot = &s.cand[(size_t(i) * kMaxFan + k) * 3];
-        if (slot[2] == 3) addTriangle(s, i, slot[0], slot[1]);
+        if (slot[2] == 3) addTriangle(s, i, slot[0], slot[1], &boundary);
       }
   }
   // Then the triangles of two corners' fans, then those of one: on a surface curved strongly at the particle
@@ -561,16 +587,14 @@ void Tesselator::triangulate(Mesh& mesh) {
     for (uint32_t i = 0; i < n; ++i)
       for (size_t k = 0; k < s.candCount[i] && (s.candVotes[i] >> votes & 1u); ++k) {
         const uint32_t* slot = &s.cand[(size_t(i) * kMaxFan + k) * 3];
-        if (slot[2] == votes) addTriangle(s, i, slot[0], slot[1]);
+        if (slot[2] == votes) addTriangle(s, i, slot[0], slot[1], &boundary);
       }
 
   // E. Hole repair.
   const size_t assembled = s.tris.size() / 3;
   s.holeTo.resize(n * 4);
   size_t unfilled = 0;
-  // The boundary count is taken in parallel after assembly and kept up to date by the repair's addTriangle calls, so
-  // a round that closes every loop needs no recount; a round after an opening-up recounts (and reflags) from scratch.
-  size_t boundary = countBoundary(s, o.numThreads);
+  // A round that closes every loop needs no recount; a round after an opening-up recounts (and reflags) from scratch.
   for (int round = 0; round < 4 && boundary > 0; ++round) {
     if (round > 0 && (boundary = countBoundary(s, o.numThreads)) == 0) break;
     collectHoles(s);
