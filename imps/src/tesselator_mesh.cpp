@@ -254,46 +254,36 @@ void collectHoles(Tesselator::State& s) {
   }
 }
 
-// The number of directed edges whose twin is missing (boundary edges), counted in parallel: the common case, a
-// closed mesh, then needs no sequential pass. Flags in s.openOut the vertices with such an outgoing edge.
-size_t countBoundary(Tesselator::State& s, int threads) {
-  const size_t n = s.size(), chunks = (n + kChunk - 1) / kChunk;
-  std::vector<size_t> counts(chunks, 0);
-  s.openOut.resize(n);
-  parallelFor(chunks, threads, [&](size_t c) {
-    const uint32_t begin = uint32_t(c * kChunk), end = uint32_t(std::min(n, (c + 1) * kChunk));
-    size_t count = 0;
-    for (uint32_t a = begin; a < end; ++a) {
-      size_t open = 0;
-      for (size_t k = 0; k < s.heCount[a]; ++k) open += hasHalfEdge(s, s.heTo[size_t(a) * kMaxHalfEdges + k], a) ? 0 : 1;
-      s.openOut[a] = open > 0 ? 1 : 0;
-      count += open;
-    }
-    counts[c] = count;
-  });
-  size_t total = 0;
-  for (size_t c : counts) total += c;
-  return total;
+// Removes directed edge a -> b from a's half-edge table (keeping the others' order).
+void removeHalfEdge(Tesselator::State& s, uint32_t a, uint32_t b) {
+  uint32_t* to = &s.heTo[size_t(a) * kMaxHalfEdges];
+  const size_t n = s.heCount[a];
+  size_t k = 0;
+  while (k < n && to[k] != b) ++k;
+  if (k == n) return;
+  std::copy(to + k + 1, to + n, to + k);
+  --s.heCount[a];
 }
 
-// Removes every triangle with a corner marked in openUp, and rebuilds the half-edge tables.
-void removeAround(Tesselator::State& s) {
-  const size_t n = s.size();
+// Removes every triangle with a corner marked in openUp, with its half-edges, keeping `boundary` (directed edges
+// without a twin) and s.openOut (a superset of the vertices with an open outgoing edge) up to date.
+void removeAround(Tesselator::State& s, size_t& boundary) {
   size_t w = 0;
   for (size_t t = 0; t < s.tris.size(); t += 3) {
-    bool drop = false;
-    for (int k = 0; k < 3; ++k) drop = drop || s.openUp[s.tris[t + size_t(k)]] != 0;
-    if (drop) continue;
-    for (int k = 0; k < 3; ++k) s.tris[w + size_t(k)] = s.tris[t + size_t(k)];
-    w += 3;
+    const uint32_t c[3] = {s.tris[t], s.tris[t + 1], s.tris[t + 2]};
+    if (!(s.openUp[c[0]] | s.openUp[c[1]] | s.openUp[c[2]])) {
+      for (int k = 0; k < 3; ++k) s.tris[w + size_t(k)] = c[k];
+      w += 3;
+      continue;
+    }
+    for (int k = 0; k < 3; ++k) {  // an edge with a twin leaves the twin open; an open edge just goes
+      const uint32_t a = c[k], b = c[(k + 1) % 3];
+      removeHalfEdge(s, a, b);
+      boundary = hasHalfEdge(s, b, a) ? boundary + 1 : boundary - 1;
+      s.openOut[a] = 1;
+    }
   }
   s.tris.resize(w);
-  s.heCount.assign(n, 0);
-  for (size_t t = 0; t < s.tris.size(); t += 3)
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t a = s.tris[t + size_t(k)], b = s.tris[t + size_t((k + 1) % 3)];
-      s.heTo[size_t(a) * kMaxHalfEdges + s.heCount[a]++] = b;
-    }
 }
 
 }  // namespace
@@ -594,9 +584,7 @@ void Tesselator::triangulate(Mesh& mesh) {
   const size_t assembled = s.tris.size() / 3;
   s.holeTo.resize(n * 4);
   size_t unfilled = 0;
-  // A round that closes every loop needs no recount; a round after an opening-up recounts (and reflags) from scratch.
   for (int round = 0; round < 4 && boundary > 0; ++round) {
-    if (round > 0 && (boundary = countBoundary(s, o.numThreads)) == 0) break;
     collectHoles(s);
     s.holeUsed.assign(n * 4, 0);
     s.openUp.assign(n, 0);
@@ -666,7 +654,7 @@ void Tesselator::triangulate(Mesh& mesh) {
     // round sees one larger, simple loop around the trouble spot. (A loop counts as unclosed when another loop's
     // triangles closed it first: then nothing is left open.)
     if (boundary == 0) unfilled = 0;
-    if (unfilled > 0 && round < 3) removeAround(s);
+    if (unfilled > 0 && round < 3) removeAround(s, boundary);
   }
 
   // Output: one vertex per particle.
