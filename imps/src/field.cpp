@@ -394,8 +394,12 @@ void atLeast(std::vector<float>& v, size_t size) {
 
 // F at n points from their per-set accumulators (sets x points): the maximum over the sets.
 void maxOverSets(bool additive, size_t sets, size_t n, const float* accs, float* out) {
-  for (size_t i = 0; i < n; ++i) out[i] = 0.0f;
-  for (size_t s = 0; s < sets; ++s) {
+  if (additive && sets > 0) {  // the first set's pass also clears: max(0, acc) is what max(out = 0, acc) gives
+    for (size_t i = 0; i < n; ++i) out[i] = std::max(0.0f, accs[i]);
+  } else {
+    for (size_t i = 0; i < n; ++i) out[i] = 0.0f;
+  }
+  for (size_t s = additive && sets > 0 ? 1 : 0; s < sets; ++s) {
     const float* acc = accs + s * n;
     if (additive) {
       for (size_t i = 0; i < n; ++i) out[i] = std::max(out[i], acc[i]);
@@ -465,12 +469,20 @@ void Field::latticeValues(std::span<const float> xs, std::span<const float> ys, 
   atLeast(scratch.ys, n);
   atLeast(scratch.zs, n);
   atLeast(scratch.term, n);
-  for (size_t k = 0; k < nz; ++k) {
-    std::fill_n(scratch.zs.begin() + long(nx * ny * k), nx * ny, zs[k]);
-    for (size_t j = 0; j < ny; ++j) {
-      std::copy(xs.begin(), xs.end(), scratch.xs.begin() + long(nx * (j + ny * k)));
-      std::fill_n(scratch.ys.begin() + long(nx * (j + ny * k)), nx, ys[j]);
+  // The points in SoA form: the first z slice's x and y element by element, then whole slices copied (a few long
+  // copies instead of one short copy per row).
+  const size_t slice = nx * ny;
+  for (size_t j = 0; j < ny; ++j)
+    for (size_t i = 0; i < nx; ++i) {
+      scratch.xs[i + nx * j] = xs[i];
+      scratch.ys[i + nx * j] = ys[j];
     }
+  for (size_t k = 0; k < nz; ++k) {
+    if (k > 0) {
+      std::copy_n(scratch.xs.begin(), slice, scratch.xs.begin() + long(slice * k));
+      std::copy_n(scratch.ys.begin(), slice, scratch.ys.begin() + long(slice * k));
+    }
+    std::fill_n(scratch.zs.begin() + long(slice * k), slice, zs[k]);
   }
   const bool additive = blend_.additive();
   const size_t sets = scratch.setCount();
@@ -694,17 +706,18 @@ void Field::samples(std::span<const glm::vec3> points, std::span<FieldSample> ou
   }
 }
 
-float Field::upperBound(const Box& box, const FieldScratch& scratch) const {
+float Field::upperBound(std::span<const float> minDistances, const FieldScratch& scratch) const {
   const auto& cand = scratch.candidates;
+  IMPS_CHECK_EQ(minDistances.size(), cand.size());
   if (!blend_.additive()) {
-    for (uint32_t i : cand)
-      if (primitives_[i].minDistance(box) < support_[i]) return INFINITY;
+    for (size_t k = 0; k < cand.size(); ++k)
+      if (minDistances[k] < support_[cand[k]]) return INFINITY;
     return 0.0f;
   }
   // Each set's sum is at most the sum of its members' largest terms in the box.
   thread_local std::vector<float> t;
   t.resize(cand.size());
-  for (size_t k = 0; k < cand.size(); ++k) t[k] = blend_.term(primitives_[cand[k]].minDistance(box), params_[cand[k]]);
+  for (size_t k = 0; k < cand.size(); ++k) t[k] = blend_.term(minDistances[k], params_[cand[k]]);
   float best = 0.0f;
   for (size_t s = 0; s < scratch.setCount(); ++s) {
     float sum = 0.0f;

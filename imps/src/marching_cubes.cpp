@@ -476,10 +476,20 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
   const int threads = options.threads;
   const bool logSpace = field.blend().kind == BlendKind::Exponential;
   const float logIso = lnPositive(iso);
-  // Root finding runs on ln F for the exponential blend: close to linear along an edge (F is a sum of exponentials
-  // of squared distances), so the first interpolation is already near the root. F is exactly 0 beyond every
-  // support; clamping at the smallest non-zero term keeps ln F finite.
-  auto transform = [&](float v) { return logSpace ? lnPositive(std::max(v, kExponentialCutoff)) - logIso : v - iso; };
+  // Root finding runs on a distance-like g for the exponential blend, so that the first interpolation is already
+  // near the root. One term is F = exp(B (d - 1)) with d the squared normalised distance to the skeleton, so
+  // d = 1 + ln F / B and g = (ln F - ln iso) / (sqrt(d_iso) + sqrt(d)) = B (sqrt(d) - sqrt(d_iso)) is linear in the
+  // distance (ln F alone is quadratic in it). Written as a quotient, g has exactly the sign of ln F - ln iso and
+  // its full precision near the root; the floor only guards a denominator that a near-zero B could round to 0.
+  // F is exactly 0 beyond every support; clamping at the smallest non-zero term keeps ln F finite.
+  const float invB = logSpace ? 1.0f / field.blend().defaultParam : 0.0f;
+  const float rootIso = std::sqrt(std::max(1.0f + logIso * invB, 0.0f));
+  // (Captured by value: a reference could alias the values it transforms, which would keep its loops scalar.)
+  auto transform = [logSpace, logIso, invB, rootIso, iso](float v) {
+    if (!logSpace) return v - iso;
+    const float lnF = lnPositive(std::max(v, kExponentialCutoff));
+    return (lnF - logIso) / std::max(rootIso + std::sqrt(std::max(1.0f + lnF * invB, 0.0f)), 1e-6f);
+  };
   // Only blocks with candidates (or thin-feature vertices) can hold surface; spreading just those over the threads
   // balances the load (surface blocks cluster in index order).
   std::vector<uint32_t>& work = st.work;
@@ -509,23 +519,30 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
       // Binning used support *boxes*; drop the candidates whose support cannot reach this block at all. Their terms
       // are exactly zero here, so every value stays bit-identical (x + 0 = x) with fewer primitives to evaluate.
       thread_local std::vector<uint32_t> reaching;
+      thread_local std::vector<float> reachingDistances;  // each reaching candidate's minDistance() to the block
       reaching.clear();
+      reachingDistances.clear();
       // For the additive blends, the sum of every reaching candidate's largest term in the block bounds each blend
       // set's sum from above (float addition of non-negative terms is monotone): most empty blocks stop here,
       // before the blend sets are prepared for the tighter upperBound().
       float largestTermsSum = 0.0f;
       for (uint32_t i : cand) {
-        const float d = field.primitive(i).minDistance(box);
-        if (d > field.supportDistance(i) * (1.0f + 1e-3f) + 1e-3f) continue;
+        const Primitive& p = field.primitive(i);
+        const float skip = field.supportDistance(i) * (1.0f + 1e-3f) + 1e-3f;
+        // A line segment's cheap bound (never above the tight one) already puts most candidates beyond the support;
+        // only the others pay for the refinement. (The other kinds have only the one bound.)
+        float d = p.minDistance(box, /*tight=*/false);
+        if (d > skip) continue;
+        if (p.kind == PrimitiveKind::LineSeg) d = p.minDistance(box);
+        if (d > skip) continue;
         reaching.push_back(i);
+        reachingDistances.push_back(d);
         largestTermsSum += field.blend().term(d, field.param(i));
       }
       if (reaching.empty()) return;
       if (field.blend().additive() && largestTermsSum < iso * (1.0f - 1e-3f)) return;
       field.prepare(reaching, scratch);
-    }
-    if (!forced[b]) {
-      if (field.upperBound(box, scratch) < iso * (1.0f - 1e-3f)) return;
+      if (field.upperBound(reachingDistances, scratch) < iso * (1.0f - 1e-3f)) return;
       if (field.lowerBound(box, scratch) > iso * (1.0f + 1e-3f)) return;
     }
     r.sampled = true;
@@ -579,7 +596,9 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
     // Surface cells (case code and cell index) and the crossing edges this block owns, in the order that numbers
     // their vertices: cells (i, j, k) ascending with i fastest, axes x, y, z within a cell.
     thread_local std::vector<EdgeRoot> edges;
+    thread_local std::vector<float> ends;  // F at each edge's two ends, then their transformed values
     edges.clear();
+    ends.clear();
     r.cells.clear();
     r.edgeVertex.assign(kBlockEdges, -1);
     for (int k = 0; k < kBlock; ++k)
@@ -604,12 +623,8 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
             bool moved = false;
             e.pa = samplePosition(i, j, k, moved);
             e.pb = samplePosition(i + (axis == 0), j + (axis == 1), k + (axis == 2), moved);
-            e.ga = transform(f0);
-            e.gb = transform(f1);
-            e.t = e.ga / (e.ga - e.gb);
-            // Scale-free stopping rule: |g| below 5e-4 of its change along the edge puts the vertex within about
-            // 5e-4 of an edge of the root where g is near linear, which the transform makes it.
-            e.tolerance = 5e-4f * std::abs(e.ga - e.gb);
+            ends.push_back(f0);
+            ends.push_back(f1);
             // Edges from a vertex moved onto a thin limb span a much steeper field: give them more steps.
             e.iterations = moved ? std::max(options.rootIterations, 10) : options.rootIterations;
             edges.push_back(e);
@@ -618,6 +633,18 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
       }
     r.hasSurface = !r.cells.empty();
     if (!r.hasSurface) return;
+
+    // The ends' transformed values in one vectorised pass, then each edge's first interpolation.
+    for (float& v : ends) v = transform(v);
+    for (size_t q = 0; q < edges.size(); ++q) {
+      EdgeRoot& e = edges[q];
+      e.ga = ends[2 * q];
+      e.gb = ends[2 * q + 1];
+      e.t = e.ga / (e.ga - e.gb);
+      // Scale-free stopping rule: |g| below 5e-4 of its change along the edge puts the vertex within about
+      // 5e-4 of an edge of the root where g is near linear, which the transform makes it.
+      e.tolerance = 5e-4f * std::abs(e.ga - e.gb);
+    }
 
     // Regula falsi root finding on the true field, every unfinished edge of the block evaluated in one batch per step.
     thread_local std::vector<uint32_t> active, stillActive;
@@ -794,16 +821,28 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
         if (options.computeNormals) r.centreNormals.insert(r.centreNormals.end(), {n.x, n.y, n.z});
         if (options.computeColors) r.centreColors.insert(r.centreColors.end(), {fs.color.x, fs.color.y, fs.color.z});
       }
-      for (int t = 0; t < entry[0]; ++t)
-        for (int v = 0; v < 3; ++v) {
-          const int code = entry[1 + 3 * t + v];
-          if (code >= kCentre) {
-            r.triangles.push_back(centreIndex[code - kCentre]);
-          } else {
-            const auto [owner, local] = ref(code);
-            r.triangles.push_back(owner->base + local);
-          }
+      // The cell's triangles written in place (one size check per cell, not per index).
+      const int count = 3 * entry[0];
+      const size_t first = r.triangles.size();
+      r.triangles.resize(first + size_t(count));
+      uint32_t* indices = r.triangles.data() + first;
+      if (interior && centres == 0) {  // the common case: every index from this block's table offsets
+        for (int v = 0; v < count; ++v) {
+          const int32_t local = r.edgeVertex[size_t(int(cell & 0xFFFFu) + table.ownedEdgeOffset[entry[size_t(1 + v)]])];
+          IMPS_CHECK(local >= 0);
+          indices[v] = r.base + uint32_t(local);
         }
+        continue;
+      }
+      for (int v = 0; v < count; ++v) {
+        const int code = entry[size_t(1 + v)];
+        if (code >= kCentre) {
+          indices[v] = centreIndex[code - kCentre];
+        } else {
+          const auto [owner, local] = ref(code);
+          indices[v] = owner->base + local;
+        }
+      }
     }
   }, 1);
 

@@ -296,7 +296,7 @@ void Tesselator::step(const Field& field, const SkeletonCache*) {
   const float alpha = o.energyCoeff, eHat = s.eHat;
   const float q2 = o.queryRadius * o.queryRadius;
   const Character* ch = s.character;
-  std::vector<uint8_t> transferred(n, 0), blocked(n, 0);
+  std::vector<uint64_t> transferred(chunks, 0), blocked(chunks, 0);  // ownership changes, per chunk
   parallelFor(chunks, o.numThreads, [&](size_t c) {
     const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
     FieldScratch& scratch = s.scratch[c];
@@ -340,9 +340,9 @@ void Tesselator::step(const Field& field, const SkeletonCache*) {
         }
         if (ok) {
           s.owner[i] = want;
-          transferred[i] = 1;
+          ++transferred[c];
         } else {
-          blocked[i] = 1;
+          ++blocked[c];
         }
       }
       // Repulsion (Witkin-Heckbert), in units of desiredRadius, over the neighbours within queryRadius (the nearest
@@ -405,9 +405,9 @@ void Tesselator::step(const Field& field, const SkeletonCache*) {
       s.sigmaRate[i] = dDot / denom;
     }
   });
-  for (size_t i = 0; i < n; ++i) {
-    stats_.transfers += transferred[i];
-    stats_.blockedTransfers += blocked[i];
+  for (size_t c = 0; c < chunks; ++c) {
+    stats_.transfers += transferred[c];
+    stats_.blockedTransfers += blocked[c];
   }
 
   // 4. Integration (parallel): clamped step, then one Newton step back onto the surface along the gradient.

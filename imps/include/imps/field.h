@@ -100,7 +100,9 @@ class Field {
   void samples(std::span<const glm::vec3> points, std::span<FieldSample> out, FieldScratch& scratch) const;
 
   // Conservative bounds of F over a box inside the prepared region: lower <= F(x) <= upper for all x in box.
-  float upperBound(const Box& box, const FieldScratch& scratch) const;
+  // upperBound() takes what it needs of the box, minDistances[k] <= the smallest kernel distance of candidate k
+  // (scratch.candidates[k]) in the box, e.g. its Primitive::minDistance(box), which callers often have already.
+  float upperBound(std::span<const float> minDistances, const FieldScratch& scratch) const;
   float lowerBound(const Box& box, const FieldScratch& scratch) const;
 
  private:
