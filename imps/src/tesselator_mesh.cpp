@@ -254,6 +254,22 @@ void collectHoles(Tesselator::State& s) {
   }
 }
 
+// Whether a hole loop may be filled: it turns counter-clockwise seen from outside (its vector area along the
+// vertices' mean normal is positive), as the loop around a hole does. A clockwise one runs around an island of
+// triangles inside a larger hole, and filling it would cap the island with a second, flipped layer; it is opened up
+// instead. Only loops whose normals all lie within 90 degrees of their mean (a patch that projects onto one plane)
+// get this verdict: one wrapped around a thin limb has no meaningful plane and is filled as before.
+bool fillable(const Tesselator::State& s, const std::vector<uint32_t>& loop) {
+  glm::vec3 normal(0.0f), area(0.0f);
+  for (size_t k = 0; k < loop.size(); ++k) {
+    normal += s.nrm[loop[k]];
+    area += glm::cross(s.vpos[loop[k]], s.vpos[loop[(k + 1) % loop.size()]]);
+  }
+  for (uint32_t v : loop)
+    if (glm::dot(s.nrm[v], normal) < 0.0f) return true;
+  return glm::dot(area, normal) > 0.0f;
+}
+
 // Removes directed edge a -> b from a's half-edge table (keeping the others' order).
 void removeHalfEdge(Tesselator::State& s, uint32_t a, uint32_t b) {
   uint32_t* to = &s.heTo[size_t(a) * kMaxHalfEdges];
@@ -572,7 +588,7 @@ void Tesselator::triangulate(Mesh& mesh) {
   // Then the triangles of two corners' fans, then those of one: on a surface curved strongly at the particle
   // spacing the corners' tangent planes disagree about near-cocircular quads, and a lone proposal that uses no taken
   // edge is usually exactly the triangle the hole repair would otherwise build, less folded (on the biped at 900
-  // particles the repair's share drops from about 160 triangles per triangulation to 14, and folds from 20-45 to 1-7).
+  // particles the repair's share drops from about 160 triangles per triangulation to a few; docs/tesselator.md).
   for (uint32_t votes : {2u, 1u})
     for (uint32_t i = 0; i < n; ++i)
       for (size_t k = 0; k < s.candCount[i] && (s.candVotes[i] >> votes & 1u); ++k) {
@@ -614,7 +630,7 @@ void Tesselator::triangulate(Mesh& mesh) {
           s.holeUsed[size_t(cur) * 4 + pick] = 1;
           cur = s.holeTo[size_t(cur) * 4 + pick];
         }
-        if (!closed || s.loop.size() > size_t(o.maxHoleLoop) || s.loop.size() < 3) {
+        if (!closed || s.loop.size() > size_t(o.maxHoleLoop) || s.loop.size() < 3 || !fillable(s, s.loop)) {
           ++unfilled;
           for (uint32_t v : s.loop) s.openUp[v] = 1;  // open up around it next round
           continue;
