@@ -8,6 +8,7 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 
 #include "imps/check.h"
@@ -20,6 +21,7 @@ constexpr int kBlock = 8;                          // cells per block side
 constexpr int kBlockVerts = kBlock + 1;            // samples per block side
 constexpr int kBlockSamples = kBlockVerts * kBlockVerts * kBlockVerts;
 constexpr int kBlockEdges = 3 * kBlock * kBlock * kBlock;  // edges owned by a block (start vertex in [0, B)^3)
+static_assert(kBlockEdges <= INT16_MAX, "a block's local vertex indices fit BlockResult::edgeVertex");
 constexpr uint32_t kCellBits = (1u << kBlock) - 1;  // the cells (or owned edges) of one row, as bits
 constexpr int kCentre = 12;                        // table code of a cell's first loop-centre vertex
 constexpr uint32_t kProvisional = 0x80000000u;     // triangle index of a centre vertex before final numbering
@@ -81,9 +83,22 @@ struct CaseTable {
   std::array<uint8_t, 256> ambiguousFaces{};  // bit f: face f has diagonal inside corners
   std::array<uint8_t, 12> edgeStartCorner{};   // edgeStart(e), looked up on the hot path
   std::array<int16_t, 12> ownedEdgeOffset{};   // ownedEdgeIndex() of edge e of the block's cell (0, 0, 0)
-  // entries[(case << 6) | joinedMask]: triangle count then 3 edge ids per triangle.
-  std::vector<std::array<uint8_t, 37>> entries = std::vector<std::array<uint8_t, 37>>(256 * 64);
-  std::vector<uint8_t> centreCount = std::vector<uint8_t>(256 * 64, 0);  // loop-centre vertices of each entry
+  // entries[entry(case, joinedMask)]: triangle count then 3 edge ids per triangle. Only the meaningful masks (subsets
+  // of the case's ambiguous faces) have an entry, so the table is dense (656 entries, 25 KB, instead of 256 x 64 with
+  // most of them empty, 600 KB) and stays in cache.
+  std::vector<std::array<uint8_t, 37>> entries;
+  std::vector<uint8_t> centreCount;            // loop-centre vertices of each entry
+  std::array<uint16_t, 256> firstEntry{};      // the entry of each case with no face joined
+
+  // A case's entries follow the ascending joined masks: a mask's rank is its bits gathered from the ambiguous faces'
+  // positions (bit b of the rank: the b-th ambiguous face is joined).
+  size_t entry(int c, int joined) const {
+    size_t rank = 0;
+    int bit = 0;
+    for (uint32_t a = ambiguousFaces[size_t(c)]; a != 0; a &= a - 1, ++bit)
+      rank |= size_t((joined >> std::countr_zero(a)) & 1) << bit;
+    return firstEntry[size_t(c)] + rank;
+  }
 
   CaseTable() {
     for (int e = 0; e < 12; ++e) {
@@ -98,9 +113,11 @@ struct CaseTable {
           changes += ((c >> faces[f].cycle[k]) & 1) != ((c >> faces[f].cycle[(k + 1) % 4]) & 1);
         if (changes == 4) ambiguousFaces[c] |= uint8_t(1u << f);
       }
+      firstEntry[size_t(c)] = uint16_t(entries.size());
       for (int joined = 0; joined < 64; ++joined) {
         if ((joined & ~ambiguousFaces[c]) != 0) continue;  // only meaningful bits
-        centreCount[size_t((c << 6) | joined)] = uint8_t(build(c, joined, entries[(c << 6) | joined]));
+        entries.emplace_back();
+        centreCount.push_back(uint8_t(build(c, joined, entries.back())));
       }
     }
   }
@@ -284,7 +301,8 @@ struct Snap {
 struct BlockResult {
   bool sampled = false, hasSurface = false;
   std::vector<float> samples;                   // kBlockSamples
-  std::vector<int32_t> edgeVertex;              // kBlockEdges: local vertex index or -1
+  std::vector<int16_t> edgeVertex;              // kBlockEdges: local vertex index or -1 (16 bits: half the cache
+                                                // lines for the triangles' lookups, often from the other core)
   std::vector<uint32_t> cells;                  // surface cells: index i + B (j + B k), case code << 16
   std::vector<float> positions, normals, colors;
   std::vector<uint32_t> triangles;              // global indices (centre vertices provisional until step 6)
@@ -480,7 +498,8 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
   // near the root. One term is F = exp(B (d - 1)) with d the squared normalised distance to the skeleton, so
   // d = 1 + ln F / B and g = (ln F - ln iso) / (sqrt(d_iso) + sqrt(d)) = B (sqrt(d) - sqrt(d_iso)) is linear in the
   // distance (ln F alone is quadratic in it). Written as a quotient, g has exactly the sign of ln F - ln iso and
-  // its full precision near the root; the floor only guards a denominator that a near-zero B could round to 0.
+  // its full precision near the root; the floor only guards the denominator where both roots are 0 (F and iso both
+  // at least exp(-B)).
   // F is exactly 0 beyond every support; clamping at the smallest non-zero term keeps ln F finite.
   const float invB = logSpace ? 1.0f / field.blend().defaultParam : 0.0f;
   const float rootIso = std::sqrt(std::max(1.0f + logIso * invB, 0.0f));
@@ -618,7 +637,7 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
             if (!((crossing[size_t(axis)] >> i) & 1u)) continue;
             const int s1 = s0 + (axis == 0 ? 1 : axis == 1 ? kBlockVerts : kBlockVerts * kBlockVerts);
             const float f0 = r.samples[s0], f1 = r.samples[s1];
-            r.edgeVertex[ownedEdgeIndex(axis, i, j, k)] = int32_t(edges.size());
+            r.edgeVertex[ownedEdgeIndex(axis, i, j, k)] = int16_t(edges.size());
             EdgeRoot e;
             bool moved = false;
             e.pa = samplePosition(i, j, k, moved);
@@ -787,10 +806,11 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
           if (saddle >= 0.0f) joined |= 1 << face;
         }
       }
-      const auto& entry = table.entries[(cs << 6) | joined];
+      const size_t entryIndex = table.entry(cs, joined);
+      const auto& entry = table.entries[entryIndex];
       // Loop-centre vertices: the mean of the loop's vertices, then Newton steps onto the surface.
       uint32_t centreIndex[2] = {0, 0};
-      const int centres = table.centreCount[size_t((cs << 6) | joined)];
+      const int centres = table.centreCount[entryIndex];
       for (int centre = 0; centre < centres; ++centre) {
         glm::vec3 sum(0.0f);
         int count = 0;
