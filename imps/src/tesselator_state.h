@@ -21,7 +21,7 @@ inline constexpr float kFanRadius = 2.5f;     // triangulation fans look this fa
 inline constexpr size_t kMaxFan = 24;         // tangent-plane fan entries per particle
 inline constexpr size_t kMaxHalfEdges = 24;   // outgoing half-edges per vertex during assembly
 inline constexpr size_t kMaxFuse = 4;        // fusion partners remembered per particle
-inline constexpr size_t kChunk = 128;         // particles per parallel task: the fixed work partition
+inline constexpr size_t kChunk = 64;          // particles per parallel task: the fixed work partition
 
 // Deterministic random numbers: one stream per (seed, particle id, update, purpose); splitmix64 finaliser.
 inline uint64_t mixBits(uint64_t x) {
