@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace imps {
 
@@ -29,13 +30,26 @@ void UniformHashGrid::build(std::span<const glm::vec3> points) {
   for (uint32_t b : touched_) start_[b] = end_[b] = kEmpty;
   touched_.clear();
   const size_t n = points.size();
-  keys_.resize(n);
-  for (size_t i = 0; i < n; ++i) keys_[i] = (uint64_t(bucketOf(points[i])) << 32) | uint64_t(i);
-  std::sort(keys_.begin(), keys_.end());
+  buckets_.resize(n);
+  for (size_t i = 0; i < n; ++i) buckets_[i] = bucketOf(points[i]);
+  // Bucket order, ties by index: a stable radix sort of the indices by bucket in two passes (low digit, then high),
+  // linear in n where a comparison sort was the largest serial step of the tesselator's update.
+  const int low = (3 * bits_ + 1) / 2;
+  const uint32_t lowMask = (1u << low) - 1u;
+  counts_.resize(size_t(1) << low);
+  spare_.resize(n);
   order_.resize(n);
+  auto pass = [&](auto digit, auto index, uint32_t* out) {
+    std::fill(counts_.begin(), counts_.end(), 0u);
+    for (size_t k = 0; k < n; ++k) ++counts_[digit(buckets_[index(k)])];
+    uint32_t sum = 0;
+    for (uint32_t& c : counts_) sum += std::exchange(c, sum);
+    for (size_t k = 0; k < n; ++k) out[counts_[digit(buckets_[index(k)])]++] = uint32_t(index(k));
+  };
+  pass([&](uint32_t b) { return b & lowMask; }, [](size_t k) { return k; }, spare_.data());
+  pass([&](uint32_t b) { return b >> low; }, [&](size_t k) { return spare_[k]; }, order_.data());
   for (size_t s = 0; s < n; ++s) {
-    const uint32_t b = uint32_t(keys_[s] >> 32);
-    order_[s] = uint32_t(keys_[s]);
+    const uint32_t b = buckets_[order_[s]];
     if (start_[b] == kEmpty) {
       start_[b] = uint32_t(s);
       touched_.push_back(b);

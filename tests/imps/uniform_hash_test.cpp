@@ -41,6 +41,24 @@ TEST(UniformHashGrid, OrderIsBucketSortedAndAdoptable) {
   std::vector<glm::vec3> sorted;
   for (uint32_t k : grid.order()) sorted.push_back(pts[k]);
   for (size_t k = 1; k < sorted.size(); ++k) EXPECT_LE(grid.bucketOf(sorted[k - 1]), grid.bucketOf(sorted[k]));
+  // Many points over many buckets (both radix digits vary): bucket order, ties by index, every point once.
+  {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(-40.0f, 40.0f);
+    std::vector<glm::vec3> many;
+    for (int k = 0; k < 2000; ++k) many.push_back({u(rng), u(rng), u(rng)});
+    UniformHashGrid big(1.0f, 6);
+    big.build(many);
+    const auto order = big.order();
+    ASSERT_EQ(order.size(), many.size());
+    std::vector<uint32_t> seen(order.begin(), order.end());
+    std::sort(seen.begin(), seen.end());
+    for (size_t k = 0; k < seen.size(); ++k) EXPECT_EQ(seen[k], k);
+    for (size_t k = 1; k < order.size(); ++k) {
+      const uint32_t a = big.bucketOf(many[order[k - 1]]), b = big.bucketOf(many[order[k]]);
+      EXPECT_TRUE(a < b || (a == b && order[k - 1] < order[k])) << k;
+    }
+  }
   grid.adoptOrder();
   size_t found = 0;
   grid.forEachWithin(sorted[0], 0.5f, sorted, [&](uint32_t j, float) { found += j < 2 ? 1 : 0; });

@@ -28,7 +28,7 @@ class UniformHashGrid {
   // The bucket of a point.
   uint32_t bucketOf(const glm::vec3& p) const;
 
-  // Rebuilds the grid over `points` (which the grid does not keep: queries take them again). O(n log n).
+  // Rebuilds the grid over `points` (which the grid does not keep: queries take them again). O(n) (a radix sort).
   void build(std::span<const glm::vec3> points);
 
   // The point indices in bucket order (ties by index): a spatially coherent ordering of the last build's points.
@@ -98,7 +98,7 @@ class UniformHashGrid {
   int bits_;
   std::vector<uint32_t> start_, end_;  // per bucket: range in order_, kEmpty when unused
   std::vector<uint32_t> touched_;      // buckets set by the last build (reset by the next)
-  std::vector<uint64_t> keys_;
+  std::vector<uint32_t> buckets_, counts_, spare_;  // build()'s radix sort: bucket per point, digit counts, pass 1
   std::vector<uint32_t> order_;
 };
 
