@@ -218,9 +218,9 @@ bool addTriangle(Tesselator::State& s, uint32_t a, uint32_t b, uint32_t c, size_
   return true;
 }
 
-// Does particle a's fan hold the consecutive pair (b, c)?
 static_assert(kMaxFan >= 9);
 
+// Does particle a's fan hold the consecutive pair (b, c)?
 bool fanHas(const Tesselator::State& s, uint32_t a, uint32_t b, uint32_t c) {
   const int32_t* f = &s.fan[size_t(a) * kMaxFan];
   const size_t m = s.fanCount[a];
