@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "drivers/binary_protocol.h"
+#include "eventually.h"
 
 namespace imps::drivers {
 namespace {
@@ -146,17 +147,6 @@ DeviceSessionOptions fastOptions() {
   o.reconnectIntervalMs = 20;
   o.ioWaitMs = 5;
   return o;
-}
-
-// Waits (generously) until pred() holds.
-template <class Pred>
-bool eventually(Pred pred, int timeoutMs = 5000) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeoutMs);
-  while (!pred()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  }
-  return true;
 }
 
 TEST(DeviceSession, HandshakeInfoAndStream) {

@@ -7,7 +7,6 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
-#include <functional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -15,6 +14,7 @@
 #include "drivers/device_session.h"
 #include "drivers/device_spec.h"
 #include "drivers/pose_mailbox.h"
+#include "eventually.h"
 #include "umockdev_hid.h"
 
 namespace imps::drivers {
@@ -73,15 +73,6 @@ std::vector<uint8_t> report(uint16_t seq, uint32_t timeUs, uint32_t a, uint32_t 
   for (int i = 0; i < 4; ++i) r.push_back(static_cast<uint8_t>(timeUs >> (8 * i)));
   for (int i = 0; i < 5; ++i) r.push_back(static_cast<uint8_t>(packed >> (8 * i)));
   return r;
-}
-
-bool eventually(const std::function<bool()>& done, int timeoutMs = 3000) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeoutMs);
-  while (std::chrono::steady_clock::now() < deadline) {
-    if (done()) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  }
-  return done();
 }
 
 TEST(HidTransport, ListsDevicesWithDescriptorVerdicts) {

@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <functional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -18,6 +17,7 @@
 #include "drivers/device_session.h"
 #include "drivers/device_spec.h"
 #include "drivers/pose_mailbox.h"
+#include "eventually.h"
 #include "sim/simulated_armature.h"
 #include "umockdev_usb.h"
 
@@ -45,16 +45,6 @@ sim::ArmatureOptions tableArmature(int channels = 8, int rows = 97) {
     o.recorded.push_back(s);
   }
   return o;
-}
-
-// Polls `done` until it holds or timeoutMs passes (the condition is the assertion; the time is only a bound).
-bool eventually(const std::function<bool()>& done, int timeoutMs = 10'000) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeoutMs);
-  while (!done()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  }
-  return true;
 }
 
 UsbTransportOptions transportOptions(const std::string& serial = "") {
@@ -528,7 +518,7 @@ TEST(UsbSession, SampleLatencyThroughTheEmulatedBus) {
   std::ranges::sort(ages);
   const int64_t median = ages[ages.size() / 2], p99 = ages[ages.size() * 99 / 100];
   std::printf("[ latency ] 1 kHz x 64 channels, %zu samples: median %.3f ms, p99 %.3f ms, dropped %llu\n",
-              ages.size(), median / 1e6, p99 / 1e6, static_cast<unsigned long long>(session.stats().samplesDropped));
+              ages.size(), double(median) / 1e6, double(p99) / 1e6, static_cast<unsigned long long>(session.stats().samplesDropped));
   EXPECT_EQ(session.stats().samplesDropped, 0u);
   EXPECT_LT(median, 20'000'000);
 }

@@ -11,6 +11,7 @@
 #include "drivers/device_session.h"
 #include "drivers/line_protocol.h"
 #include "drivers/serial_transport.h"
+#include "eventually.h"
 #include "umockdev_serial.h"
 
 namespace imps::sim {
@@ -196,16 +197,6 @@ TEST(SimulatedArmature, SpecOptions) {
 }
 
 // ---- Through a DeviceSession
-
-template <class Pred>
-bool eventually(Pred pred, int timeoutMs = 10000) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeoutMs);
-  while (!pred()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  }
-  return true;
-}
 
 DeviceSessionOptions fastOptions() {
   DeviceSessionOptions o;
