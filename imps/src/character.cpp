@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <map>
-#include <set>
 
 namespace imps {
 
@@ -43,13 +42,17 @@ class CharacterBuilder {
 
     if (const auto* flat = std::get_if<BlendNode>(root)) {
       c_.blend_ = BlendFunction::fromNode(*flat);
+      blendSource_ = flat;
       c_.hierarchical_ = false;
-      for (const SceneNode& child : flat->children) walk(child, -1);
+      for (const SceneNode& child : flat->children) walk(child, -1, c_.blend_.defaultParam);
     } else {
-      const BlendNode* fn = scene_.blendingFunction();
-      c_.blend_ = fn ? BlendFunction::fromNode(*fn) : BlendFunction{};
+      // A hierarchical character has one blend function: the polygonizer's blendingFunction, else that of the
+      // first blend node nested in the hierarchy (appendix A.2.2's mcSimpleBip01.wrl style).
+      blendSource_ = scene_.blendingFunction();
+      if (!blendSource_) blendSource_ = firstBlendNode(*root);
+      c_.blend_ = blendSource_ ? BlendFunction::fromNode(*blendSource_) : BlendFunction{};
       c_.hierarchical_ = true;
-      walk(*root, -1);
+      walk(*root, -1, c_.blend_.defaultParam);
     }
     if (!diags_.hasErrors() && c_.primitives_.empty())
       diags_.error(fileLoc, "the scene graph holds no primitives (Metaball, Ellipsoid or LineSeg)");
@@ -60,7 +63,16 @@ class CharacterBuilder {
   }
 
  private:
-  void walk(const SceneNode& node, int joint) {
+  static const BlendNode* firstBlendNode(const SceneNode& node) {
+    if (const auto* b = std::get_if<BlendNode>(&node)) return b;
+    if (const auto* t = std::get_if<TransformNode>(&node))
+      for (const SceneNode& child : t->children)
+        if (const BlendNode* b = firstBlendNode(child)) return b;
+    return nullptr;
+  }
+
+  // `defaultParam`: the blendParam of shapes that give none (the innermost enclosing blend node's).
+  void walk(const SceneNode& node, int joint, float defaultParam) {
     if (const auto* t = std::get_if<TransformNode>(&node)) {
       Joint j;
       j.name = t->name.empty() ? "joint" + std::to_string(c_.joints_.size()) : t->name;
@@ -69,16 +81,31 @@ class CharacterBuilder {
       const int index = static_cast<int>(c_.joints_.size());
       jointNames_[j.name].push_back(index);
       c_.joints_.push_back(std::move(j));
-      for (const SceneNode& child : t->children) walk(child, index);
+      for (const SceneNode& child : t->children) walk(child, index, defaultParam);
     } else if (const auto* s = std::get_if<ShapeNode>(&node)) {
-      addPrimitive(*s, joint);
+      addPrimitive(*s, joint, defaultParam);
     } else if (const auto* b = std::get_if<BlendNode>(&node)) {
-      diags_.error(b->loc, "a blend node may only be the root of a flat scene graph; in a hierarchical scene "
-                           "give the polygonizer a blendingFunction instead");
+      // A nested blend node scopes its parameters over the shapes it wraps; which shapes blend is still the
+      // blending rule's (a blend node is not a joint and does not group anything).
+      if (b->kind != c_.blend_.kind) {
+        const char* mine = blendTypeName(b->kind);
+        diags_.error(b->loc, std::string("this ") + mine + " differs from the character's blend function, " +
+                                 blendTypeName(c_.blend_.kind) + " (" + sourceOf(blendSource_) +
+                                 "): a character has one blend function; give every blend node the same type, or "
+                                 "set the polygonizer's blendingFunction " + mine + " { ... }");
+        return;
+      }
+      const float param = BlendFunction::fromNode(*b).defaultParam;
+      for (const SceneNode& child : b->children) walk(child, joint, param);
     }
   }
 
-  void addPrimitive(const ShapeNode& s, int joint) {
+  static std::string sourceOf(const BlendNode* b) {
+    if (!b) return "the default, as no blend node or blendingFunction is given";
+    return "from " + std::to_string(b->loc.line) + ":" + std::to_string(b->loc.column);
+  }
+
+  void addPrimitive(const ShapeNode& s, int joint, float defaultParam) {
     CharacterPrimitive p;
     const size_t index = c_.primitives_.size();
     switch (s.kind) {
@@ -89,7 +116,7 @@ class CharacterBuilder {
     static const char* kKindNames[] = {"metaball", "ellipsoid", "lineseg"};
     p.name = s.name.empty() ? kKindNames[static_cast<int>(s.kind)] + std::to_string(index) : s.name;
     p.joint = joint;
-    p.blendParam = s.blendParam.value_or(c_.blend_.defaultParam);
+    p.blendParam = s.blendParam.value_or(defaultParam);
     const bool wrongSign = c_.blend_.kind == BlendKind::Exponential ? !(p.blendParam < 0.0f) : !(p.blendParam > 0.0f);
     if (wrongSign || !std::isfinite(p.blendParam)) {
       diags_.error(s.loc, c_.blend_.kind == BlendKind::Exponential
@@ -108,79 +135,92 @@ class CharacterBuilder {
     return -1;
   }
 
-  void buildBlendGraph() {
+  // The twin classes: primitives of one joint (any joint in a flat scene) with the same BlendGroup memberships.
+  // `groupMembers[g]`: the primitives BlendGroup g names.
+  std::vector<uint32_t> twinClasses(const std::vector<std::vector<uint32_t>>& groupMembers, size_t& classCount) const {
     const size_t n = c_.primitives_.size();
-    std::vector<std::set<uint32_t>> nb(n);
-    if (c_.hierarchical_) {
-      std::vector<int> count(c_.joints_.size(), 0);
-      for (const auto& p : c_.primitives_)
-        if (p.joint >= 0) ++count[p.joint];
-      std::vector<int> parentOf(c_.joints_.size());
-      for (size_t j = 0; j < c_.joints_.size(); ++j) parentOf[j] = shapeParent(static_cast<int>(j), count);
-      for (size_t a = 0; a < n; ++a)
-        for (size_t b = a + 1; b < n; ++b) {
-          const int ja = c_.primitives_[a].joint, jb = c_.primitives_[b].joint;
-          const bool siblings = ja == jb;
-          const bool parentChild = (ja >= 0 && parentOf[ja] == jb && jb >= 0) || (jb >= 0 && parentOf[jb] == ja && ja >= 0);
-          if (siblings || parentChild) {
-            nb[a].insert(static_cast<uint32_t>(b));
-            nb[b].insert(static_cast<uint32_t>(a));
-          }
-        }
-    } else if (!scene_.blendGroups.empty()) {
-      // A flat scene blends everything with everything; only BlendGroups need the pairs spelled out.
-      for (size_t a = 0; a < n; ++a)
-        for (size_t b = 0; b < n; ++b)
-          if (a != b) nb[a].insert(static_cast<uint32_t>(b));
+    std::vector<std::vector<uint32_t>> memberships(n);
+    for (size_t g = 0; g < groupMembers.size(); ++g)
+      for (uint32_t i : groupMembers[g])
+        if (memberships[i].empty() || memberships[i].back() != g) memberships[i].push_back(static_cast<uint32_t>(g));
+    std::map<std::pair<int, std::vector<uint32_t>>, uint32_t> ids;
+    std::vector<uint32_t> classOf(n);
+    for (size_t i = 0; i < n; ++i) {
+      const int joint = c_.hierarchical_ ? c_.primitives_[i].joint : -1;
+      classOf[i] = ids.try_emplace({joint, std::move(memberships[i])}, static_cast<uint32_t>(ids.size())).first->second;
     }
+    classCount = ids.size();
+    return classOf;
+  }
 
-    // BlendGroups override the hierarchy, later groups winning.
-    for (const BlendGroupNode& g : scene_.blendGroups) {
-      std::vector<uint32_t> members;
-      for (const std::string& name : g.members) {
-        std::vector<uint32_t> found = primitivesNamed(name);
-        if (found.empty()) {
-          std::vector<std::string> known;
-          for (const auto& [k, v] : shapeNames_) known.push_back(k);
-          for (const auto& [k, v] : jointNames_) known.push_back(k);
-          const std::string guess = closestMatch(name, known);
-          diags_.error(g.loc, "BlendGroup member '" + name + "' names no primitive or RigidTransform" +
-                                  (guess.empty() ? "" : "; did you mean '" + guess + "'?"));
-        }
-        members.insert(members.end(), found.begin(), found.end());
+  void buildBlendGraph() {
+    std::vector<std::vector<uint32_t>> groupMembers;
+    for (const BlendGroupNode& g : scene_.blendGroups) groupMembers.push_back(blendGroupMembers(g));
+    size_t classCount = 0;
+    std::vector<uint32_t> classOf = twinClasses(groupMembers, classCount);
+    BlendGraph graph(classOf, classCount);
+    std::vector<int> jointOf(classCount, -1);
+    for (size_t i = 0; i < classOf.size(); ++i) jointOf[classOf[i]] = c_.primitives_[i].joint;
+
+    // The rule: siblings, parent and children (hierarchical); everything (flat).
+    std::vector<int> count(c_.joints_.size(), 0);
+    for (const auto& p : c_.primitives_)
+      if (p.joint >= 0) ++count[p.joint];
+    for (uint32_t a = 0; a < classCount; ++a)
+      for (uint32_t b = a + 1; b < classCount; ++b) {
+        const int ja = jointOf[a], jb = jointOf[b];
+        const bool related = !c_.hierarchical_ || ja == jb || (ja >= 0 && shapeParent(ja, count) == jb) ||
+                             (jb >= 0 && shapeParent(jb, count) == ja);
+        graph.setBlend(a, b, related);
       }
-      for (uint32_t a : members)
-        for (uint32_t b : members) {
-          if (a == b) continue;
-          if (g.blend) nb[a].insert(b);
-          else nb[a].erase(b);
-        }
+    // BlendGroups override the rule, later groups winning. Each group's members are a union of twin classes.
+    for (size_t g = 0; g < groupMembers.size(); ++g) {
+      std::vector<uint32_t> classes;
+      for (uint32_t i : groupMembers[g]) classes.push_back(classOf[i]);
+      std::sort(classes.begin(), classes.end());
+      classes.erase(std::unique(classes.begin(), classes.end()), classes.end());
+      const bool blend = scene_.blendGroups[g].blend;
+      for (uint32_t a : classes) {
+        graph.setSelfBlend(a, blend);
+        for (uint32_t b : classes) graph.setBlend(a, b, blend);
+      }
     }
 
-    c_.neighbours_.resize(n);
-    for (size_t i = 0; i < n; ++i) c_.neighbours_[i].assign(nb[i].begin(), nb[i].end());
-
-    if (!c_.hierarchical_ && scene_.blendGroups.empty()) {
-      c_.sets_ = BlendSets::all(n);
+    c_.graph_ = std::move(graph);
+    if (c_.graph_.complete()) {
+      c_.sets_ = BlendSets::all(c_.primitives_.size());
       return;
     }
-    // One set per primitive: itself and its neighbours; drop duplicates and subsets (they never win the max,
-    // since the blends are monotone in every term).
-    std::vector<std::vector<uint32_t>> sets(n);
-    for (size_t i = 0; i < n; ++i) {
-      sets[i] = c_.neighbours_[i];
-      sets[i].insert(std::lower_bound(sets[i].begin(), sets[i].end(), static_cast<uint32_t>(i)),
-                     static_cast<uint32_t>(i));
+    constexpr size_t kMaxBlendSets = 100000;
+    auto cliques = c_.graph_.maximalCliques(kMaxBlendSets);
+    if (!cliques) {
+      diags_.error({scene_.fileName, 0, 0}, "the BlendGroups make more than " + std::to_string(kMaxBlendSets) +
+                                                " blend sets (maximal cliques of the blend graph); group primitives "
+                                                "that should blend together instead of removing many single pairs");
+      return;
     }
-    std::vector<bool> keep(n, true);
-    for (size_t a = 0; a < n; ++a)
-      for (size_t b = 0; b < n && keep[a]; ++b) {
-        if (a == b || !keep[b]) continue;
-        const bool subset = std::includes(sets[b].begin(), sets[b].end(), sets[a].begin(), sets[a].end());
-        if (subset && (sets[a].size() < sets[b].size() || a > b)) keep[a] = false;
+    for (const auto& set : *cliques) c_.sets_.add(set);
+  }
+
+  // The primitives a BlendGroup names (a primitive's DEF name, or a RigidTransform's for all its primitives),
+  // ascending; unknown names are errors with a suggestion.
+  std::vector<uint32_t> blendGroupMembers(const BlendGroupNode& g) {
+    std::vector<uint32_t> members;
+    for (const std::string& name : g.members) {
+      std::vector<uint32_t> found = primitivesNamed(name);
+      if (found.empty()) {
+        std::vector<std::string> known;
+        for (const auto& [k, v] : shapeNames_) known.push_back(k);
+        for (const auto& [k, v] : jointNames_) known.push_back(k);
+        const std::string guess = closestMatch(name, known);
+        diags_.error(g.loc, "BlendGroup member '" + name + "' names no primitive or RigidTransform" +
+                                (guess.empty() ? "" : "; did you mean '" + guess + "'?"));
       }
-    for (size_t i = 0; i < n; ++i)
-      if (keep[i]) c_.sets_.add(sets[i]);
+      members.insert(members.end(), found.begin(), found.end());
+    }
+    std::sort(members.begin(), members.end());
+    members.erase(std::unique(members.begin(), members.end()), members.end());
+    return members;
   }
 
   std::vector<uint32_t> primitivesNamed(const std::string& name) const {
@@ -197,6 +237,7 @@ class CharacterBuilder {
   }
 
   const Scene& scene_;
+  const BlendNode* blendSource_ = nullptr;  // where the character's blend function comes from, if from a node
   Character c_;
   Diagnostics diags_;
   std::map<std::string, std::vector<size_t>> shapeNames_;

@@ -594,6 +594,7 @@ FieldSample Field::sample(const glm::vec3& x, FieldScratch& scratch) const {
     }
   }
   out.value = std::max(bestValue, 0.0f);
+  scratch.lastWinner = static_cast<uint32_t>(best);
   // Gradient, colour and owner from the winning set.
   glm::vec3 color(0.0f);
   float weightSum = 0.0f, bestWeight = -1.0f;

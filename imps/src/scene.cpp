@@ -74,4 +74,13 @@ bool Scene::operator==(const Scene& o) const {
   return polygonizer == o.polygonizer && root == o.root && blendGroups == o.blendGroups;
 }
 
+const char* blendTypeName(BlendKind kind) {
+  switch (kind) {
+    case BlendKind::Exponential: return "ExponentialBlend";
+    case BlendKind::BlancSchlick: return "BlancSchlickBlend";
+    case BlendKind::Elliptical: return "EllipticalBlend";
+  }
+  return "?";
+}
+
 }  // namespace imps

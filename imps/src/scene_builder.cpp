@@ -316,15 +316,6 @@ size_t expectedCount(FieldType type) {
   }
 }
 
-std::string blendTypeName(BlendKind kind) {
-  switch (kind) {
-    case BlendKind::Exponential: return "ExponentialBlend";
-    case BlendKind::BlancSchlick: return "BlancSchlickBlend";
-    case BlendKind::Elliptical: return "EllipticalBlend";
-  }
-  return "?";
-}
-
 std::string shapeTypeName(ShapeKind kind) {
   switch (kind) {
     case ShapeKind::Metaball: return "Metaball";
@@ -711,7 +702,7 @@ void SceneBuilder::checkBlendParams(const SceneNode& node, BlendKind inForce) {
   } else if (const auto* shape = std::get_if<ShapeNode>(&node); shape && shape->blendParam) {
     const float p = *shape->blendParam;
     const std::string head = "blendParam " + formatFloat(p) + " of " + shapeTypeName(shape->kind) + " must be ";
-    const std::string under = " under " + blendTypeName(inForce);
+    const std::string under = std::string(" under ") + blendTypeName(inForce);
     if (inForce == BlendKind::Exponential && !(p < 0.0f))
       sink_.error(shape->loc, head + "negative" + under + " (it is the blobbiness B)");
     if (inForce == BlendKind::BlancSchlick && !(p > 0.0f))

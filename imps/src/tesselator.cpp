@@ -234,9 +234,9 @@ ParticleView Tesselator::particles() const {
 void Tesselator::update(const SkeletonCache& skeleton) {
   State& s = *s_;
   const auto t0 = Clock::now();
-  s.character = skeleton.character().hierarchical() ? &skeleton.character() : nullptr;
+  s.character = &skeleton.character();
   // 1. Differential transforms (thesis 3.7): particles follow their owners' joints rigidly.
-  if (options_.doDifferentialTransforms && s.character && s.lastGeneration != ~0ull &&
+  if (options_.doDifferentialTransforms && s.character->hierarchical() && s.lastGeneration != ~0ull &&
       skeleton.generation() != s.lastGeneration) {
     const size_t prims = skeleton.field().size();
     std::vector<Rigid> d(prims);
@@ -333,11 +333,7 @@ void Tesselator::step(const Field& field, const SkeletonCache*) {
       // Ownership: the field's owner, but only the current owner's blend neighbours may take a particle over.
       const int32_t want = fs.owner;
       if (want >= 0 && want != s.owner[i]) {
-        bool ok = s.owner[i] < 0 || ch == nullptr;
-        if (!ok) {
-          const auto& nb = ch->blendNeighbours(size_t(s.owner[i]));
-          ok = std::binary_search(nb.begin(), nb.end(), uint32_t(want));
-        }
+        const bool ok = s.owner[i] < 0 || ch == nullptr || ch->blends(size_t(s.owner[i]), size_t(want));
         if (ok) {
           s.owner[i] = want;
           ++transferred[c];

@@ -343,9 +343,11 @@ void Tesselator::triangulate(Mesh& mesh) {
       glm::vec3 v = p;
       FieldSample fs;
       bool converged = false;
+      uint32_t winner = 0;  // the blend set winning at the particle
       for (int it = 0; it < 3; ++it) {
         fs = field.sample(v, scratch);
         if (it == 0) {  // at the particle itself: the next compute phase reuses it if nothing moves before it
+          winner = scratch.lastWinner;
           s.cacheValue[i] = fs.value;
           s.cacheGrad[i] = fs.gradient;
           s.cacheOwner[i] = fs.owner;
@@ -373,7 +375,8 @@ void Tesselator::triangulate(Mesh& mesh) {
       }
       s.vok[i] = converged ? 1 : 0;  // else no vertex this render (see kVertexOff)
       s.vpos[i] = finite3(v) ? v : p;
-      // Colour: primitive colours weighted by term^(1/colorWidth) over the owner's blend set (wider = smoother).
+      // Colour: primitive colours weighted by term^(1/colorWidth) over the blend set winning at the particle
+      // (wider = smoother): only primitives that blend there mix their colours.
       glm::vec3 col(0.0f);
       float wsum = 0.0f;
       auto addColor = [&](uint32_t k) {
@@ -385,9 +388,9 @@ void Tesselator::triangulate(Mesh& mesh) {
         wsum += w;
       };
       const int32_t ow = s.owner[i];
-      if (s.character && ow >= 0) {
-        addColor(uint32_t(ow));
-        for (uint32_t k : s.character->blendNeighbours(size_t(ow))) addColor(k);
+      if (ow >= 0 && scratch.setCount() > 0) {
+        for (uint32_t m = scratch.setOffsets[winner]; m < scratch.setOffsets[winner + 1]; ++m)
+          addColor(scratch.candidates[scratch.setMembers[m]]);
       } else {
         for (uint32_t k : scratch.candidates) addColor(k);
       }

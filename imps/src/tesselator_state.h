@@ -80,7 +80,7 @@ struct Tesselator::State {
   std::vector<FieldScratch> scratch;  // one per chunk (reused)
 
   const Field* field = nullptr;
-  const Character* character = nullptr;  // set for hierarchical characters
+  const Character* character = nullptr;  // set when updated from a skeleton: who may take a particle over
   uint64_t lastGeneration = ~0ull;
   uint64_t nextId = 0;
   uint64_t update = 0;

@@ -90,26 +90,33 @@ TEST(Character, BlendGroupWithUnknownNameIsAnError) {
   EXPECT_NE(c.error().str().find("did you mean"), std::string::npos);
 }
 
-TEST(Character, BlendSetsHoldEachPrimitiveWithItsNeighboursWithoutSubsets) {
+TEST(Character, BlendSetsAreTheMaximalCliquesOfTheBlendGraph) {
   const Character c = compile(kChain);
   const BlendSets& sets = c.blendSets();
-  // Every primitive's own set {i} + neighbours(i) is covered by some kept set ...
-  for (size_t i = 0; i < c.primitives().size(); ++i) {
-    std::vector<uint32_t> own = c.blendNeighbours(i);
-    own.insert(std::lower_bound(own.begin(), own.end(), uint32_t(i)), uint32_t(i));
-    bool covered = false;
-    for (size_t s = 0; s < sets.count(); ++s) {
-      const auto set = sets.set(s);
-      covered |= std::includes(set.begin(), set.end(), own.begin(), own.end());
+  const size_t n = c.primitives().size();
+  auto contains = [&](size_t s, size_t i) {
+    return std::binary_search(sets.set(s).begin(), sets.set(s).end(), uint32_t(i));
+  };
+  for (size_t s = 0; s < sets.count(); ++s) {
+    // A clique: every pair of members blends ...
+    for (uint32_t a : sets.set(s))
+      for (uint32_t b : sets.set(s))
+        if (a != b) EXPECT_TRUE(c.blends(a, b)) << s;
+    // ... and maximal: no other primitive blends with all of them.
+    for (size_t i = 0; i < n; ++i) {
+      if (contains(s, i)) continue;
+      bool all = true;
+      for (uint32_t m : sets.set(s)) all = all && c.blends(i, m);
+      EXPECT_FALSE(all) << "set " << s << " could take primitive " << i;
     }
-    EXPECT_TRUE(covered) << i;
   }
-  // ... and no kept set is contained in another.
-  for (size_t a = 0; a < sets.count(); ++a)
-    for (size_t b = 0; b < sets.count(); ++b)
-      if (a != b) {
-        EXPECT_FALSE(std::includes(sets.set(b).begin(), sets.set(b).end(), sets.set(a).begin(), sets.set(a).end()));
-      }
+  // Every blending pair shares a set; no other pair does.
+  for (size_t a = 0; a < n; ++a)
+    for (size_t b = a + 1; b < n; ++b) {
+      bool shared = false;
+      for (size_t s = 0; s < sets.count(); ++s) shared = shared || (contains(s, a) && contains(s, b));
+      EXPECT_EQ(shared, c.blends(a, b)) << a << " " << b;
+    }
 }
 
 TEST(Character, FlatSceneBlendsEverything) {

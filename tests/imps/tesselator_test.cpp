@@ -217,8 +217,7 @@ TEST(Tesselator, BlendRuleRespectedWhenHandsTouchHips) {
     for (const auto& [id, o] : now) {
       auto it = before.find(id);
       if (it == before.end() || it->second == o || it->second < 0) continue;
-      const auto& nb = ch.blendNeighbours(size_t(it->second));
-      EXPECT_TRUE(std::binary_search(nb.begin(), nb.end(), uint32_t(o)))
+      EXPECT_TRUE(ch.blends(size_t(it->second), size_t(o)))
           << ch.primitives()[size_t(it->second)].name << " -> " << ch.primitives()[size_t(o)].name;
       ++checked;
     }
@@ -230,6 +229,59 @@ TEST(Tesselator, BlendRuleRespectedWhenHandsTouchHips) {
   // owned by a hip/pelvis primitive or vice versa (they never blend).
   EXPECT_LT(worstSurfaceError(skel.field(), mesh), 0.01f * e.options.desiredRadius);
   for (float x : mesh.positions) ASSERT_TRUE(std::isfinite(x));
+}
+
+// The blend rule in the particles too (thesis 3.7): on a torso -> shoulder -> arm chain coloured red, green and
+// blue, torso and arm never blend, so no vertex mixes red with blue, and no particle passes between them.
+TEST(Tesselator, ColoursAndOwnershipMixOnlyAcrossBlendingPairs) {
+  auto scene = readScene(R"(#VRML V2.0 utf8
+Tesselator3MP { desiredRadius 0.03 queryRadius 0.072 numThreads 2
+  spatialSubdivision UniformHash { cubeSize 0.072 bitsPerDim 6 }
+  blendingFunction ExponentialBlend { variance 2 } sceneGraph RigidTransform { children [
+  DEF torso LineSeg { point1 0 0 0 point2 0 0.6 0 radius1 0.12 radius2 0.12 material Material { diffuseColor 1 0 0 } }
+  DEF Shoulder RigidTransform { translation 0.24 0.6 0 children [
+    DEF shoulder Metaball { radius 0.1 material Material { diffuseColor 0 1 0 } }
+    DEF Arm RigidTransform { translation 0 -0.02 0 children [
+      DEF arm LineSeg { point1 0 0 0 point2 0 -0.5 0 radius1 0.05 radius2 0.05 material Material { diffuseColor 0 0 1 } }
+    ] }
+  ] }
+] } }
+)", "chain.wrl");
+  ASSERT_TRUE(scene.has_value()) << scene.error().str();
+  auto ch = Character::fromScene(*scene);
+  ASSERT_TRUE(ch.has_value()) << ch.error().str();
+  SkeletonCache skel(*ch);
+  Tesselator tess(TesselatorOptions::fromNode(std::get<Tesselator3MPNode>(scene->polygonizer)));
+  Mesh mesh;
+  tess.settle(skel, mesh, 80);
+  size_t greenish = 0;
+  for (size_t v = 0; v < mesh.vertexCount(); ++v) {
+    const glm::vec3 c = mesh.color(v);
+    EXPECT_LT(std::min(c.r, c.b), 1e-3f) << "vertex " << v << " mixes torso and arm colours";
+    greenish += c.g > 0.2f && (c.r > 0.2f || c.b > 0.2f);
+  }
+  EXPECT_GT(greenish, 10u) << "the shoulder does mix with both neighbours";
+  // Swing the arm against the torso and back: no particle of the torso is ever taken over by the arm or back.
+  const size_t torso = 0, arm = 2;
+  ASSERT_EQ(ch->primitives()[arm].name, "arm");
+  std::map<uint64_t, int32_t> before;
+  for (int u = 0; u <= 30; ++u) {
+    const float a = 0.4f * std::sin(float(u) / 30.0f * 6.2831853f);
+    skel.setRotation("Shoulder", glm::angleAxis(a, glm::vec3(0, 0, 1)));
+    skel.update();
+    tess.update(skel);
+    const ParticleView pv = tess.particles();
+    std::map<uint64_t, int32_t> now;
+    for (size_t i = 0; i < pv.size(); ++i) {
+      now[pv.ids[i]] = pv.owners[i];
+      auto it = before.find(pv.ids[i]);
+      if (it == before.end()) continue;
+      const bool torsoToArm = size_t(it->second) == torso && size_t(pv.owners[i]) == arm;
+      const bool armToTorso = size_t(it->second) == arm && size_t(pv.owners[i]) == torso;
+      EXPECT_FALSE(torsoToArm || armToTorso) << "particle " << pv.ids[i];
+    }
+    before = std::move(now);
+  }
 }
 
 TEST(Tesselator, RecoversAfterSudden45DegreeRotation) {

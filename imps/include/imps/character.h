@@ -6,7 +6,8 @@
 // (primitives of the nearest ancestor joint that holds primitives) and its children (primitives of joints whose
 // nearest primitive-holding ancestor is its joint) — never with a grandparent or grandchild. BlendGroup nodes then
 // add (blend TRUE) or remove (blend FALSE) pairs, later groups winning. A flat scene (blend node at the root) blends
-// everything with everything.
+// everything with everything. Two primitives blend only if they are neighbours in this graph: the field's blend
+// sets are its maximal cliques (blend_graph.h).
 #pragma once
 
 #include <expected>
@@ -17,6 +18,7 @@
 #include <glm/gtc/quaternion.hpp>
 #include <glm/vec3.hpp>
 
+#include "imps/blend_graph.h"
 #include "imps/diagnostic.h"
 #include "imps/field.h"
 #include "imps/primitives.h"
@@ -55,8 +57,9 @@ struct CharacterPrimitive {
 
 class Character {
  public:
-  // Compiles a scene. Errors (with the scene's source locations): no scene graph, no primitives, nested blend
-  // nodes, a blendParam of the wrong sign for the blend in force.
+  // Compiles a scene. Errors (with the scene's source locations): no scene graph, no primitives, a nested blend
+  // node of another type than the character's blend function, a blendParam of the wrong sign for the blend in
+  // force. A blend node inside the graph gives its parameters to the shapes it wraps (their default blendParam).
   static std::expected<Character, Diagnostics> fromScene(const Scene& scene);
 
   const std::vector<Joint>& joints() const { return joints_; }
@@ -66,17 +69,19 @@ class Character {
   bool hierarchical() const { return hierarchical_; }
   // Index of the joint with this name, or -1.
   int findJoint(std::string_view name) const;
-  // Primitives that primitive i blends with (ascending, excluding i). Empty for a flat scene without BlendGroups,
-  // where every primitive blends with every other (see hierarchical()).
-  const std::vector<uint32_t>& blendNeighbours(size_t i) const { return neighbours_[i]; }
-  // The sets the field takes its maximum over (field.h): {i} + neighbours(i) per primitive, with duplicates and
-  // subsets removed; one set of everything for a flat scene.
+  // Whether primitives a and b (a != b) are blend neighbours. Constant time.
+  bool blends(size_t a, size_t b) const { return graph_.blends(graph_.classOf(a), graph_.classOf(b)); }
+  // Primitives that primitive i blends with (ascending, excluding i).
+  std::vector<uint32_t> blendNeighbours(size_t i) const { return graph_.neighbours(i); }
+  const BlendGraph& blendGraph() const { return graph_; }
+  // The sets the field takes its maximum over (field.h): the maximal cliques of the blend graph; one set of
+  // everything when everything blends.
   const BlendSets& blendSets() const { return sets_; }
 
  private:
   std::vector<Joint> joints_;
   std::vector<CharacterPrimitive> primitives_;
-  std::vector<std::vector<uint32_t>> neighbours_;
+  BlendGraph graph_{{}, 0};
   BlendSets sets_;
   BlendFunction blend_;
   float iso_ = 1.0f;

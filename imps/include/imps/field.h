@@ -2,8 +2,8 @@
 // primitives may blend (the unwanted-blending rule of thesis 3.7). Evaluates value, gradient and colour.
 //
 // F(x) = max over blend sets S of blend(S)(x). A flat scene has one set holding every primitive. A hierarchical one
-// has, for each primitive, the set of it and its blend neighbours (Character::blendSets), so a hand that touches a
-// hip is unioned with it, never blended. The field convention (F >= 0, surface at iso, inside larger) is in blend.h.
+// has the maximal cliques of its blend graph (blend_graph.h), so two primitives blend only if they are blend
+// neighbours: a hand that touches a hip is unioned with it, never blended. The field convention (F >= 0, surface at iso, inside larger) is in blend.h.
 #pragma once
 
 #include <span>
@@ -46,6 +46,7 @@ struct FieldScratch {
   std::vector<float> xs, ys, zs, term, acc;      // points (SoA), one primitive's terms, per-set accumulators
   std::vector<float> terms;                       // samples(): every candidate's terms
   std::vector<uint32_t> winner;                  // samples(): each point's winning set
+  uint32_t lastWinner = 0;                        // sample(): the winning local set of the last call
   std::vector<uint8_t> setStarted;               // accumulate(): which sets hold a value yet
   std::vector<int32_t> globalToLocal;
   size_t setCount() const { return setOffsets.size() - 1; }

@@ -69,6 +69,8 @@ struct ShapeNode {
 };
 
 enum class BlendKind { Exponential, BlancSchlick, Elliptical };
+// The node type that spells a blend kind in a file: "ExponentialBlend", "BlancSchlickBlend", "EllipticalBlend".
+const char* blendTypeName(BlendKind kind);
 
 // A blending function node: `ExponentialBlend`, `BlancSchlickBlend` or `EllipticalBlend`. As the
 // `blendingFunction` of a polygonizer it carries no children; as the root of a flat scene graph it holds the
