@@ -434,7 +434,7 @@ std::string toJson(const RigMap& map) {
       const ChannelMap& c = map.channels[jm.mappings[k]];
       ordered_json o;
       if (c.channel >= 0) o["channel"] = c.channel;
-      else o["channel"] = c.channelName;
+      else o["channel"] = toValidUtf8(c.channelName);
       o["axis"] = toString(c.axis);
       o["sign"] = c.sign;
       if (c.encoder == EncoderKind::Linear) o["encoder"] = "linear";

@@ -36,6 +36,20 @@ size_t firstInvalidUtf8(std::string_view text) {
   return n;
 }
 
+namespace {
+
+// How many bytes from an ill-formed position one U+FFFD stands for: a lead byte with the continuation bytes that
+// follow it (a sequence cut short is one replacement, as most decoders do), else the single byte.
+size_t illFormedLength(std::string_view text) {
+  const auto b0 = static_cast<unsigned char>(text[0]);
+  const size_t length = b0 >= 0xC2 && b0 <= 0xDF ? 2 : b0 >= 0xE0 && b0 <= 0xEF ? 3 : b0 >= 0xF0 && b0 <= 0xF4 ? 4 : 1;
+  size_t n = 1;
+  while (n < length && n < text.size() && (static_cast<unsigned char>(text[n]) & 0xC0) == 0x80) ++n;
+  return n;
+}
+
+}  // namespace
+
 std::string toValidUtf8(std::string_view text) {
   std::string out;
   out.reserve(text.size());
@@ -44,7 +58,7 @@ std::string toValidUtf8(std::string_view text) {
     out.append(text.substr(0, bad));
     if (bad == text.size()) return out;
     out += "\xEF\xBF\xBD";  // U+FFFD
-    text.remove_prefix(bad + 1);
+    text.remove_prefix(bad + illFormedLength(text.substr(bad)));
   }
 }
 

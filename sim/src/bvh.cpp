@@ -397,8 +397,10 @@ std::expected<BvhClip, std::string> readBvhText(std::string_view text, std::stri
 std::expected<BvhClip, std::string> readBvh(const std::filesystem::path& path, std::vector<std::string>* warnings) {
   auto text = detail::readFileText(path, kMaxBvhFileBytes);
   if (!text)
-    return std::unexpected(path.string() + ": error: cannot read BVH file: " + text.error() +
-                           (text.error().starts_with("larger") ? " (the most this program reads)" : ""));
+    return std::unexpected(path.string() + ": error: " +
+                           (text.error().starts_with("larger")
+                                ? "cannot read BVH file: " + text.error() + " (the most this program reads)"
+                                : "cannot open BVH file: " + text.error()));
   return readBvhText(*text, path.string(), warnings);
 }
 

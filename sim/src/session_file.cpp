@@ -376,10 +376,11 @@ std::expected<Session, std::string> readSession(const std::filesystem::path& pat
   // The magic first: a file that is not a session (/dev/zero, a picture) is refused without reading it whole.
   std::ifstream in(path, std::ios::binary);
   if (!in) return std::unexpected(path.string() + ": error: cannot open session file: " + errnoText(errno));
-  std::array<char, kMagic.size()> magic{};
-  in.read(magic.data(), magic.size());
-  if (in.gcount() == static_cast<std::streamsize>(magic.size()) && magic != kMagic)
-    return readSessionBytes(std::span(reinterpret_cast<const uint8_t*>(magic.data()), magic.size()), path.string());
+  std::array<char, kFileHeaderBytes> header{};
+  in.read(header.data(), header.size());
+  if (in.gcount() == static_cast<std::streamsize>(header.size()) &&
+      !std::equal(kMagic.begin(), kMagic.end(), header.begin()))
+    return readSessionBytes(std::span(reinterpret_cast<const uint8_t*>(header.data()), header.size()), path.string());
   auto text = detail::readFileText(path, kMaxSessionFileBytes);
   if (!text)
     return std::unexpected(path.string() + ": error: cannot read session file: " + text.error() +

@@ -234,7 +234,7 @@ TEST(RigMap, StringsFromADeviceThatAreNotUtf8AreWrittenAsValidJson) {
   auto b = parseRigMap(written, "b.json");
   ASSERT_TRUE(b.has_value()) << b.error().str() << written;
   EXPECT_EQ(b->device, "Monkey \uFFFD");
-  EXPECT_EQ(b->channels[0].channelName, "L_\uFFFD\uFFFD");
+  EXPECT_EQ(b->channels[0].channelName, "L_\uFFFD");  // one replacement for a sequence cut short
   EXPECT_EQ(b->info, "{\"serial\":\"\uFFFD\uFFFD\"}");
 }
 
