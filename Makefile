@@ -29,10 +29,14 @@ test-sanitize: deps
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
 	cd $(ASAN_BUILD) && ctest --output-on-failure -j $(JOBS) -LE slow --timeout 900
 
-# Every libFuzzer target, FUZZ_SECONDS each, starting from its seeds (clang 16, ASan + UBSan).
-FUZZ_BUILD   ?= build-fuzz
-FUZZ_SECONDS ?= 60
-FUZZ_TARGETS := $(patsubst tests/fuzz/%.cpp,%,$(wildcard tests/fuzz/*_fuzz.cpp))
+# Every libFuzzer target, FUZZ_SECONDS each, starting from its seeds (clang 16, ASan + UBSan, UB fatal). Readers of
+# whole files, where size matters (limits, quadratic checks), get inputs up to FUZZ_LARGE_LEN bytes; wire codecs
+# keep libFuzzer's default.
+FUZZ_BUILD     ?= build-fuzz
+FUZZ_SECONDS   ?= 60
+FUZZ_LARGE_LEN ?= 262144
+FUZZ_LARGE     := bvh_reader bvh_session check_pose rig_map scene_polygonize scene_reader session_reader
+FUZZ_TARGETS   := $(patsubst tests/fuzz/%.cpp,%,$(wildcard tests/fuzz/*_fuzz.cpp))
 fuzz:
 	@bash scripts/install-deps.sh fuzz
 	cmake -S . -B $(FUZZ_BUILD) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DIMPS_FUZZ=ON \
@@ -40,7 +44,9 @@ fuzz:
 	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target $(FUZZ_TARGETS)
 	@for f in $(FUZZ_BUILD)/tests/fuzz/*_fuzz; do \
 	  name=$$(basename $$f _fuzz); mkdir -p $(FUZZ_BUILD)/corpus/$$name; \
-	  echo "== $$name"; $$f -max_total_time=$(FUZZ_SECONDS) -print_final_stats=1 $(FUZZ_BUILD)/corpus/$$name tests/fuzz/seeds/$$name || exit 1; \
+	  len=""; case " $(FUZZ_LARGE) " in *" $$name "*) len="-max_len=$(FUZZ_LARGE_LEN)";; esac; \
+	  echo "== $$name"; $$f -max_total_time=$(FUZZ_SECONDS) -print_final_stats=1 $$len \
+	    $(FUZZ_BUILD)/corpus/$$name tests/fuzz/seeds/$$name || exit 1; \
 	done
 
 bench: build

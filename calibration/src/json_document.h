@@ -2,6 +2,7 @@
 // files' diagnostics. Private to calibration/; writing goes through nlohmann-json.
 #pragma once
 
+#include <cstddef>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -11,6 +12,10 @@
 #include "imps/diagnostic.h"
 
 namespace imps::calibration::detail {
+
+// The largest rig map, calibration or check-pose file read (a real one is a few kilobytes): a bigger or endless
+// input (/dev/zero) is refused before it fills memory.
+inline constexpr size_t kMaxFileBytes = size_t{16} << 20;
 
 struct JsonValue {
   enum class Kind { Null, Bool, Number, String, Array, Object };

@@ -8,6 +8,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "imps/file_read.h"
 #include "json_document.h"
 #include "object_reader.h"
 
@@ -153,15 +154,15 @@ std::expected<std::vector<PoseTarget>, Diagnostics> parseCheckPose(std::string_v
 
 std::expected<std::vector<PoseTarget>, Diagnostics> readCheckPoseFile(const std::filesystem::path& path,
                                                                       const Character* character) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  if (in) text << in.rdbuf();
-  if (!in || std::filesystem::is_directory(path)) {
+  auto text = readFileText(path, detail::kMaxFileBytes);
+  if (!text) {
     Diagnostics d;
-    d.error({path.string(), 0, 0}, "cannot read check pose: not a readable file");
+    d.error({path.string(), 0, 0}, "cannot read check pose: " + (text.error().starts_with("larger")
+                                                                    ? text.error() + " (a check pose is a few lines)"
+                                                                    : std::string("not a readable file")));
     return std::unexpected(d);
   }
-  return parseCheckPose(text.str(), path.string(), character);
+  return parseCheckPose(*text, path.string(), character);
 }
 
 PoseCheck checkPose(const Calibration& calibration, const WindowAverage& window, std::span<const PoseTarget> targets,

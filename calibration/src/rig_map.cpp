@@ -13,9 +13,12 @@
 #include <fstream>
 #include <numbers>
 #include <sstream>
+#include <unordered_map>
 
 #include <nlohmann/json.hpp>
 
+#include "imps/file_read.h"
+#include "imps/utf8.h"
 #include "json_document.h"
 #include "object_reader.h"
 
@@ -101,6 +104,8 @@ void checkMap(RigMap& map, const RigMapContext& ctx, Diagnostics& diags) {
     }
     c.channel = found;
   }
+  std::unordered_map<int, size_t> byIndex;          // channel index -> its first mapping
+  std::unordered_map<std::string, size_t> byName;   // unresolved channel name -> its first mapping
   for (size_t i = 0; i < map.channels.size(); ++i) {
     const ChannelMap& c = map.channels[i];
     if (ctx.device && c.channel >= ctx.device->channelCount)
@@ -111,15 +116,14 @@ void checkMap(RigMap& map, const RigMapContext& ctx, Diagnostics& diags) {
       diags.error(c.loc, "channel " + std::to_string(c.channel) + " is out of range: armatures have at most " +
                              std::to_string(drivers::kMaxChannels) + " channels (0.." +
                              std::to_string(drivers::kMaxChannels - 1) + ")");
-    for (size_t j = 0; j < i; ++j) {
-      const ChannelMap& o = map.channels[j];
-      const bool same = (c.channel >= 0 && c.channel == o.channel) ||
-                        (c.channel < 0 && !c.channelName.empty() && c.channelName == o.channelName);
-      if (same) {
-        diags.error(c.loc, channelText(c) + " is mapped twice: it already drives " + o.joint + " " + toString(o.axis) +
-                               " (line " + std::to_string(o.loc.line) + ")");
-        break;
-      }
+    // The first mapping of the same channel (by index, or by name while unresolved), found by hash: linear time.
+    size_t first = i;
+    if (c.channel >= 0) first = byIndex.try_emplace(c.channel, i).first->second;
+    else if (!c.channelName.empty()) first = byName.try_emplace(c.channelName, i).first->second;
+    if (first != i) {
+      const ChannelMap& o = map.channels[first];
+      diags.error(c.loc, channelText(c) + " is mapped twice: it already drives " + o.joint + " " + toString(o.axis) +
+                             " (line " + std::to_string(o.loc.line) + ")");
     }
     if (ctx.requireOffsets && !c.offset)
       diags.error(c.loc, "missing field 'offset' for " + channelText(c) +
@@ -128,12 +132,12 @@ void checkMap(RigMap& map, const RigMapContext& ctx, Diagnostics& diags) {
   std::vector<std::string> jointNames;
   if (ctx.character)
     for (const Joint& j : ctx.character->joints()) jointNames.push_back(j.name);
+  std::unordered_map<std::string, size_t> jointEntries;  // joint name -> its first entry
   for (size_t ji = 0; ji < map.joints.size(); ++ji) {
     const JointMap& jm = map.joints[ji];
-    for (size_t k = 0; k < ji; ++k)
-      if (map.joints[k].joint == jm.joint)
-        diags.error(jm.loc, "joint '" + jm.joint + "' is listed twice (first at line " +
-                                std::to_string(map.joints[k].loc.line) + "): put all its channels in one entry");
+    if (const auto [first, fresh] = jointEntries.try_emplace(jm.joint, ji); !fresh)
+      diags.error(jm.loc, "joint '" + jm.joint + "' is listed twice (first at line " +
+                              std::to_string(map.joints[first->second].loc.line) + "): put all its channels in one entry");
     if (ctx.character && ctx.character->findJoint(jm.joint) < 0) {
       std::string message = "unknown joint '" + jm.joint + "'";
       const std::string guess = closestMatch(jm.joint, jointNames);
@@ -349,16 +353,16 @@ std::expected<RigMap, Diagnostics> parseRigMap(std::string_view json, std::strin
 
 std::expected<RigMap, Diagnostics> readRigMapFile(const std::filesystem::path& path, const RigMapContext& context,
                                                   Diagnostics* warnings) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  if (in) text << in.rdbuf();
-  if (!in || std::filesystem::is_directory(path)) {
+  auto text = readFileText(path, detail::kMaxFileBytes);
+  if (!text) {
+    const std::string reason = !std::filesystem::exists(path)       ? std::string("no such file")
+                               : text.error().starts_with("larger") ? text.error() + " (a rig map is a few kilobytes)"
+                                                                    : std::string("not a readable file");
     Diagnostics d;
-    d.error({path.string(), 0, 0}, std::string("cannot read rig map: ") +
-                                       (std::filesystem::exists(path) ? "not a readable file" : "no such file"));
+    d.error({path.string(), 0, 0}, "cannot read rig map: " + reason);
     return std::unexpected(d);
   }
-  return parseRigMap(text.str(), path.string(), context, warnings);
+  return parseRigMap(*text, path.string(), context, warnings);
 }
 
 bool validateRigMap(RigMap& map, const RigMapContext& context, Diagnostics& diags) {
@@ -392,6 +396,10 @@ bool validateRigMap(RigMap& map, const RigMapContext& context, Diagnostics& diag
 
 namespace {
 
+// A JSON string for text from a device or a file: ill-formed UTF-8 (a device name is whatever bytes the device
+// sent) becomes U+FFFD instead of making the writer throw.
+std::string jsonString(std::string_view text) { return nlohmann::ordered_json(toValidUtf8(text)).dump(); }
+
 // Angles are written in degrees: that is what a technician reads and edits.
 nlohmann::ordered_json degrees(double radians) { return radians / kDegree; }
 
@@ -402,7 +410,7 @@ std::string inlineObject(const nlohmann::ordered_json& o) {
   for (const auto& [key, value] : o.items()) {
     if (!first) s += ", ";
     first = false;
-    s += nlohmann::ordered_json(key).dump() + ": " + value.dump();
+    s += jsonString(key) + ": " + value.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
   }
   return s + "}";
 }
@@ -413,20 +421,20 @@ std::string toJson(const RigMap& map) {
   using nlohmann::ordered_json;
   std::string out = "{\n  \"version\": " + std::to_string(kRigMapVersion) + ",\n  \"bits\": " +
                     std::to_string(map.bits) + ",\n";
-  if (!map.device.empty()) out += "  \"device\": " + ordered_json(map.device).dump() + ",\n";
-  if (!map.info.empty()) out += "  \"info\": " + inlineObject(ordered_json::parse(map.info)) + ",\n";
+  if (!map.device.empty()) out += "  \"device\": " + jsonString(map.device) + ",\n";
+  if (!map.info.empty()) out += "  \"info\": " + inlineObject(ordered_json::parse(toValidUtf8(map.info))) + ",\n";
   out += "  \"joints\": [";
   for (size_t ji = 0; ji < map.joints.size(); ++ji) {
     const JointMap& jm = map.joints[ji];
     out += ji ? ",\n" : "\n";
-    out += "    {\"joint\": " + ordered_json(jm.joint).dump();
-    if (jm.mappings.size() > 1) out += ", \"order\": " + ordered_json(jm.order).dump();
+    out += "    {\"joint\": " + jsonString(jm.joint);
+    if (jm.mappings.size() > 1) out += ", \"order\": " + jsonString(jm.order);
     out += ", \"channels\": [";
     for (size_t k = 0; k < jm.mappings.size(); ++k) {
       const ChannelMap& c = map.channels[jm.mappings[k]];
       ordered_json o;
       if (c.channel >= 0) o["channel"] = c.channel;
-      else o["channel"] = c.channelName;
+      else o["channel"] = toValidUtf8(c.channelName);
       o["axis"] = toString(c.axis);
       o["sign"] = c.sign;
       if (c.encoder == EncoderKind::Linear) o["encoder"] = "linear";

@@ -33,7 +33,11 @@ void Diagnostics::note(SourceLoc loc, std::string message) {
 
 std::string Diagnostics::str() const {
   std::string out;
-  for (const Diagnostic& d : items_) out += d.str() + "\n";
+  const size_t shown = std::min(items_.size(), kMaxPrinted);
+  for (size_t i = 0; i < shown; ++i) out += items_[i].str() + "\n";
+  if (shown < items_.size())
+    out += "... and " + std::to_string(items_.size() - shown) + " more (" + std::to_string(errorCount_) +
+           " errors in all; only the first " + std::to_string(kMaxPrinted) + " are shown)\n";
   return out;
 }
 

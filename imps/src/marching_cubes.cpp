@@ -9,7 +9,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
+#include <string>
 
 #include "imps/check.h"
 #include "imps/parallel.h"
@@ -270,24 +272,50 @@ struct Grid {
   }
 };
 
-Grid makeGrid(const Field& field, const MarchingCubesOptions& o) {
-  Grid g;
+// The cell size and the cells needed along each axis (one cell of margin on each side so no surface touches the
+// grid boundary, rounded up to whole blocks), counted in floating point so that no cell size overflows an int; or
+// why the grid is refused.
+struct GridPlan {
+  glm::vec3 cell{1.0f};
+  glm::dvec3 cells{0.0};
+  std::string error;
+};
+
+GridPlan planGridCells(const Field& field, const MarchingCubesOptions& o) {
+  GridPlan p;
   Box bounds = field.surfaceBounds();
-  if (bounds.empty()) return g;
+  if (bounds.empty()) return p;
   const glm::vec3 size = glm::max(bounds.size(), glm::vec3(1e-6f));
   if (o.cellSize > 0.0f) {
-    g.cell = glm::vec3(o.cellSize);
+    p.cell = glm::vec3(o.cellSize);
   } else if (o.gridResolution.x > 0 && o.gridResolution.y > 0 && o.gridResolution.z > 0) {
-    g.cell = size / glm::vec3(o.gridResolution);
+    p.cell = size / glm::vec3(o.gridResolution);
   } else {
-    g.cell = glm::vec3(std::max({size.x, size.y, size.z}) / float(std::max(o.resolution, 1)));
+    p.cell = glm::vec3(std::max({size.x, size.y, size.z}) / float(std::max(o.resolution, 1)));
   }
-  // One cell of margin on each side so no surface touches the grid boundary, rounded up to whole blocks and
-  // centred on the bounds.
-  glm::ivec3 need = glm::ivec3(glm::ceil(size / g.cell)) + 2;
-  g.blocks = (need + kBlock - 1) / kBlock;
-  g.cells = g.blocks * kBlock;
-  g.origin = bounds.center() - 0.5f * glm::vec3(g.cells) * g.cell;
+  const glm::dvec3 need = glm::dvec3(glm::ceil(size / p.cell)) + 2.0;  // float division, as ever; no int yet
+  p.cells = glm::ceil(need / double(kBlock)) * double(kBlock);
+  const double count = p.cells.x * p.cells.y * p.cells.z;
+  if (!(count <= double(o.maxCells))) {
+    char text[256];
+    std::snprintf(text, sizeof text,
+                  "a grid of %.0f x %.0f x %.0f cells (%.3g) for a surface of %.3g x %.3g x %.3g m at cell %.3g m is "
+                  "more than the limit of %zu cells",
+                  p.cells.x, p.cells.y, p.cells.z, count, double(size.x), double(size.y), double(size.z),
+                  double(p.cell.x), o.maxCells);
+    p.error = text;
+  }
+  return p;
+}
+
+Grid makeGrid(const Field& field, const MarchingCubesOptions& o) {
+  Grid g;
+  const GridPlan p = planGridCells(field, o);
+  if (!p.error.empty() || p.cells.x == 0.0) return g;  // nothing to mesh, or refused: an empty grid, an empty mesh
+  g.cell = p.cell;
+  g.cells = glm::ivec3(p.cells);
+  g.blocks = g.cells / kBlock;
+  g.origin = field.surfaceBounds().center() - 0.5f * glm::vec3(g.cells) * g.cell;
   return g;
 }
 
@@ -328,6 +356,12 @@ struct MarchingCubes::State {
 
 MarchingCubes::MarchingCubes() : state_(std::make_unique<State>()) {}
 MarchingCubes::~MarchingCubes() = default;
+
+std::expected<glm::ivec3, std::string> planGrid(const Field& field, const MarchingCubesOptions& options) {
+  const GridPlan p = planGridCells(field, options);
+  if (!p.error.empty()) return std::unexpected(p.error);
+  return glm::ivec3(p.cells);
+}
 
 Mesh polygonize(const Field& field, const MarchingCubesOptions& options, MarchingCubesStats* stats) {
   MarchingCubes mc;

@@ -9,6 +9,8 @@
 #include <optional>
 #include <utility>
 
+#include "imps/parallel.h"
+
 namespace imps::vrml {
 
 namespace {
@@ -45,7 +47,11 @@ enum NodeClass : unsigned {
 };
 
 enum class FieldType { Bool, Int, Float, Vec3, Color, Rotation, Strings, Node, Nodes };
-enum class Constraint { None, Positive, NonNegative, AtLeastOne, BitsPerDim, UnitInterval };
+enum class Constraint { None, Positive, NonNegative, AtLeastOne, BitsPerDim, UnitInterval, Threads, Resolution };
+
+// Bounds on sizes a scene asks for (the command line's --threads and --res take the same ranges; kMaxThreads is
+// imps/parallel.h's).
+constexpr int kMaxResolution = 4096;
 
 // A field's value once its type is checked.
 struct Value {
@@ -89,7 +95,7 @@ const std::vector<FieldSpec> kTesselatorFields = {
     {"fissioningFrac", FieldType::Float, Constraint::None, IMPS_SET(Tesselator3MPNode, fissioningFrac, f), 0, ""},
     {"isoValue", FieldType::Float, Constraint::Positive, IMPS_SET(Tesselator3MPNode, isoValue, f), 0, ""},
     {"useSimpleRadii", FieldType::Bool, Constraint::None, IMPS_SET(Tesselator3MPNode, useSimpleRadii, b), 0, ""},
-    {"numThreads", FieldType::Int, Constraint::NonNegative, IMPS_SET(Tesselator3MPNode, numThreads, i), 0, ""},
+    {"numThreads", FieldType::Int, Constraint::Threads, IMPS_SET(Tesselator3MPNode, numThreads, i), 0, ""},
     {"updatesPerRender", FieldType::Int, Constraint::AtLeastOne, IMPS_SET(Tesselator3MPNode, updatesPerRender, i),
      0, ""},
     {"colorWidth", FieldType::Float, Constraint::None, IMPS_SET(Tesselator3MPNode, colorWidth, f), 0, ""},
@@ -103,11 +109,11 @@ const std::vector<FieldSpec> kTesselatorFields = {
 
 const std::vector<FieldSpec> kMarchingCubesFields = {
     {"cellSize", FieldType::Float, Constraint::Positive, IMPS_SET(MarchingCubesNode, cellSize, f), 0, ""},
-    {"xResolution", FieldType::Int, Constraint::NonNegative, IMPS_SET(MarchingCubesNode, xResolution, i), 0, ""},
-    {"yResolution", FieldType::Int, Constraint::NonNegative, IMPS_SET(MarchingCubesNode, yResolution, i), 0, ""},
-    {"zResolution", FieldType::Int, Constraint::NonNegative, IMPS_SET(MarchingCubesNode, zResolution, i), 0, ""},
+    {"xResolution", FieldType::Int, Constraint::Resolution, IMPS_SET(MarchingCubesNode, xResolution, i), 0, ""},
+    {"yResolution", FieldType::Int, Constraint::Resolution, IMPS_SET(MarchingCubesNode, yResolution, i), 0, ""},
+    {"zResolution", FieldType::Int, Constraint::Resolution, IMPS_SET(MarchingCubesNode, zResolution, i), 0, ""},
     {"isoValue", FieldType::Float, Constraint::Positive, IMPS_SET(MarchingCubesNode, isoValue, f), 0, ""},
-    {"numThreads", FieldType::Int, Constraint::NonNegative, IMPS_SET(MarchingCubesNode, numThreads, i), 0, ""},
+    {"numThreads", FieldType::Int, Constraint::Threads, IMPS_SET(MarchingCubesNode, numThreads, i), 0, ""},
     {"blendingFunction", FieldType::Node, Constraint::None, nullptr, kBlendClass, kBlendText},
     {"sceneGraph", FieldType::Node, Constraint::None, nullptr, kSceneGraphClasses, kSceneGraphText},
 };
@@ -605,6 +611,8 @@ void SceneBuilder::storeField(Frame& frame, const FieldSpec& spec, const SourceL
       case Constraint::AtLeastOne: ok = ok && x >= 1.0; break;
       case Constraint::BitsPerDim: ok = ok && x >= 1.0 && x <= 10.0; break;
       case Constraint::UnitInterval: ok = ok && x >= 0.0 && x <= 1.0; break;
+      case Constraint::Threads: ok = ok && x >= 0.0 && x <= kMaxThreads; break;
+      case Constraint::Resolution: ok = ok && x >= 0.0 && x <= kMaxResolution; break;
     }
   }
   if (!ok) {
@@ -615,6 +623,10 @@ void SceneBuilder::storeField(Frame& frame, const FieldSpec& spec, const SourceL
       case Constraint::AtLeastOne: rule = "be >= 1"; break;
       case Constraint::BitsPerDim: rule = "be between 1 and 10"; break;
       case Constraint::UnitInterval: rule = "be between 0 and 1"; break;
+      case Constraint::Threads: rule = "be between 0 and " + std::to_string(kMaxThreads) + " (0: all cores)"; break;
+      case Constraint::Resolution:
+        rule = "be between 0 and " + std::to_string(kMaxResolution) + " cells (0: unset)";
+        break;
       case Constraint::None: break;
     }
     if (n > 1) rule += " in every component";
@@ -626,6 +638,10 @@ void SceneBuilder::storeField(Frame& frame, const FieldSpec& spec, const SourceL
     return;
   }
   spec.set(frame.data, v);
+  // Where the sizes whose cost depends on the character were given, for the polygonizers' limits' messages.
+  if (auto* mc = std::get_if<MarchingCubesNode>(&frame.data); mc && fieldName != "isoValue" && fieldName != "numThreads")
+    mc->resolutionLoc = loc;
+  if (auto* t = std::get_if<Tesselator3MPNode>(&frame.data); t && fieldName == "desiredRadius") t->desiredRadiusLoc = loc;
 }
 
 void SceneBuilder::deliver(Finished child) {

@@ -7,6 +7,7 @@
 #include <memory>
 #include <system_error>
 
+#include "imps/file_read.h"
 #include "scene_builder.h"
 #include "scene_parser.h"
 
@@ -14,7 +15,7 @@ namespace imps {
 
 namespace {
 
-constexpr long kMaxFileBytes = 256L << 20;
+constexpr size_t kMaxFileBytes = size_t{256} << 20;
 
 // Moves the warnings (not the errors) of `all` into `warnings`.
 void copyWarnings(const Diagnostics& all, Diagnostics* warnings) {
@@ -47,20 +48,9 @@ std::expected<Scene, Diagnostics> readSceneFile(const std::string& path, Diagnos
     d.error(SourceLoc{path, 0, 0}, "cannot read scene file: " + reason);
     return std::unexpected(std::move(d));
   };
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
-  if (!file) return fail(std::strerror(errno));
-  std::string text;
-  char buffer[1 << 16];
-  while (true) {
-    const size_t n = std::fread(buffer, 1, sizeof buffer, file.get());
-    text.append(buffer, n);
-    if (static_cast<long>(text.size()) > kMaxFileBytes) return fail("larger than 256 MiB");
-    if (n < sizeof buffer) {
-      if (std::ferror(file.get())) return fail(std::strerror(errno));
-      break;
-    }
-  }
-  return readScene(text, path, warnings);
+  auto text = readFileText(path, kMaxFileBytes);
+  if (!text) return fail(text.error());
+  return readScene(*text, path, warnings);
 }
 
 std::expected<Scene, Diagnostics> readSceneFile(const std::string& path) { return readSceneFile(path, nullptr); }

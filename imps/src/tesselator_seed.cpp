@@ -62,12 +62,42 @@ void primitivePoints(const Primitive& p, float spacing, std::vector<glm::vec3>& 
   }
 }
 
+// About how many points primitivePoints gives at `spacing` (its surface area over spacing^2).
+double pointEstimate(const Primitive& p, float spacing) {
+  constexpr double kPi = 3.14159265358979;
+  double area = 0.0;
+  switch (p.kind) {
+    case PrimitiveKind::Metaball: area = 4.0 * kPi * double(p.radius) * double(p.radius); break;
+    case PrimitiveKind::Ellipsoid: {
+      const double r = (double(p.radii.x) + double(p.radii.y) + double(p.radii.z)) / 3.0;
+      area = 4.0 * kPi * r * r;
+      break;
+    }
+    case PrimitiveKind::LineSeg:
+      area = 4.0 * kPi * (double(p.r1) * p.r1 + double(p.r2) * p.r2) +
+             2.0 * kPi * std::max(double(p.r1), double(p.r2)) * double(p.length);
+      break;
+  }
+  return area / (double(spacing) * spacing) + 8.0;
+}
+
+// The candidates' spacing: 0.8 desiredRadius, widened when that would give more than a few times maxParticles
+// candidates (a tiny desiredRadius on a large character), so seeding's memory stays in proportion to the limit.
+float seedSpacing(const Field& field, const TesselatorOptions& o) {
+  const float spacing = 0.8f * o.desiredRadius;
+  double total = 0.0;
+  for (const Primitive& p : field.primitives()) total += pointEstimate(p, spacing);
+  const double budget = 4.0 * double(std::max<size_t>(o.maxParticles, 1));
+  return total > budget ? float(double(spacing) * std::sqrt(total / budget)) : spacing;
+}
+
 }  // namespace
 
 void seedParticles(Tesselator::State& s, const Field& field, const TesselatorOptions& o) {
   const float h = o.desiredRadius;
   std::vector<glm::vec3> points;
-  for (const Primitive& p : field.primitives()) primitivePoints(p, 0.8f * h, points);
+  const float spacing = seedSpacing(field, o);
+  for (const Primitive& p : field.primitives()) primitivePoints(p, spacing, points);
 
   FieldScratch scratch;
   Box all = field.bounds();
@@ -83,6 +113,7 @@ void seedParticles(Tesselator::State& s, const Field& field, const TesselatorOpt
   };
   const float minD2 = cellSize * cellSize;
   for (glm::vec3 x : points) {
+    if (s.size() >= o.maxParticles) break;
     // Newton projection onto F = iso along the gradient, steps clamped to one desiredRadius.
     bool ok = false;
     FieldSample fs;

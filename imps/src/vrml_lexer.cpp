@@ -38,39 +38,6 @@ std::string describe(const Token& token) {
   return "?";
 }
 
-size_t firstInvalidUtf8(std::string_view text) {
-  size_t i = 0;
-  const size_t n = text.size();
-  while (i < n) {
-    const auto b0 = static_cast<unsigned char>(text[i]);
-    if (b0 < 0x80) {
-      ++i;
-      continue;
-    }
-    size_t length = 0;
-    unsigned min = 0;
-    unsigned cp = 0;
-    if ((b0 & 0xE0) == 0xC0) {
-      length = 2, min = 0x80, cp = b0 & 0x1Fu;
-    } else if ((b0 & 0xF0) == 0xE0) {
-      length = 3, min = 0x800, cp = b0 & 0x0Fu;
-    } else if ((b0 & 0xF8) == 0xF0) {
-      length = 4, min = 0x10000, cp = b0 & 0x07u;
-    } else {
-      return i;
-    }
-    if (n - i < length) return i;
-    for (size_t k = 1; k < length; ++k) {
-      const auto b = static_cast<unsigned char>(text[i + k]);
-      if ((b & 0xC0) != 0x80) return i;
-      cp = (cp << 6) | (b & 0x3Fu);
-    }
-    if (cp < min || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF)) return i;
-    i += length;
-  }
-  return n;
-}
-
 namespace {
 
 bool isIdentifierStart(char c) { return std::isalpha(static_cast<unsigned char>(c)) != 0 || c == '_'; }

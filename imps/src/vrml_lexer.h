@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "imps/diagnostic.h"
+#include "imps/utf8.h"
 
 namespace imps::vrml {
 
@@ -81,8 +82,6 @@ class Lexer {
   int column_ = 1;
 };
 
-// The offset of the first byte of `text` that is not part of well-formed UTF-8 (overlong forms, surrogates and
-// code points above U+10FFFF are ill-formed), or text.size() when it is all valid.
-size_t firstInvalidUtf8(std::string_view text);
+using imps::firstInvalidUtf8;  // imps/utf8.h
 
 }  // namespace imps::vrml

@@ -5,15 +5,18 @@
 #include <cstdio>
 #include <ctime>
 
+#include "imps/utf8.h"
+
 namespace imps::app {
 namespace {
 
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
 
-// A JSON string literal (the info fields are paths and names).
+// A JSON string literal (the info fields are paths and names; a serial number is whatever bytes the device sent, so
+// ill-formed UTF-8 becomes U+FFFD: JSON text must be UTF-8).
 std::string jsonString(const std::string& text) {
   std::string out = "\"";
-  for (char c : text) {
+  for (char c : toValidUtf8(text)) {
     if (c == '"' || c == '\\') {
       out += '\\';
       out += c;

@@ -270,7 +270,7 @@ int runRecord(const RecordArgs& a) {
     return exitCode == kExitOk ? kExitIoError : exitCode;
   }
   if (auto r = recorder->close(); !r) {
-    std::fprintf(stderr, "%s\n", r.error().c_str());
+    if (exitCode == kExitOk) std::fprintf(stderr, "%s\n", r.error().c_str());  // else the write error was printed
     return kExitIoError;
   }
   const drivers::DeviceSessionStats st = session.stats();

@@ -27,6 +27,8 @@ struct MeshArgs {
   bool noThin = false;
   std::string polygonizer = "mc";
   int updates = 0;  // particles: 0 = until settled
+  size_t maxCells = MarchingCubesOptions{}.maxCells;
+  size_t maxParticles = TesselatorOptions{}.maxParticles;
   bool check = false;
 };
 
@@ -40,11 +42,35 @@ bool reportTopology(const Mesh& mesh) {
   return t.closedManifold();
 }
 
+// A Marching Cubes grid beyond --max-cells is refused before any work: the message says where its size came from
+// (`source`: "--cell 1e-09", or the scene's cellSize / x/y/zResolution at file:line:column) and how to go further.
+bool gridRefused(const char* command, const Field& field, const MarchingCubesOptions& options,
+                 const std::string& source) {
+  auto plan = planGrid(field, options);
+  if (plan) return false;
+  std::fprintf(stderr, "puppeteer %s: error: %s: %s; use larger cells, or raise the limit with --max-cells N\n",
+               command, source.c_str(), plan.error().c_str());
+  return true;
+}
+
+// Where a Marching Cubes resolution came from, for gridRefused.
+std::string resolutionSource(float cell, int res, const MarchingCubesNode* node) {
+  char text[64];
+  if (cell > 0.0f) std::snprintf(text, sizeof text, "--cell %g", double(cell));
+  else if (res > 0) std::snprintf(text, sizeof text, "--res %d", res);
+  else if (node && node->resolutionLoc.line > 0)
+    return node->resolutionLoc.file + ":" + std::to_string(node->resolutionLoc.line) + ":" +
+           std::to_string(node->resolutionLoc.column) + ": the scene's MarchingCubes resolution";
+  else std::snprintf(text, sizeof text, "the default resolution");
+  return text;
+}
+
 // --polygonizer particles: the tesselator run until settled (or --updates N), its triangulation written.
 int runParticleMesh(const MeshArgs& a, const Scene& scene, const SkeletonCache& skeleton) {
   TesselatorOptions options;
   if (const auto* node = std::get_if<Tesselator3MPNode>(&scene.polygonizer)) options = TesselatorOptions::fromNode(*node);
   if (a.threads > 0) options.numThreads = a.threads;
+  options.maxParticles = a.maxParticles;
   Tesselator tess(options);
   Mesh mesh;
   int updates = a.updates;
@@ -61,6 +87,17 @@ int runParticleMesh(const MeshArgs& a, const Scene& scene, const SkeletonCache& 
   }
   std::printf("%s: %zu particles, %zu triangles after %d updates, written to %s\n", a.scene.c_str(),
               mesh.vertexCount(), mesh.triangleCount(), updates, a.output.c_str());
+  if (tess.particles().size() >= options.maxParticles) {
+    const auto* node = std::get_if<Tesselator3MPNode>(&scene.polygonizer);
+    const SourceLoc at = node ? node->desiredRadiusLoc : SourceLoc{};
+    std::fprintf(stderr,
+                 "%s: warning: the particles reached their limit of %zu (desiredRadius %g m is small for this "
+                 "character), so the surface is sampled more coarsely than asked; use a larger desiredRadius, or "
+                 "raise the limit with --max-particles N\n",
+                 at.line > 0 ? (at.file + ":" + std::to_string(at.line) + ":" + std::to_string(at.column)).c_str()
+                             : a.scene.c_str(),
+                 options.maxParticles, double(options.desiredRadius));
+  }
   if (a.check) reportTopology(mesh);
   return kExitOk;
 }
@@ -86,8 +123,12 @@ int runMesh(const MeshArgs& a) {
     if (a.res > 0) options.resolution = a.res;
   }
 
+  options.maxCells = a.maxCells;
   SkeletonCache skeleton(character);
   if (a.polygonizer == "particles") return runParticleMesh(a, scene, skeleton);
+  if (gridRefused("mesh", skeleton.field(), options,
+                  resolutionSource(a.cell, a.res, std::get_if<MarchingCubesNode>(&scene.polygonizer))))
+    return a.cell > 0.0f || a.res > 0 ? kExitUsage : kExitInvalidInput;  // the command line's value, or the file's
   MarchingCubesStats stats;
   const Mesh mesh = polygonize(skeleton.field(), options, &stats);
 
@@ -165,6 +206,7 @@ struct RenderArgs {
   int res = 96;
   int width = 800, height = 800;
   std::string view = "three-quarter";
+  size_t maxCells = MarchingCubesOptions{}.maxCells;
 };
 
 // Renders the scene's Marching Cubes mesh in software to a PNG: a quick look without a GPU or a display.
@@ -176,6 +218,9 @@ int runRender(const RenderArgs& a) {
   MarchingCubesOptions options;
   options.cellSize = a.cell;
   options.resolution = a.res;
+  options.maxCells = a.maxCells;
+  if (gridRefused("render", skeleton.field(), options, resolutionSource(a.cell, a.cell > 0 ? 0 : a.res, nullptr)))
+    return kExitUsage;
   const Mesh mesh = polygonize(skeleton.field(), options);
   SnapshotOptions snap;
   snap.width = a.width;
@@ -211,6 +256,10 @@ void addSceneCommands(CLI::App& app, Commands& commands) {
       ->check(CLI::IsMember({"mc", "particles"}));
   meshCmd->add_option("--updates", mesh->updates, "particles: updates to run (default: until settled)")
       ->check(CLI::Range(1, 1000000));
+  meshCmd->add_option("--max-cells", mesh->maxCells, "Marching Cubes: the most grid cells (default 2^28; more is refused)")
+      ->check(CLI::PositiveNumber);
+  meshCmd->add_option("--max-particles", mesh->maxParticles, "particles: the most particles (default 2^18)")
+      ->check(CLI::PositiveNumber);
   commands.push_back({meshCmd, [mesh] { return runMesh(*mesh); }});
 
   auto checkPath = std::make_shared<std::string>();
@@ -226,6 +275,8 @@ void addSceneCommands(CLI::App& app, Commands& commands) {
   renderCmd->add_option("--res", render->res, "Cells along the longest side (default 96)")->check(CLI::Range(1, 4096))->excludes(renderCell);
   renderCmd->add_option("--width", render->width, "Image width in pixels")->check(CLI::Range(16, 8192));
   renderCmd->add_option("--height", render->height, "Image height in pixels")->check(CLI::Range(16, 8192));
+  renderCmd->add_option("--max-cells", render->maxCells, "The most grid cells (default 2^28; more is refused)")
+      ->check(CLI::PositiveNumber);
   renderCmd->add_option("--view", render->view, "Camera direction")->check(CLI::IsMember({"three-quarter", "front", "side", "top"}));
   commands.push_back({renderCmd, [render] { return runRender(*render); }});
 }

@@ -45,7 +45,7 @@ int runInfo(const std::string& path) {
       previous = sample.sequence;
       ++count;
     }
-    const double seconds = double(last - first) * 1e-9;
+    const double seconds = (double(last) - double(first)) * 1e-9;  // any two int64 timestamps, no overflow
     std::printf("  device %zu: \"%s\" serial \"%s\" firmware \"%s\": %d channels of %d bits%s\n", d, info.name.c_str(),
                 info.serialNumber.c_str(), info.firmwareVersion.c_str(), info.channelCount, info.bitsPerChannel,
                 info.hasDeviceTimestamp ? ", device timestamps" : "");

@@ -1,6 +1,7 @@
 // The `puppeteer` program: every command of the product's command line.
 #include <unistd.h>
 
+#include <csignal>
 #include <cstdlib>
 #include <string>
 
@@ -30,5 +31,8 @@ void useHugePages(char** argv) {
 
 int main(int argc, char** argv) {
   useHugePages(argv);
+  // A file-size limit (ulimit -f) must fail a write like a full disk does (EFBIG: a message, the I/O exit code, the
+  // temporary file removed), not kill the process mid-save with SIGXFSZ.
+  std::signal(SIGXFSZ, SIG_IGN);
   return imps::app::runCli(argc, argv);
 }

@@ -14,9 +14,13 @@
 #include <stdexcept>
 #include <vector>
 
+#include "file_text.h"
+
 namespace imps::sim {
 
 namespace {
+
+constexpr size_t kMaxBvhFileBytes = size_t{256} << 20;  // readBvh refuses larger (or endless) inputs
 
 constexpr std::array<std::string_view, 6> kChannelNames = {"Xposition", "Yposition", "Zposition",
                                                            "Xrotation", "Yrotation", "Zrotation"};
@@ -286,6 +290,9 @@ class Parser {
     auto frameTime = parseNumber<double>(ft.text);
     if (!frameTime || *frameTime < 0)
       return fail(ft, "expected a frame time in seconds after 'Frame Time:', found " + quoted(ft.text));
+    if (*frameTime > kMaxFrameTime)
+      return fail(ft, "frame time " + std::string(ft.text) + " s is longer than the " + std::to_string(int(kMaxFrameTime)) +
+                          " s this program accepts (a BVH frame time is a fraction of a second, e.g. 0.0083333)");
     clip_.frameTime = *frameTime;
     if (!lex_.atLineEnd()) {
       Token extra = lex_.next();
@@ -322,6 +329,10 @@ class Parser {
         return fail(lineEnd, "frame " + std::to_string(clip_.frames.size() + 1) + " has " + std::to_string(row.size()) +
                                  " values, expected " + std::to_string(channels));
       }
+      if (clip_.frames.size() == kMaxFrames)
+        return fail(first, "more than " + std::to_string(kMaxFrames) + " frames (" +
+                               std::to_string(kMaxFrames / 120 / 3600) + " hours at 120 fps), the most this program "
+                               "reads: split the clip");
       clip_.frames.push_back(row);
     }
     if (static_cast<unsigned long long>(*declared) != clip_.frames.size())
@@ -331,6 +342,10 @@ class Parser {
   }
 
   static constexpr int kMaxDepth = 256;   // deeper nesting is not a skeleton; also bounds the recursion
+  // Bounds that keep every timestamp of a converted clip (frame index * frame time, in ns) inside int64 and its
+  // memory in proportion: 2^20 frames of at most an hour each.
+  static constexpr size_t kMaxFrames = size_t{1} << 20;
+  static constexpr double kMaxFrameTime = 3600;
   Lexer lex_;
   int depth_ = 0;
   std::string name_;
@@ -380,11 +395,13 @@ std::expected<BvhClip, std::string> readBvhText(std::string_view text, std::stri
 }
 
 std::expected<BvhClip, std::string> readBvh(const std::filesystem::path& path, std::vector<std::string>* warnings) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return std::unexpected(path.string() + ": error: cannot open BVH file: " + std::strerror(errno));
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) return std::unexpected(path.string() + ": error: read failed");
-  return readBvhText(text, path.string(), warnings);
+  auto text = detail::readFileText(path, kMaxBvhFileBytes);
+  if (!text)
+    return std::unexpected(path.string() + ": error: " +
+                           (text.error().starts_with("larger")
+                                ? "cannot read BVH file: " + text.error() + " (the most this program reads)"
+                                : "cannot open BVH file: " + text.error()));
+  return readBvhText(*text, path.string(), warnings);
 }
 
 std::string writeBvh(const BvhClip& clip) {

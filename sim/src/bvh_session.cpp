@@ -88,6 +88,16 @@ double countsToDegrees(uint32_t counts, int bits) {
          static_cast<double>(int64_t{1} << bits);
 }
 
+namespace {
+
+// "the clip's WHAT takes N bytes, more than the 64 MiB a session record holds".
+std::string recordTooLarge(const std::string& what, size_t bytes) {
+  return "the clip's " + what + " takes " + std::to_string(bytes) + " bytes, more than the " +
+         std::to_string(kMaxRecordPayloadBytes >> 20) + " MiB a session record holds";
+}
+
+}  // namespace
+
 std::expected<Session, std::string> bvhToSession(const BvhClip& clip, std::string_view sourceName,
                                                  BvhToSessionOptions options) {
   const std::string name(sourceName);
@@ -99,6 +109,18 @@ std::expected<Session, std::string> bvhToSession(const BvhClip& clip, std::strin
   const size_t channelCount = clip.channelCount();
   if (channelCount == 0) return fail("the clip has no channels");
   if (!(clip.frameTime >= 0) || !std::isfinite(clip.frameTime)) return fail("bad frame time");
+  // Every timestamp, frame index * frame time in ns, must fit the session's int64 (about 292 years).
+  if (static_cast<double>(clip.frames.size()) * clip.frameTime * 1e9 >= 0x1p62)
+    return fail("the clip lasts longer than a session can time (" + std::to_string(clip.frames.size()) +
+                " frames of " + std::to_string(clip.frameTime) + " s)");
+
+  // A session of more channels than this would be thousands of devices and records beyond the format's limit.
+  constexpr size_t kMaxSessionChannels = size_t{1} << 16;
+  if (channelCount > kMaxSessionChannels)
+    return fail("the clip has " + std::to_string(channelCount) + " channels, more than the " +
+                std::to_string(kMaxSessionChannels) + " a session holds (" +
+                std::to_string(kMaxSessionChannels / drivers::kMaxChannels) + " devices of " +
+                std::to_string(drivers::kMaxChannels) + ")");
 
   // Per channel: joint, kind; and the largest position magnitude for the automatic scale.
   std::vector<std::string> channelNames;
@@ -155,11 +177,14 @@ std::expected<Session, std::string> bvhToSession(const BvhClip& clip, std::strin
             std::string(bvhChannelName(split->second).substr(0, 1)) + "\"}";
   }
   json += "]}";
+  if (json.size() > kMaxRecordPayloadBytes) return fail(recordTooLarge("channel description", json.size()));
   s.calibrations.push_back({0, std::move(json)});
 
   BvhClip hierarchy = clip;
   hierarchy.frames.clear();
   s.skeleton = SessionSkeleton{writeBvh(hierarchy), unitsPerCount};
+  if (s.skeleton->bvh.size() + 8 > kMaxRecordPayloadBytes)  // the SKELETON record: scale, then the text
+    return fail(recordTooLarge("hierarchy (joint names and offsets)", s.skeleton->bvh.size() + 8));
 
   s.samples.reserve(clip.frames.size() * deviceCount);
   s.sampleDevice.reserve(clip.frames.size() * deviceCount);
@@ -262,7 +287,8 @@ std::expected<BvhClip, std::string> sessionToBvh(const Session& session, Session
     std::optional<int64_t> previous;
     for (size_t i = 0; i < session.samples.size(); ++i) {
       if (session.sampleDevice[i] != 0) continue;
-      if (previous) deltas.push_back(timeOf(i) - *previous);
+      // Timestamps are whatever the file holds: a difference that overflows int64 is no frame time.
+      if (int64_t delta; previous && !__builtin_sub_overflow(timeOf(i), *previous, &delta)) deltas.push_back(delta);
       previous = timeOf(i);
     }
     clip.frameTime = 1.0 / 60.0;

@@ -18,6 +18,8 @@
 #include <thread>
 #include <utility>
 
+#include "file_text.h"
+
 namespace imps::sim {
 
 namespace {
@@ -26,7 +28,8 @@ constexpr std::array<char, 8> kMagic = {'I', 'M', 'P', 'S', 'S', 'E', 'S', 'S'};
 constexpr uint16_t kFormatVersion = 1;
 constexpr size_t kFileHeaderBytes = 16;
 constexpr size_t kRecordHeaderBytes = 12;
-constexpr uint32_t kMaxPayloadBytes = 64u << 20;  // larger lengths are treated as corruption
+constexpr uint32_t kMaxPayloadBytes = kMaxRecordPayloadBytes;  // larger lengths are treated as corruption
+constexpr size_t kMaxSessionFileBytes = size_t{1} << 30;  // readSession refuses larger (or endless) inputs
 
 enum RecordType : uint16_t {
   kDeviceInfo = 1,
@@ -370,11 +373,19 @@ std::expected<void, std::string> SessionWriter::close() {
 // Reader
 
 std::expected<Session, std::string> readSession(const std::filesystem::path& path) {
+  // The magic first: a file that is not a session (/dev/zero, a picture) is refused without reading it whole.
   std::ifstream in(path, std::ios::binary);
   if (!in) return std::unexpected(path.string() + ": error: cannot open session file: " + errnoText(errno));
-  std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) return std::unexpected(path.string() + ": error: read failed");
-  return readSessionBytes(bytes, path.string());
+  std::array<char, kFileHeaderBytes> header{};
+  in.read(header.data(), header.size());
+  if (in.gcount() == static_cast<std::streamsize>(header.size()) &&
+      !std::equal(kMagic.begin(), kMagic.end(), header.begin()))
+    return readSessionBytes(std::span(reinterpret_cast<const uint8_t*>(header.data()), header.size()), path.string());
+  auto text = detail::readFileText(path, kMaxSessionFileBytes);
+  if (!text)
+    return std::unexpected(path.string() + ": error: cannot read session file: " + text.error() +
+                           (text.error().starts_with("larger") ? " (the most this program reads; split the take)" : ""));
+  return readSessionBytes(std::span(reinterpret_cast<const uint8_t*>(text->data()), text->size()), path.string());
 }
 
 std::expected<Session, std::string> readSessionBytes(std::span<const uint8_t> bytes, std::string_view name) {
@@ -605,7 +616,11 @@ std::expected<void, std::string> saveSession(const std::filesystem::path& path, 
   }();
   if (!result) {
     std::filesystem::remove(tmp, ignored);
-    return std::unexpected(result.error());
+    // The writer names the file it wrote; the user asked for `path`, and the temporary file is gone.
+    std::string message = result.error();
+    for (size_t at = message.find(tmp.string()); at != std::string::npos; at = message.find(tmp.string(), at))
+      message.replace(at, tmp.string().size(), path.string());
+    return std::unexpected(message);
   }
   if (::rename(tmp.c_str(), path.c_str()) != 0) {
     const int err = errno;
@@ -617,6 +632,25 @@ std::expected<void, std::string> saveSession(const std::filesystem::path& path, 
 
 // ---------------------------------------------------------------------------------------------------------------
 // Replay
+
+namespace {
+
+constexpr int64_t kTimeMax = std::numeric_limits<int64_t>::max(), kTimeMin = std::numeric_limits<int64_t>::min();
+int64_t saturatingSub(int64_t a, int64_t b) {
+  int64_t r;
+  return __builtin_sub_overflow(a, b, &r) ? (b < 0 ? kTimeMax : kTimeMin) : r;
+}
+int64_t saturatingAdd(int64_t a, int64_t b) {
+  int64_t r;
+  return __builtin_add_overflow(a, b, &r) ? (b > 0 ? kTimeMax : kTimeMin) : r;
+}
+int64_t saturatingRound(double ns) {
+  if (!(ns < 0x1p63)) return kTimeMax;
+  if (ns < -0x1p63) return kTimeMin;
+  return static_cast<int64_t>(std::llround(ns));
+}
+
+}  // namespace
 
 SessionReplay::SessionReplay(const Session& session, Clock& clock, ReplayOptions options)
     : session_(session), clock_(clock), options_(options) {}
@@ -653,14 +687,13 @@ size_t SessionReplay::run(SampleConsumer& consumer) {
     while (position_ < n && !stopRequested_.load(std::memory_order_relaxed)) {
       const size_t p = position_;
       if (paced) {
-        const int64_t recorded = recordedTimeNs(p) - firstRecordedNs;
-        const int64_t offset = options_.speed == 1.0
-                                   ? recorded
-                                   : static_cast<int64_t>(std::llround(static_cast<double>(recorded) / options_.speed));
-        const int64_t due = startNs + offset;
+        // Recorded timestamps are whatever the file holds: the schedule saturates instead of overflowing.
+        const int64_t recorded = saturatingSub(recordedTimeNs(p), firstRecordedNs);
+        const int64_t offset = options_.speed == 1.0 ? recorded : saturatingRound(double(recorded) / options_.speed);
+        const int64_t due = saturatingAdd(startNs, offset);
         for (int64_t now = clock_.nowNs(); now < due; now = clock_.nowNs()) {
           if (stopRequested_.load(std::memory_order_relaxed)) break;
-          clock_.sleepUntilNs(std::min(due, now + maxSleep));
+          clock_.sleepUntilNs(std::min(due, saturatingAdd(now, maxSleep)));
         }
         if (stopRequested_.load(std::memory_order_relaxed)) break;
       }

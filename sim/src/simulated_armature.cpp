@@ -80,7 +80,11 @@ std::expected<ArmatureOptions, std::string> armatureOptionsFromSpec(const driver
         begin = bar + 1;
       }
     } else if (key == "boot_ms" || key == "unplug_ms" || key == "replug_ms") {
-      ok = parseValue(value, ms) && ms >= 0;
+      // At most a year: the value in ns, and the clock times it is added to, stay far inside int64.
+      constexpr int64_t kMaxMs = int64_t{365} * 24 * 3600 * 1000;
+      ok = parseValue(value, ms) && ms >= 0 && ms <= kMaxMs;
+      if (!ok) return bad(key, "bad value '" + value + "': expected milliseconds from 0 to " + std::to_string(kMaxMs) +
+                                   " (a year)");
       (key == "boot_ms" ? o.bootDelayNs : key == "unplug_ms" ? o.unplugAtNs : o.replugAfterNs) = ms * 1'000'000;
     } else if (key == "stream_at_boot" || key == "timestamps") {
       ok = parseValue(value, flag) && (flag == 0 || flag == 1);

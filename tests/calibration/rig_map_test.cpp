@@ -4,11 +4,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
 #include "imps/character.h"
 #include "imps/scene_reader.h"
+#include "imps/utf8.h"
 
 namespace imps::calibration {
 namespace {
@@ -210,6 +212,49 @@ TEST(RigMap, SyntaxErrorsHaveLocations) {
   EXPECT_EQ(errors("{\"version\": 1, \"version\": 1}"),
             "rig.json:1:16: error: duplicate key 'version' (first at line 1)\n");
   EXPECT_EQ(errors("{\"version\": 1, \"bits\": 12, \"joints\": [\n"), "rig.json:2:1: error: unexpected end of file: expected a value\n");
+}
+
+TEST(RigMap, TextThatIsNotUtf8IsRefusedAtItsFirstBadByte) {
+  EXPECT_EQ(errors("{\"version\": 1,\n  \"device\": \"ab\xFF\"}"),
+            "rig.json:2:16: error: invalid UTF-8 (byte 0xFF); a JSON file must be UTF-8 text\n");
+  EXPECT_EQ(errors(oneChannel(R"({"channel": 16, "axis": "y", "sign": 1})", "L_\xC3(")),
+            "rig.json:5:18: error: invalid UTF-8 (byte 0xC3); a JSON file must be UTF-8 text\n");
+}
+
+TEST(RigMap, StringsFromADeviceThatAreNotUtf8AreWrittenAsValidJson) {
+  // A map built in memory carries the device's own bytes: its name, channel names and the info the app records.
+  auto a = parseRigMap(oneChannel(R"({"channel": "L_elbow", "axis": "y", "sign": 1})"), "a.json");
+  ASSERT_TRUE(a.has_value()) << a.error().str();
+  a->device = "Monkey \xFF";
+  a->channels[0].channelName = "L_\xE2\x82";
+  a->info = "{\"serial\":\"\xC0\x80\"}";
+  std::string written;
+  ASSERT_NO_THROW(written = toJson(*a));
+  EXPECT_EQ(firstInvalidUtf8(written), written.size()) << written;
+  auto b = parseRigMap(written, "b.json");
+  ASSERT_TRUE(b.has_value()) << b.error().str() << written;
+  EXPECT_EQ(b->device, "Monkey \uFFFD");
+  EXPECT_EQ(b->channels[0].channelName, "L_\uFFFD");  // one replacement for a sequence cut short
+  EXPECT_EQ(b->info, "{\"serial\":\"\uFFFD\uFFFD\"}");
+}
+
+TEST(RigMap, HugeFilesAreCheckedInLinearTimeAndTheReportIsCapped) {
+  // 100,000 entries for one joint (each a duplicate of the first) and 200,000 unknown keys: the duplicate checks were
+  // quadratic (50,000 keys took 22 s) and the report ran to megabytes. Every error is still counted.
+  std::string text = "{\"version\": 1, \"bits\": 12,";
+  for (int k = 0; k < 200000; ++k) text += " \"k" + std::to_string(k) + "\": 0,";
+  text += " \"joints\": [\n";
+  for (int j = 0; j < 100000; ++j)
+    text += std::string(j ? "," : "") + "{\"joint\": \"Head\", \"channels\": [{\"channel\": 3, \"axis\": \"x\", \"sign\": 1}]}\n";
+  text += "]}\n";
+  auto r = parseRigMap(text, "big.json", {&biped()});
+  ASSERT_FALSE(r.has_value());
+  EXPECT_EQ(r.error().errorCount(), 200000 + 2 * 99999);  // unknown keys; joint listed twice; channel mapped twice
+  const std::string report = r.error().str();
+  EXPECT_EQ(std::count(report.begin(), report.end(), '\n'), 101) << report.substr(0, 2000);
+  EXPECT_NE(report.find("\n... and 399898 more (399998 errors in all; only the first 100 are shown)\n"),
+            std::string::npos)
+      << report.substr(report.size() - 300);
 }
 
 TEST(RigMap, EveryErrorIsReportedNotOnlyTheFirst) {

@@ -8,6 +8,7 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include "imps/mesh.h"
+#include "imps/parallel.h"
 
 namespace imps {
 namespace {
@@ -124,6 +125,46 @@ TEST(MarchingCubes, ResolutionOptionsSetTheGrid) {
   polygonize(f, o, &stats);
   EXPECT_NEAR(stats.cellSize.x, f.surfaceBounds().size().x / 10.0f, 1e-6f);
   EXPECT_NEAR(stats.cellSize.y, f.surfaceBounds().size().y / 40.0f, 1e-6f);
+}
+
+TEST(MarchingCubes, AGridBeyondTheCellLimitIsRefusedNotAllocated) {
+  // A 0.4 m ball at cell 1e-7 m: 4e6 cells a side, 6.4e19 cells (was an uncaught std::length_error or int overflow).
+  const Field f = makeField({Primitive::metaball({0, 0, 0}, 0.2f)}, -8.0f);
+  MarchingCubesOptions o;
+  for (float cell : {1e-7f, 1e-9f, 1e-30f}) {
+    o.cellSize = cell;
+    auto plan = planGrid(f, o);
+    ASSERT_FALSE(plan) << cell;
+    EXPECT_NE(plan.error().find("is more than the limit of 268435456 cells"), std::string::npos) << plan.error();
+    MarchingCubesStats stats;
+    const Mesh mesh = polygonize(f, o, &stats);
+    EXPECT_EQ(mesh.triangleCount(), 0u);
+    EXPECT_EQ(stats.cells, glm::ivec3(0));
+  }
+  // Within the limit the plan is the grid polygonize() uses; a lower limit refuses it.
+  o.cellSize = 0.02f;
+  MarchingCubesStats stats;
+  polygonize(f, o, &stats);
+  ASSERT_TRUE(planGrid(f, o));
+  EXPECT_EQ(*planGrid(f, o), stats.cells);
+  o.maxCells = size_t(stats.cells.x) * size_t(stats.cells.y) * size_t(stats.cells.z) - 1;
+  EXPECT_FALSE(planGrid(f, o));
+  o.gridResolution = {4096, 4096, 4096};  // the largest the scene file allows, at the default limit
+  o.cellSize = 0.0f;
+  o.maxCells = MarchingCubesOptions{}.maxCells;
+  EXPECT_FALSE(planGrid(f, o));
+}
+
+TEST(MarchingCubes, AThreadCountBeyondTheLimitRunsOnTheLimit) {
+  // A scene's numThreads 2147483647 once reached oneTBB as an arena of two billion threads (a segfault).
+  EXPECT_EQ(resolveThreads(2147483647), kMaxThreads);
+  const Field f = makeField({Primitive::metaball({0, 0, 0}, 0.2f)}, -8.0f);
+  MarchingCubesOptions o;
+  o.resolution = 16;
+  const Mesh one = polygonize(f, o);
+  o.threads = 2147483647;
+  const Mesh many = polygonize(f, o);
+  EXPECT_EQ(many.indices, one.indices);
 }
 
 TEST(MarchingCubes, EmptySpaceIsSkipped) {

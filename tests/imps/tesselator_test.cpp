@@ -457,6 +457,23 @@ TEST(Tesselator, TurningNeckDoesNotBubble) {
   EXPECT_LT(double(r.maxRegion), 1.2 * double(r.settledRegion));
 }
 
+TEST(Tesselator, ATinyDesiredRadiusStopsAtTheParticleLimit) {
+  // desiredRadius 1e-4 m on the biped asked for ~10^8 seed points and grew past a gigabyte; seeding and fission now
+  // stop at maxParticles, and the candidates are spaced so that their number stays in proportion to it.
+  Example e = load("simple_biped.wrl");
+  SkeletonCache skel(*e.character);
+  TesselatorOptions o = e.options;
+  o.desiredRadius = 1e-4f;
+  o.queryRadius = 2.5e-4f;
+  o.maxParticles = 2000;
+  Tesselator tess(o);
+  for (int u = 0; u < 3; ++u) {
+    tess.update(skel);
+    EXPECT_LE(tess.particles().size(), o.maxParticles) << "update " << u;
+  }
+  EXPECT_GT(tess.particles().size(), 0u);
+}
+
 TEST(Tesselator, FlatFieldWithoutSkeletonAndReset) {
   Example e = load("textured_blobs.wrl");
   SkeletonCache skel(*e.character);

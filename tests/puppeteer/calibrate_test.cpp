@@ -13,6 +13,7 @@
 #include "calibration/calibration.h"
 #include "cli.h"
 #include "imps/scene_reader.h"
+#include "imps/utf8.h"
 #include "session_calibration.h"
 #include "sim/session_file.h"
 
@@ -59,8 +60,9 @@ uint32_t countFor(size_t ch, double angle, int sign = 1) {
 
 // 1 s of T-pose at 1 kHz with ±1 count of wobble, then 1 s with the elbows (channels 16 L_Forearm y, 17 R_Forearm
 // y) bent 90 degrees forward: L -90, R +90. `rightElbowSign` -1 simulates an encoder mounted reversed.
-void writeSession(const std::filesystem::path& path, int rightElbowSign = 1) {
-  auto w = sim::SessionWriter::create(path, device32());
+void writeSession(const std::filesystem::path& path, int rightElbowSign = 1,
+                  const drivers::DeviceInfo& device = device32()) {
+  auto w = sim::SessionWriter::create(path, device);
   ASSERT_TRUE(w.has_value()) << w.error();
   for (int k = 0; k < 2000; ++k) {
     drivers::Sample s;
@@ -134,6 +136,27 @@ TEST(CalibrateCommand, FromASessionWritesOffsetsAndPassesTheCheckPose) {
   const auto& last = read->samples.back();
   EXPECT_NEAR(cal->angle(16, last.counts[16]), -std::numbers::pi / 2, 1.5 / kGain12);
   EXPECT_NEAR(cal->angle(17, last.counts[17]), std::numbers::pi / 2, 1.5 / kGain12);
+}
+
+TEST(CalibrateCommand, ADeviceNameThatIsNotUtf8IsWrittenAsValidJson) {
+  // A device's name and serial are whatever bytes it sent; the calibration file is JSON, which must be UTF-8.
+  TempDir dir;
+  const auto session = dir.path / "take.session", out = dir.path / "biped.calibration.json";
+  drivers::DeviceInfo dev = device32();
+  dev.name = "Monkey \xFF\xFE";
+  dev.serialNumber = "SN-\xC3";
+  writeSession(session, 1, dev);
+  const int rc = runCalibrate({"--rig", kSource + "/examples/simple_biped.rig.json", "--scene",
+                               kSource + "/examples/simple_biped.wrl", "--session", session.string(), "-o",
+                               out.string(), "--window-ms", "500"});
+  ASSERT_EQ(rc, kExitOk);
+  std::ifstream in(out, std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(firstInvalidUtf8(text), text.size()) << text;
+  auto cal = calibration::Calibration::readFile(out, &biped(), &dev);
+  ASSERT_TRUE(cal.has_value()) << cal.error().str();
+  EXPECT_EQ(cal->rigMap().device, "Monkey \uFFFD\uFFFD");
+  EXPECT_NE(cal->rigMap().info.find("\"serial\":\"SN-\uFFFD\""), std::string::npos) << cal->rigMap().info;
 }
 
 TEST(CalibrateCommand, AReversedChannelFailsTheCheckPoseAndWritesNothing) {

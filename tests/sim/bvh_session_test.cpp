@@ -234,6 +234,78 @@ TEST(SessionToBvh, LiveSessionGetsAFlatSkeleton) {
   EXPECT_EQ(*reread, *clip);
 }
 
+TEST(SessionToBvh, TimestampsWhoseDifferencesOverflowGiveNoFrameTime) {
+  // Timestamps are whatever the file holds. Every difference here overflows int64; it used to wrap into a frame time
+  // of hundreds of years (undefined behaviour); now no spacing is measurable and the default 1/60 s applies.
+  Session s;
+  DeviceInfo d;
+  d.name = "extreme";
+  d.channelCount = 1;
+  d.bitsPerChannel = 12;
+  s.devices = {d};
+  for (int i = 0; i < 5; ++i) {
+    Sample x;
+    x.channelCount = 1;
+    x.arrivalTimeNs = i % 2 ? 9'000'000'000'000'000'000 : -9'000'000'000'000'000'000;
+    s.samples.push_back(x);
+    s.sampleDevice.push_back(0);
+  }
+  auto clip = sessionToBvh(s);
+  ASSERT_TRUE(clip) << clip.error();
+  EXPECT_DOUBLE_EQ(clip->frameTime, 1.0 / 60.0);
+}
+
+TEST(BvhToSession, AClipLongerThanSessionTimestampsReachIsRefused) {
+  BvhClip clip;
+  clip.joints.push_back({"A", -1, {0, 0, 0}, {C::Xrotation}, false, {}});
+  clip.frames = {{0.f}, {1.f}, {2.f}};
+  clip.frameTime = 1e308;  // built in memory: the reader refuses this, the conversion must not trust it either
+  auto s = bvhToSession(clip, "long.bvh");
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.error().find("long.bvh: error: the clip lasts longer than a session can time"), std::string::npos)
+      << s.error();
+}
+
+TEST(BvhToSession, AClipOfMoreChannelsThanASessionHoldsIsAnInputError) {
+  // 1.2 M channels used to reach the session writer, fail on a record beyond the format's limit, and be reported as
+  // an I/O error naming the temporary file.
+  BvhClip clip;
+  clip.joints.push_back({"Root", -1, {0, 0, 0}, {}, false, {}});
+  for (int j = 0; j < 11000; ++j)
+    clip.joints.push_back({"J" + std::to_string(j), 0, {0, 0, 0},
+                           {C::Xposition, C::Yposition, C::Zposition, C::Xrotation, C::Yrotation, C::Zrotation},
+                           false, {}});
+  auto s = bvhToSession(clip, "wide.bvh");
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.error(), "wide.bvh: error: the clip has 66000 channels, more than the 65536 a session holds (1024 "
+                       "devices of 64)");
+  // Long joint names: within the channel limit, but the hierarchy's text is beyond a record's 64 MiB.
+  clip.joints.resize(1 + 4000);
+  clip.joints[0].channels = {C::Xrotation};
+  for (size_t j = 1; j < clip.joints.size(); ++j) {
+    clip.joints[j].name = std::string(17000, 'n') + std::to_string(j);
+    clip.joints[j].channels.clear();
+  }
+  s = bvhToSession(clip, "long.bvh");
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.error().find("more than the 64 MiB a session record holds"), std::string::npos) << s.error();
+}
+
+TEST(SaveSession, ErrorsNameTheTargetNotTheTemporaryFile) {
+  const fs::path target = fs::temp_directory_path() / ("imps_save_" + std::to_string(::getpid()) + ".session");
+  Session s;
+  DeviceInfo bad;
+  bad.name = "no channels";  // refused by the writer
+  s.devices = {bad};
+  auto saved = saveSession(target, s);
+  ASSERT_FALSE(saved);
+  EXPECT_EQ(saved.error().rfind(target.string() + ": error: ", 0), 0u) << saved.error();
+  EXPECT_EQ(saved.error().find(".tmp"), std::string::npos) << saved.error();
+  EXPECT_FALSE(fs::exists(target));
+  for (const auto& e : fs::directory_iterator(target.parent_path()))
+    EXPECT_EQ(e.path().filename().string().find(target.filename().string() + ".tmp"), std::string::npos) << e.path();
+}
+
 TEST(BvhToSession, Errors) {
   BvhClip empty;
   empty.joints.push_back({"A", -1, {0, 0, 0}, {}, false, {}});

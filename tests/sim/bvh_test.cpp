@@ -178,6 +178,30 @@ TEST(BvhRead, InlineErrors) {
   EXPECT_NE(tooDeep.error().find("error: joints nested more than 256 deep"), std::string::npos);
 }
 
+TEST(BvhRead, SizesAreBoundedWithAMessage) {
+  const std::string header = "HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\nCHANNELS 1 Xrotation\n}\nMOTION\nFrames: 1\n";
+  // A frame time whose timestamps (frame index * frame time, in ns) could not be represented.
+  auto slow = readBvhText(header + "Frame Time: 1e308\n0\n", "t.bvh");
+  ASSERT_FALSE(slow);
+  EXPECT_EQ(slow.error(), "t.bvh:9:13: error: frame time 1e308 s is longer than the 3600 s this program accepts (a BVH "
+                          "frame time is a fraction of a second, e.g. 0.0083333)");
+  // More frames than the reader keeps: 2^20 (2.4 hours at 120 fps).
+  std::string many = header + "Frame Time: 0.01\n";
+  for (size_t f = 0; f <= (size_t{1} << 20); ++f) many += "0\n";
+  auto tooMany = readBvhText(many, "t.bvh");
+  ASSERT_FALSE(tooMany);
+  EXPECT_EQ(tooMany.error(), "t.bvh:1048586:1: error: more than 1048576 frames (2 hours at 120 fps), the most this "
+                             "program reads: split the clip");
+}
+
+TEST(BvhRead, AnEndlessFileIsRefusedAtTheLimit) {
+  // /dev/zero never ends: the reader stops at its limit instead of filling memory.
+  auto endless = readBvh("/dev/zero");
+  ASSERT_FALSE(endless);
+  EXPECT_EQ(endless.error(), "/dev/zero: error: cannot read BVH file: larger than the 256 MiB limit (the most this "
+                             "program reads)");
+}
+
 TEST(BvhRead, LenientAboutCaseColonsBomAndJointNamesWithSpaces) {
   const std::string text =
       "\xEF\xBB\xBFhierarchy\nroot My Hips {\n offset 1 2 3\n channels 3 ZROTATION xrotation Yrotation\n}\n"

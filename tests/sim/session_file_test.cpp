@@ -8,7 +8,9 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <random>
+#include <tuple>
 
 namespace imps::sim {
 namespace {
@@ -457,6 +459,34 @@ TEST(SessionReplay, DeviceTimebaseAndLongGapsInSteps) {
   const auto got = replay(s, options, clock);
   for (size_t i = 0; i < got.size(); ++i) EXPECT_EQ(got[i].atNs, static_cast<int64_t>(i) * 8'000'000);
   EXPECT_EQ(clock.sleeps().size(), 3 * (s.samples.size() - 1));
+}
+
+TEST(SessionReplay, ExtremeTimestampsSaturateTheScheduleInsteadOfOverflowing) {
+  // Timestamps are whatever the file holds. A gap of more than 2^63 ns, or a due time past the clock's range, used
+  // to overflow (undefined behaviour; in practice a negative due time, so the sample came at once). The schedule now
+  // saturates: the sample is due at the end of time, and that is when a clock that can get there delivers it.
+  constexpr int64_t kMax = std::numeric_limits<int64_t>::max(), kMin = std::numeric_limits<int64_t>::min();
+  for (const auto& [first, second, start] :
+       {std::tuple{int64_t{0}, kMax, int64_t{1'000'000'000'000'000'000}}, std::tuple{kMin, kMax, int64_t{0}},
+        std::tuple{kMin, int64_t{0}, int64_t{5}}}) {
+    Session s;
+    s.devices = {device(1, 12)};
+    for (int64_t t : {first, second}) {
+      Sample x;
+      x.channelCount = 1;
+      x.arrivalTimeNs = t;
+      s.samples.push_back(x);
+      s.sampleDevice.push_back(0);
+    }
+    ManualClock clock(start);
+    ReplayOptions options;
+    options.maxSleepNs = kMax;
+    const auto got = replay(s, options, clock);
+    ASSERT_EQ(got.size(), 2u);
+    EXPECT_EQ(got[0].atNs, start);
+    EXPECT_EQ(got[1].atNs, kMax) << first << " then " << second << " from " << start;
+    for (size_t i = 1; i < clock.sleeps().size(); ++i) EXPECT_GE(clock.sleeps()[i], clock.sleeps()[i - 1]);
+  }
 }
 
 TEST(SessionReplay, RewritesArrivalTimeOnlyWhenAsked) {

@@ -196,6 +196,21 @@ TEST(SimulatedArmature, SpecOptions) {
   EXPECT_FALSE(armatureOptionsFromSpec(*parseDeviceSpec("sim:/nonexistent.session")));
 }
 
+TEST(SimulatedArmature, TimeKeysOutOfRangeAreRefusedNotWrapped) {
+  // 9223372036854 ms is 9.2e18 ns: multiplied out it overflowed int64 and the key was silently ignored.
+  for (const char* key : {"boot_ms", "unplug_ms", "replug_ms"}) {
+    auto bad = armatureOptionsFromSpec(*parseDeviceSpec(std::string("sim:?") + key + "=9223372036854"));
+    ASSERT_FALSE(bad) << key;
+    EXPECT_NE(bad.error().find(std::string("sim key '") + key + "': bad value '9223372036854': expected milliseconds "
+                               "from 0 to 31536000000 (a year)"),
+              std::string::npos)
+        << bad.error();
+  }
+  auto year = armatureOptionsFromSpec(*parseDeviceSpec("sim:?boot_ms=31536000000"));
+  ASSERT_TRUE(year) << year.error();
+  EXPECT_EQ(year->bootDelayNs, int64_t{31536000000} * kMs);
+}
+
 // ---- Through a DeviceSession
 
 DeviceSessionOptions fastOptions() {

@@ -1,6 +1,7 @@
 // Diagnostics for bad input: where it is (file:line:column) and what was expected.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -34,8 +35,10 @@ class Diagnostics {
   bool hasErrors() const { return errorCount_ > 0; }
   int errorCount() const { return errorCount_; }
   const std::vector<Diagnostic>& all() const { return items_; }
-  // Every diagnostic, one per line, in the order reported.
+  // The first kMaxPrinted diagnostics, one per line, in the order reported, then "... and N more (E errors in all;
+  // ...)" when there were more: a file with 100,000 bad entries gives a readable report, not megabytes of errors.
   std::string str() const;
+  static constexpr size_t kMaxPrinted = 100;
   void append(const Diagnostics& other);
 
  private:

@@ -23,7 +23,9 @@
 #pragma once
 
 #include <cstddef>
+#include <expected>
 #include <memory>
+#include <string>
 
 #include <glm/vec3.hpp>
 
@@ -49,6 +51,9 @@ struct MarchingCubesOptions {
   bool preserveThinFeatures = true;
   bool computeNormals = true;
   bool computeColors = true;
+  // The most cells a grid may have (2^28: 645^3, about 3 GB of work at the densest). A finer grid is refused:
+  // polygonize() gives an empty mesh and planGrid() says why. Raise it for a deliberately huge mesh.
+  size_t maxCells = size_t{1} << 28;
 };
 
 struct MarchingCubesStats {
@@ -65,7 +70,14 @@ struct MarchingCubesStats {
   double gatherMs = 0.0;           // concatenation into the output mesh
 };
 
-// Polygonizes field's iso-surface. Reuses nothing between calls; see MarchingCubes for repeated use.
+// The grid polygonize() uses for `field` with `options`: cells along x, y and z (zero for an empty field), or the
+// message "a grid of X x Y x Z cells (N) for a surface of ... m at cell C m is more than the limit of M cells" when
+// it would have more than options.maxCells cells. Cheap (the field's bounds only); call it before polygonize() to
+// report a refused grid.
+std::expected<glm::ivec3, std::string> planGrid(const Field& field, const MarchingCubesOptions& options);
+
+// Polygonizes field's iso-surface. Reuses nothing between calls; see MarchingCubes for repeated use. A grid beyond
+// options.maxCells gives an empty mesh (see planGrid).
 Mesh polygonize(const Field& field, const MarchingCubesOptions& options = {}, MarchingCubesStats* stats = nullptr);
 
 // A polygonizer that keeps its buffers between calls (for the live app, which meshes every frame).

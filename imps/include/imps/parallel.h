@@ -10,7 +10,12 @@
 
 namespace imps {
 
-// Number of worker threads for a requested count: `requested` if > 0, else the machine's hardware concurrency.
+// The most worker threads any loop runs on (the command line's --threads and a scene's numThreads are bounded by
+// it too): a larger request is a mistake, and oneTBB fails on arenas of millions of threads.
+inline constexpr int kMaxThreads = 1024;
+
+// Number of worker threads for a requested count: `requested` (at most kMaxThreads) if > 0, else the machine's
+// hardware concurrency.
 int resolveThreads(int requested);
 
 // Runs body(i) for i in [0, n) on up to `threads` threads (0 = all cores). Returns when every call has returned.

@@ -133,6 +133,7 @@ struct Tesselator3MPNode {
   std::optional<BlendNode> blendingFunction;
   UniformHash spatialSubdivision;
   std::optional<SceneNode> sceneGraph;
+  SourceLoc desiredRadiusLoc;  // where desiredRadius was given (unset: the default); not compared
   bool operator==(const Tesselator3MPNode& o) const;
 };
 
@@ -148,6 +149,7 @@ struct MarchingCubesNode {
   int numThreads = 0;  // 0: all cores
   std::optional<BlendNode> blendingFunction;
   std::optional<SceneNode> sceneGraph;
+  SourceLoc resolutionLoc;  // where cellSize or x/y/zResolution was last given (unset: neither); not compared
   bool operator==(const MarchingCubesNode& o) const;
 };
 

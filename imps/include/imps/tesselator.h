@@ -59,7 +59,9 @@ struct TesselatorOptions {
   int bitsPerDim = 3;            // UniformHash bitsPerDim (clamped to [1, 7])
   // Ours.
   uint64_t seed = 1;             // random streams: same seed (and same calls) => same meshes
-  size_t maxParticles = 1u << 20;  // fission stops at this many particles
+  // The most particles (seeding and fission stop here; about 1.7 kB each while updating and triangulating). A
+  // desiredRadius too small for the character reaches it; the surface is then sampled more coarsely than asked.
+  size_t maxParticles = size_t{1} << 18;
   int maxHoleLoop = 40;          // boundary loops up to this many edges are filled by the hole repair
 
   // From a scene's Tesselator3MP node (every figure A-1 field plus seed).

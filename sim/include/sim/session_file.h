@@ -57,6 +57,9 @@ class ManualClock final : public Clock {
   std::vector<int64_t> sleeps_;
 };
 
+// The largest record payload the format allows (docs/session-format.md); a reader treats a longer length as corruption.
+inline constexpr uint32_t kMaxRecordPayloadBytes = 64u << 20;
+
 // ---------------------------------------------------------------------------------------------------------------
 // The in-memory session
 

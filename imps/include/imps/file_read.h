@@ -1,0 +1,20 @@
+// Reading a whole input file with a size limit, so a huge or endless input (/dev/zero, a pipe that never closes)
+// is refused with a message instead of growing memory until the process dies.
+#pragma once
+
+#include <cstddef>
+#include <expected>
+#include <filesystem>
+#include <string>
+
+namespace imps {
+
+// The whole contents of `path`, or the reason it cannot be read: the system's error text ("No such file or
+// directory", "Is a directory"), or "larger than the N MiB limit" once more than `maxBytes` bytes were read
+// (without reading further). Reads in 64 KiB chunks.
+std::expected<std::string, std::string> readFileText(const std::filesystem::path& path, size_t maxBytes);
+
+// "16 MiB", "1.5 GiB": a byte limit for messages.
+std::string byteSizeText(size_t bytes);
+
+}  // namespace imps
