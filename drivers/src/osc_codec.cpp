@@ -80,6 +80,14 @@ struct Arguments {
     at += n, ++index;
     return v;
   }
+  // The next argument as a finite float32 (a double beyond float's range is refused, not turned into infinity).
+  std::expected<float, std::string> single(std::string_view what) {
+    const size_t start = at;
+    auto v = number(what);
+    if (!v) return std::unexpected(v.error());
+    if (!std::isfinite(float(*v))) return r->fail(start, cat(what, " is beyond the range of a float"));
+    return float(*v);
+  }
   std::expected<void, std::string> end(std::string_view address) const {
     if (index != tags.size()) return r->fail(at, cat("unexpected extra arguments to ", address));
     return {};
@@ -156,9 +164,9 @@ struct Decoder {
 
   std::expected<void, std::string> root(Arguments& a, std::string_view address) {
     for (float& v : pose.root) {
-      auto n = a.number("a root translation coordinate");
+      auto n = a.single("a root translation coordinate");
       if (!n) return std::unexpected(n.error());
-      v = float(*n);
+      v = *n;
     }
     pose.hasRoot = haveJointsOrRoot = true;
     return a.end(address);
@@ -172,9 +180,9 @@ struct Decoder {
     OscJointRotation& j = pose.joints[pose.jointCount];
     float* q[4] = {&j.w, &j.x, &j.y, &j.z};
     for (float* v : q) {
-      auto n = a.number("a quaternion component (w x y z)");
+      auto n = a.single("a quaternion component (w x y z)");
       if (!n) return std::unexpected(n.error());
-      *v = float(*n);
+      *v = *n;
     }
     if (j.w == 0 && j.x == 0 && j.y == 0 && j.z == 0) return a.r->fail(a.at, "expected a non-zero quaternion");
     if (auto e = a.end(address); !e) return e;

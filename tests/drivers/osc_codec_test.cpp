@@ -161,6 +161,8 @@ TEST(OscCodec, MalformedPacketsNameTheByteAndTheProblem) {
   expectError(OscBytes().str("/imps/frame").str(",if").u32(1).f32(2).bytes, 20, "as an OSC integer");
   expectError(OscBytes().str("/imps/frame").str(",is").u32(1).str("x").bytes, 20, "as an OSC integer");
   expectError(OscBytes().str("/imps/root").str(",fff").f32(1).f32(NAN).f32(3).bytes, 24, "not a finite number");
+  expectError(OscBytes().str("/imps/joint/A").str(",dfff").f64(1e300).f32(0).f32(0).f32(0).bytes, 24,
+              "beyond the range of a float");  // found by the fuzzer: was accepted as an infinite component
   expectError(OscBytes().str("/imps/joint/").str(",ffff").f32(1).f32(0).f32(0).f32(0).bytes, 0, "joint name");
   expectError(OscBytes().str("/imps/joint/A").str(",ffff").f32(0).f32(0).f32(0).f32(0).bytes, 40, "non-zero");
   expectError(OscBytes().str("/imps/channels").str(",i").u32(0xFFFFFFFFu).bytes, 24, "0..4294967295");

@@ -3,8 +3,9 @@
 // stream has been idle for IDLE_MS after its first frame (or 60 s pass). Prints one line:
 //   received N first F last L dropped D out_of_order O malformed M late T latency_median_us X latency_p99_us Y
 // Latency is sender → receiver: arrival minus the bundle's send time (both processes on one host share the steady
-// clock). Exit 0 when every frame from 0 to L arrived, in order, none malformed; 1 otherwise.
-// Usage: osc_receive_check READY_FILE [IDLE_MS]
+// clock). Exit 0 when every frame from 0 to L arrived, in order, and exactly MALFORMED datagrams (default 0) were
+// malformed; 1 otherwise.
+// Usage: osc_receive_check READY_FILE [IDLE_MS [MALFORMED]]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -19,11 +20,12 @@
 using namespace imps::drivers;
 
 int main(int argc, char** argv) {
-  if (argc != 2 && argc != 3) {
-    std::fprintf(stderr, "usage: osc_receive_check READY_FILE [IDLE_MS]\n");
+  if (argc < 2 || argc > 4) {
+    std::fprintf(stderr, "usage: osc_receive_check READY_FILE [IDLE_MS [MALFORMED]]\n");
     return 2;
   }
-  const int idleMs = argc == 3 ? std::atoi(argv[2]) : 1500;
+  const int idleMs = argc >= 3 ? std::atoi(argv[2]) : 1500;
+  const uint64_t expectedMalformed = argc == 4 ? std::strtoull(argv[3], nullptr, 10) : 0;
   std::mutex mutex;
   std::vector<uint32_t> frames;
   std::vector<int64_t> transitNs;
@@ -74,7 +76,7 @@ int main(int argc, char** argv) {
               frames.size(), first, last, static_cast<unsigned long long>(s.dropped),
               static_cast<unsigned long long>(s.outOfOrder), static_cast<unsigned long long>(s.malformed),
               static_cast<unsigned long long>(s.late), at(0.5), at(0.99));
-  bool ok = !frames.empty() && first == 0 && s.malformed == 0 && s.outOfOrder == 0 && s.dropped == 0;
+  bool ok = !frames.empty() && first == 0 && s.malformed == expectedMalformed && s.outOfOrder == 0 && s.dropped == 0;
   for (size_t i = 0; ok && i < frames.size(); ++i) ok = frames[i] == uint32_t(i);
   if (!ok) std::printf("FAIL: frames missing, out of order or malformed\n");
   return ok ? 0 : 1;
