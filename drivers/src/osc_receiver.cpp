@@ -92,25 +92,20 @@ void OscReceiver::run() {
   int consecutiveTimeouts = 0;
   while (!stopRequested_.load(std::memory_order_relaxed)) {
     pollfd p{fd_, POLLIN, 0};
-    if (poll(&p, 1, options_.ioWaitMs) > 0) {
+    // Every datagram waiting (at most 64 per wake-up, so the silence check below still runs under a flood).
+    for (int i = 0; i < 64 && (i > 0 || poll(&p, 1, options_.ioWaitMs) > 0); ++i) {
       // MSG_TRUNC: the datagram's real length, so an oversize one is reported, not decoded cut short.
       const ssize_t n = recv(fd_, buffer.data(), buffer.size(), MSG_TRUNC | MSG_DONTWAIT);
-      if (n >= 0) {
-        const int64_t arrival = options_.clock ? options_.clock() : steadyNs();
-        const uint64_t accepted = counters_.poses.load(std::memory_order_relaxed) +
-                                  counters_.samples.load(std::memory_order_relaxed);
-        handle(std::span(buffer.data(), std::min(size_t(n), buffer.size())), arrival);
-        if (counters_.poses.load(std::memory_order_relaxed) + counters_.samples.load(std::memory_order_relaxed) !=
-            accepted) {
-          lastPacket = steadyNs();
-          consecutiveTimeouts = 0;
-          if (state() != ConnectionState::Streaming) {
-            bump(counters_.connections);
-            if (everConnected_) bump(counters_.reconnects);
-            everConnected_ = true;
-            setState(ConnectionState::Streaming);
-          }
-        }
+      if (n < 0) break;
+      const int64_t arrival = options_.clock ? options_.clock() : steadyNs();
+      if (!handle(std::span(buffer.data(), std::min(size_t(n), buffer.size())), arrival)) continue;
+      lastPacket = steadyNs();
+      consecutiveTimeouts = 0;
+      if (state() != ConnectionState::Streaming) {
+        bump(counters_.connections);
+        if (everConnected_) bump(counters_.reconnects);
+        everConnected_ = true;
+        setState(ConnectionState::Streaming);
       }
     }
     // Silence: a timeout each sampleTimeoutMs; enough of them in a row lose the source (the last pose stays).
@@ -118,16 +113,17 @@ void OscReceiver::run() {
       bump(counters_.timeouts);
       lastPacket = steadyNs();
       if (++consecutiveTimeouts >= options_.timeoutsBeforeLost) {
-        std::lock_guard lock(mutex_);
-        lastError_ = cat("no OSC frames for ", options_.sampleTimeoutMs * options_.timeoutsBeforeLost, " ms");
-        state_.store(ConnectionState::Lost, std::memory_order_release);
-        stateChanged_.notify_all();
+        {
+          std::lock_guard lock(mutex_);
+          lastError_ = cat("no OSC frames for ", options_.sampleTimeoutMs * options_.timeoutsBeforeLost, " ms");
+        }
+        setState(ConnectionState::Lost);
       }
     }
   }
 }
 
-void OscReceiver::handle(std::span<const uint8_t> packet, int64_t arrivalNs) {
+bool OscReceiver::handle(std::span<const uint8_t> packet, int64_t arrivalNs) {
   bump(counters_.packets);
   bump(counters_.bytes, packet.size());
   auto decoded = packet.size() > kMaxOscPacket
@@ -138,28 +134,29 @@ void OscReceiver::handle(std::span<const uint8_t> packet, int64_t arrivalNs) {
     bump(counters_.malformed);
     std::lock_guard lock(mutex_);
     lastError_ = decoded.error();
-    return;
+    return false;
   }
   switch (decoded->kind) {
     case OscPacketKind::Ignored:
       bump(counters_.ignored);
-      return;
+      return false;
     case OscPacketKind::Pose:
-      if (!accept(pose_->frame, arrivalNs, pose_->sentTimeNs)) return;
+      if (!accept(pose_->frame, arrivalNs, pose_->sentTimeNs)) return false;
       poses_.publish(*pose_);
       bump(counters_.poses);
       if (options_.onPose) options_.onPose(*pose_);
-      return;
+      return true;
     case OscPacketKind::Channels:
       if (decoded->hasFrame) {
-        if (!accept(sample_.sequence, arrivalNs, 0)) return;
+        if (!accept(sample_.sequence, arrivalNs, 0)) return false;
       } else {
         sample_.sequence = unframedSequence_++;  // no counter to order by: the order of arrival
       }
       mailbox_.publish(sample_);
       bump(counters_.samples);
-      return;
+      return true;
   }
+  return false;
 }
 
 // Ordering and lateness of a framed packet; false when it is discarded (out of order).

@@ -20,6 +20,7 @@
 #include "calibration/calibration.h"
 #include "drivers/device_session.h"
 #include "drivers/device_spec.h"
+#include "drivers/osc_sender.h"
 #include "drivers/serial_transport.h"
 #include "sim/bvh.h"
 #include "sim/bvh_session.h"
@@ -262,6 +263,17 @@ std::optional<SampleMapper> readCalibration(const std::string& path, const Chara
   return SampleMapper(std::move(*c), std::filesystem::path(path).filename().string());
 }
 
+// --osc-out URLs, checked before anything is loaded or opened; false after printing the error.
+bool checkOscOutArgs(const LiveArgs& a) {
+  for (const std::string& url : a.oscOut) {
+    if (auto ok = drivers::checkOscTargetUrl(url); !ok) {
+      std::fprintf(stderr, "puppeteer: error: --osc-out %s: %s\n", url.c_str(), ok.error().c_str());
+      return false;
+    }
+  }
+  return true;
+}
+
 // Runs the viewer on `source`, streaming every pose it applies to the --osc-out targets when there are any.
 int runWithOscOut(const LiveArgs& a, ViewerPipeline& pipeline, PoseSource& source, const ViewerOptions& v) {
   auto sender = openOscOut(a.oscOut, pipeline.character());
@@ -272,7 +284,7 @@ int runWithOscOut(const LiveArgs& a, ViewerPipeline& pipeline, PoseSource& sourc
 }
 
 int runReplay(const LiveArgs& a) {
-  if (!checkScreenshotArgs(a) || !checkRigArgs(a)) return kExitUsage;
+  if (!checkScreenshotArgs(a) || !checkRigArgs(a) || !checkOscOutArgs(a)) return kExitUsage;
   auto script = parseScript(a);
   if (!script) return kExitUsage;
   std::optional<sim::Session> session = loadSession(a.session);
@@ -331,7 +343,7 @@ int runReplay(const LiveArgs& a) {
 }
 
 int runLive(const LiveArgs& a) {
-  if (!checkScreenshotArgs(a)) return kExitUsage;
+  if (!checkScreenshotArgs(a) || !checkOscOutArgs(a)) return kExitUsage;
   // --rig alone is allowed here: key k calibrates it (and saves to --calibration-out); until then channels map by
   // name.
   if (!a.rig.empty() && a.calibration.empty() && a.calibrationOut.empty()) {

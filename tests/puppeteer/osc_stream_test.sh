@@ -27,6 +27,18 @@ for f in r1 r2; do
 done
 p1=$(cat "$work/r1.port") p2=$(cat "$work/r2.port")
 
+# Usage errors: exit codes as docs/cli.md says.
+expect_exit() {  # CODE PATTERN COMMAND…: the command exits with CODE and prints PATTERN on stderr
+  local code=$1 pattern=$2 rc=0; shift 2
+  "$@" >/dev/null 2>"$work/err" || rc=$?
+  [ "$rc" -eq "$code" ] && grep -q -- "$pattern" "$work/err" \
+    || { cat "$work/err"; echo "FAIL: expected exit $code and '$pattern' from: $*"; exit 1; }
+}
+expect_exit 2 "is an OSC pose stream" "$puppeteer" record --device "osc.udp://:$p1" -o "$work/x.session"
+expect_exit 2 "osc:1:11: error: expected HOST:PORT" "$puppeteer" live "$scene" --device sim: --osc-out osc.udp://nohost
+expect_exit 3 "cannot listen: Address already in use" "$puppeteer" live "$scene" --device "osc.udp://127.0.0.1:$p2"
+expect_exit 2 "spec:1:12: error: expected a UDP port" "$puppeteer" live "$scene" --device "osc.udp://:99999"
+
 # 2. The render host listens on a free port of its own; its stdout is line-buffered so its hashes can be followed.
 for _ in $(seq 20); do
   p3=$((20000 + RANDOM % 20000))

@@ -78,14 +78,14 @@ class OscReceiver {
   uint16_t port() const { return port_; }
   ConnectionState state() const { return state_.load(std::memory_order_acquire); }
   OscReceiverStats stats() const;
-  std::string lastError() const;  // the latest malformed packet's decode error, "" when none
+  std::string lastError() const;  // the latest malformed packet's decode error, or why the source was lost; "" none
   // Blocks until state() == wanted or timeoutMs passes; returns whether it was reached.
   bool waitForState(ConnectionState wanted, int timeoutMs) const;
 
  private:
   OscReceiver(int fd, uint16_t port, OscReceiverOptions options, PoseMailbox& channels);
   void run();
-  void handle(std::span<const uint8_t> packet, int64_t arrivalNs);
+  bool handle(std::span<const uint8_t> packet, int64_t arrivalNs);  // true when a frame was accepted
   bool accept(uint32_t frame, int64_t arrivalNs, int64_t sentNs);
   void setState(ConnectionState s);
 
