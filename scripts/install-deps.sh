@@ -13,6 +13,8 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev libtinygltf-dev
   # devices
   libserialport-dev libhidapi-dev libusb-1.0-0-dev umockdev libumockdev-dev
+  # pose streaming (OSC over UDP)
+  liblo-dev
   # app, pictures and headless rendering
   libglfw3-dev libgl-dev libegl-dev libopenimageio-dev libimgui-dev xvfb xauth libgl1-mesa-dri
 )

@@ -15,6 +15,7 @@ const char* toString(DeviceKind kind) {
     case DeviceKind::Hid: return "hid";
     case DeviceKind::Usb: return "usb";
     case DeviceKind::Sim: return "sim";
+    case DeviceKind::Osc: return "osc.udp";
   }
   return "?";
 }
@@ -45,17 +46,35 @@ bool parseHexId(std::string_view s, uint16_t& out) { return s.size() >= 1 && s.s
 
 }  // namespace
 
+// `osc.udp://[ADDRESS]:PORT`: the text after the scheme.
+std::expected<DeviceSpec, std::string> parseOscSpec(std::string_view text) {
+  constexpr std::string_view kPrefix = "osc.udp://";
+  if (!text.starts_with(kPrefix)) return fail(0, "expected osc.udp://:PORT (or osc.udp://ADDRESS:PORT)");
+  const std::string_view rest = text.substr(kPrefix.size());
+  const size_t colon = rest.rfind(':');
+  if (colon == std::string_view::npos) return fail(kPrefix.size(), "expected :PORT, e.g. osc.udp://:9000");
+  DeviceSpec spec;
+  spec.kind = DeviceKind::Osc;
+  spec.path = rest.substr(0, colon);
+  std::string_view port = rest.substr(colon + 1);
+  if (!port.empty() && port.back() == '/') port.remove_suffix(1);
+  if (!parseNumber(port, spec.port) || spec.port == 0)
+    return fail(kPrefix.size() + colon + 1, "expected a UDP port in 1..65535");
+  return spec;
+}
+
 std::expected<DeviceSpec, std::string> parseDeviceSpec(std::string_view text) {
   DeviceSpec spec;
+  if (text.starts_with("osc.")) return parseOscSpec(text);
   const size_t colon = text.find(':');
   if (colon == std::string_view::npos)
-    return fail(0, "expected SCHEME:… where SCHEME is serial, hid, usb or sim");
+    return fail(0, "expected SCHEME:… where SCHEME is serial, hid, usb, sim or osc.udp");
   const std::string_view scheme = text.substr(0, colon);
   if (scheme == "serial") spec.kind = DeviceKind::Serial;
   else if (scheme == "hid") spec.kind = DeviceKind::Hid;
   else if (scheme == "usb") spec.kind = DeviceKind::Usb;
   else if (scheme == "sim") spec.kind = DeviceKind::Sim;
-  else return fail(0, cat("unknown scheme '", scheme, "': expected serial, hid, usb or sim"));
+  else return fail(0, cat("unknown scheme '", scheme, "': expected serial, hid, usb, sim or osc.udp"));
 
   const size_t bodyBegin = colon + 1;
   const size_t question = text.find('?', bodyBegin);
@@ -64,6 +83,8 @@ std::expected<DeviceSpec, std::string> parseDeviceSpec(std::string_view text) {
 
   // ---- Body: a path or VID:PID
   switch (spec.kind) {
+    case DeviceKind::Osc:  // parsed above
+      break;
     case DeviceKind::Serial:
       if (body.empty()) return fail(bodyBegin, "expected a device path, e.g. serial:/dev/ttyACM0");
       spec.path = body;
@@ -136,6 +157,7 @@ std::expected<DeviceSpec, std::string> parseDeviceSpec(std::string_view text) {
 }
 
 std::string formatDeviceSpec(const DeviceSpec& spec) {
+  if (spec.kind == DeviceKind::Osc) return cat("osc.udp://", spec.path, ":", spec.port);
   std::string out = toString(spec.kind);
   out += ':';
   std::vector<std::string> query;

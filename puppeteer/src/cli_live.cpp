@@ -20,6 +20,7 @@
 #include "calibration/calibration.h"
 #include "drivers/device_session.h"
 #include "drivers/device_spec.h"
+#include "drivers/osc_sender.h"
 #include "drivers/serial_transport.h"
 #include "sim/bvh.h"
 #include "sim/bvh_session.h"
@@ -30,6 +31,7 @@
 #include "viewer_pipeline.h"
 #include "viewer_replay.h"
 #include "calibration_flow.h"
+#include "osc_stream.h"
 #include "scripted_input.h"
 
 namespace imps::app {
@@ -52,6 +54,7 @@ struct LiveArgs {
   std::vector<std::string> drags;
   bool syncPhases = false;
   bool overlap = false;
+  std::vector<std::string> oscOut;  // live, replay: --osc-out targets
   // replay
   std::string session;
   std::string rig, calibration;
@@ -92,6 +95,11 @@ void addCommonOptions(CLI::App* cmd, LiveArgs& a) {
                 "Polygonize the next frame on a worker thread while the GL draws this one");
   cmd->add_flag("--sync-phases", a.syncPhases,
                 "glFinish after every phase so the per-phase times include the GL's work (profiling)");
+}
+
+void addOscOutOption(CLI::App* cmd, LiveArgs& a) {
+  cmd->add_option("--osc-out", a.oscOut,
+                  "Also stream every pose as OSC over UDP to osc.udp://HOST:PORT (repeatable; docs/osc.md)");
 }
 
 // Parses "NAME=ax,ay,az,angle".
@@ -255,8 +263,28 @@ std::optional<SampleMapper> readCalibration(const std::string& path, const Chara
   return SampleMapper(std::move(*c), std::filesystem::path(path).filename().string());
 }
 
+// --osc-out URLs, checked before anything is loaded or opened; false after printing the error.
+bool checkOscOutArgs(const LiveArgs& a) {
+  for (const std::string& url : a.oscOut) {
+    if (auto ok = drivers::checkOscTargetUrl(url); !ok) {
+      std::fprintf(stderr, "puppeteer: error: --osc-out %s: %s\n", url.c_str(), ok.error().c_str());
+      return false;
+    }
+  }
+  return true;
+}
+
+// Runs the viewer on `source`, streaming every pose it applies to the --osc-out targets when there are any.
+int runWithOscOut(const LiveArgs& a, ViewerPipeline& pipeline, PoseSource& source, const ViewerOptions& v) {
+  auto sender = openOscOut(a.oscOut, pipeline.character());
+  if (!sender) return sender.error();
+  if (!*sender) return runViewer(pipeline, &source, v);
+  OscStreamingSource streaming(source, std::move(*sender), pipeline.character());
+  return runViewer(pipeline, &streaming, v);
+}
+
 int runReplay(const LiveArgs& a) {
-  if (!checkScreenshotArgs(a) || !checkRigArgs(a)) return kExitUsage;
+  if (!checkScreenshotArgs(a) || !checkRigArgs(a) || !checkOscOutArgs(a)) return kExitUsage;
   auto script = parseScript(a);
   if (!script) return kExitUsage;
   std::optional<sim::Session> session = loadSession(a.session);
@@ -311,11 +339,11 @@ int runReplay(const LiveArgs& a) {
     source = std::make_unique<ReplayPoseSource>(*session, std::move(*mapper), a.speed, name);
   ViewerOptions v = viewerOptions(a, "IMPS Puppeteer: replay " + name);
   v.script = std::move(*script);
-  return runViewer(*pipeline, source.get(), v);
+  return runWithOscOut(a, *pipeline, *source, v);
 }
 
 int runLive(const LiveArgs& a) {
-  if (!checkScreenshotArgs(a)) return kExitUsage;
+  if (!checkScreenshotArgs(a) || !checkOscOutArgs(a)) return kExitUsage;
   // --rig alone is allowed here: key k calibrates it (and saves to --calibration-out); until then channels map by
   // name.
   if (!a.rig.empty() && a.calibration.empty() && a.calibrationOut.empty()) {
@@ -348,14 +376,28 @@ int runLive(const LiveArgs& a) {
   int code = kExitOk;
   auto pipeline = makePipeline(a, &code);
   if (!pipeline) return code;
-  sim::SteadyClock clock;  // the simulated armature's; outlives the source below
-  auto opener = openerForSpec(*spec, clock, "live");
-  if (!opener) return opener.error();
   std::optional<SampleMapper> mapper;
   if (!a.calibration.empty()) {
     mapper = readCalibration(a.calibration, pipeline->character(), nullptr);
     if (!mapper) return kExitInvalidInput;
   }
+  ViewerOptions v = viewerOptions(a, "IMPS Puppeteer: live " + a.device);
+  v.script = std::move(*script);
+  if (spec->kind == drivers::DeviceKind::Osc) {
+    if (!a.record.empty()) {
+      std::fprintf(stderr, "puppeteer: error: --record: an OSC pose stream is not recorded (record at the sender)\n");
+      return kExitUsage;
+    }
+    auto source = OscPoseSource::open(*spec, pipeline->character(), std::move(mapper));
+    if (!source) {
+      std::fprintf(stderr, "puppeteer live: error: %s\n", source.error().c_str());
+      return kExitIoError;
+    }
+    return runWithOscOut(a, *pipeline, **source, v);
+  }
+  sim::SteadyClock clock;  // the simulated armature's; outlives the source below
+  auto opener = openerForSpec(*spec, clock, "live");
+  if (!opener) return opener.error();
   LiveSourceOptions live;
   live.recordPath = a.record;
   live.recordDir = a.recordDir;
@@ -366,9 +408,7 @@ int runLive(const LiveArgs& a) {
   live.calibrate = a.calibrate;
   LivePoseSource source(*opener, drivers::sessionOptionsFor(*spec), pipeline->character(), a.device,
                         std::move(mapper), std::move(live));
-  ViewerOptions v = viewerOptions(a, "IMPS Puppeteer: live " + a.device);
-  v.script = std::move(*script);
-  return runViewer(*pipeline, &source, v);
+  return runWithOscOut(a, *pipeline, source, v);
 }
 
 }  // namespace
@@ -395,13 +435,15 @@ void addLiveCommands(CLI::App& app, Commands& commands) {
                       "One recorded sample per rendered frame, no clock: deterministic (tests)");
   replayCmd->add_option("--export-session", replay->exportSession,
                         "Also save the session (e.g. a converted .bvh) to this new file");
+  addOscOutOption(replayCmd, *replay);
   addCommonOptions(replayCmd, *replay);
   commands.push_back({replayCmd, [replay] { return runReplay(*replay); }});
 
   auto live = std::make_shared<LiveArgs>();
   CLI::App* liveCmd = app.add_subcommand("live", "Drive a scene's character from an armature in the live app");
   liveCmd->add_option("scene", live->scene, "Scene file (.wrl)")->required()->check(CLI::ExistingFile);
-  liveCmd->add_option("--device", live->device, "Device spec (docs/devices.md): serial:/dev/ttyACM0, sim:SESSION …")
+  liveCmd->add_option("--device", live->device,
+                      "Device spec (docs/devices.md): serial:/dev/ttyACM0, sim:SESSION, osc.udp://:PORT …")
       ->required();
   liveCmd->add_option("--calibration", live->calibration,
                       "Calibration file (puppeteer calibrate); without one, channels map to joints by name");
@@ -421,6 +463,7 @@ void addLiveCommands(CLI::App& app, Commands& commands) {
   liveCmd->add_option("--max-noise-deg", live->calibrate.maxNoiseDeg,
                       "Key k: reject the window above this per-channel standard deviation")
       ->capture_default_str();
+  addOscOutOption(liveCmd, *live);
   addCommonOptions(liveCmd, *live);
   commands.push_back({liveCmd, [live] { return runLive(*live); }});
 }

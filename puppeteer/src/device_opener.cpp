@@ -38,6 +38,13 @@ std::expected<drivers::TransportOpener, int> openerForSpec(const drivers::Device
       }
       return sim::simulatedOpener(*options, clock);
     }
+    case drivers::DeviceKind::Osc:
+      // An OSC stream carries poses (or channels) as datagrams, not a byte stream: only the live app reads it.
+      std::fprintf(stderr,
+                   "puppeteer %s: error: %s is an OSC pose stream (docs/osc.md): drive a character with it in "
+                   "`puppeteer live SCENE --device %s`\n",
+                   command, drivers::formatDeviceSpec(spec).c_str(), drivers::formatDeviceSpec(spec).c_str());
+      return std::unexpected(int(kExitUsage));
   }
   std::fprintf(stderr, "puppeteer %s: error: unknown device kind\n", command);  // every DeviceKind is handled above
   return std::unexpected(int(kExitUsage));

@@ -82,6 +82,10 @@ TEST(DeviceSpec, ErrorsSayWhereAndWhat) {
       {"hid:12345:1", "error: expected a USB vendor id"},
       {"usb:1209:xyz", "spec:1:10: error: expected a USB product id"},
       {"usb:1209:0001?baud=9600", "error: unknown key 'baud' for usb"},
+      {"osc:9000", "spec:1:1: error: unknown scheme 'osc': expected serial, hid, usb, sim or osc.udp"},
+      {"osc.udp://9000", "spec:1:11: error: expected :PORT"},
+      {"osc.udp://:0", "spec:1:12: error: expected a UDP port in 1..65535"},
+      {"osc.udp://:70000", "spec:1:12: error: expected a UDP port in 1..65535"},
   };
   for (const Case& c : cases) {
     auto spec = parseDeviceSpec(c.text);
@@ -90,11 +94,24 @@ TEST(DeviceSpec, ErrorsSayWhereAndWhat) {
   }
 }
 
+TEST(DeviceSpec, OscPoseStream) {
+  auto any = parseDeviceSpec("osc.udp://:9000");
+  ASSERT_TRUE(any) << any.error();
+  EXPECT_EQ(any->kind, DeviceKind::Osc);
+  EXPECT_EQ(any->port, 9000);
+  EXPECT_TRUE(any->path.empty());
+  auto bound = parseDeviceSpec("osc.udp://127.0.0.1:9001/");
+  ASSERT_TRUE(bound) << bound.error();
+  EXPECT_EQ(bound->path, "127.0.0.1");
+  EXPECT_EQ(bound->port, 9001);
+  EXPECT_EQ(formatDeviceSpec(*bound), "osc.udp://127.0.0.1:9001");
+}
+
 TEST(DeviceSpec, FormatRoundTrips) {
   for (const char* text : {"serial:/dev/ttyACM0", "serial:/dev/ttyUSB1?baud=9600&protocol=lines&channels=4",
                            "serial:/dev/ttyACM0?mode=poll&rate=30", "hid:2341:8036?serial=X", "usb:1209:0001",
                            "usb:1209:0001?serial=U1&mode=poll&rate=250",
-                           "sim:?rate=1000&channels=64&noise=1"}) {
+                           "sim:?rate=1000&channels=64&noise=1", "osc.udp://:9000", "osc.udp://10.0.0.2:57120"}) {
     auto spec = parseDeviceSpec(text);
     ASSERT_TRUE(spec) << spec.error();
     EXPECT_EQ(formatDeviceSpec(*spec), text);

@@ -1,5 +1,6 @@
 // Device specs: the one-line text that names an armature and how to talk to it (docs/devices.md), e.g.
-// `serial:/dev/ttyACM0?baud=115200&protocol=lines`, `hid:2341:8036`, `usb:1209:0001`, `sim:?channels=32`.
+// `serial:/dev/ttyACM0?baud=115200&protocol=lines`, `hid:2341:8036`, `usb:1209:0001`, `sim:?channels=32`,
+// `osc.udp://:9000` (an OSC pose stream, docs/osc.md).
 #pragma once
 
 #include <cstdint>
@@ -11,7 +12,7 @@
 
 namespace imps::drivers {
 
-enum class DeviceKind : uint8_t { Serial, Hid, Usb, Sim };
+enum class DeviceKind : uint8_t { Serial, Hid, Usb, Sim, Osc };
 // Which codec the session feeds: the binary framed protocol or the DIY line protocol (docs/protocol.md), or HID
 // input reports (one per transport read, decoded with drivers/hid_report.h; used for hid: specs, not a spec key).
 enum class WireProtocol : uint8_t { Binary, Lines, HidReports };
@@ -25,8 +26,10 @@ const char* toString(AcquisitionMode mode);
 // A parsed device spec. Fields not meaningful for `kind` keep their defaults.
 struct DeviceSpec {
   DeviceKind kind = DeviceKind::Serial;
-  // serial: the device node ("/dev/ttyACM0"); sim: the optional session file to play ("" = generated motion).
+  // serial: the device node ("/dev/ttyACM0"); sim: the optional session file to play ("" = generated motion);
+  // osc: the numeric IPv4 address to listen on ("" = every interface).
   std::string path;
+  uint16_t port = 0;  // osc: the UDP port to listen on (1..65535)
   // hid, usb: USB vendor and product id; serialNumber selects one of several identical units ("" = first).
   uint16_t vendorId = 0;
   uint16_t productId = 0;
@@ -44,7 +47,8 @@ struct DeviceSpec {
 
 // Parses a device spec. Bad input gives "spec:1:COLUMN: error: what was expected" (COLUMN 1-based into `text`):
 // an unknown scheme, a missing path, VID/PID that are not 1..4 hex digits, an unknown or repeated key (catches
-// typos), or a value out of range (baud 1..4000000, rate 0..65535, channels 0..64). Never throws.
+// typos), or a value out of range (baud 1..4000000, rate 0..65535, channels 0..64, port 1..65535). An osc spec
+// is `osc.udp://[ADDRESS]:PORT` and takes no keys. Never throws.
 std::expected<DeviceSpec, std::string> parseDeviceSpec(std::string_view text);
 
 // The canonical text of a spec; parseDeviceSpec(formatDeviceSpec(s)) == s. Keys at their defaults are omitted.
