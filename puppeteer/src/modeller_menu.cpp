@@ -49,7 +49,7 @@ void drawModellerMenu(const ViewerPipeline& pipeline, const Modeller& modeller, 
                       Actions& actions) {
   const ImVec2 display = ImGui::GetIO().DisplaySize;
   ImGui::SetNextWindowPos(ImVec2(display.x - 6, 6), ImGuiCond_Always, ImVec2(1, 0));
-  ImGui::SetNextWindowSize(ImVec2(250, 0), ImGuiCond_Always);
+  ImGui::SetNextWindowSize(ImVec2(300, 0), ImGuiCond_Always);
   ImGui::SetNextWindowBgAlpha(0.72f);
   const ImGuiWindowFlags flags = ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoMove |
                                  ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoFocusOnAppearing;

@@ -5,12 +5,13 @@
 //   modeller_check moved SCENE SAVED W H TARGET X Y        the target in SAVED lies under pixel (X, Y) of SCENE's
 //                                                           first view (within 0.5 px), at the same depth
 //   modeller_check radius SAVED PRIMITIVE R                the metaball's radius in SAVED is R (within 1e-4 R)
-// TARGET: a primitive's name, or joint:N for joint N. Exit 0 when the check holds, 1 (with a message) otherwise.
+// TARGET: a primitive's name, NAME.point1 / NAME.point2 for a LineSeg's endpoints, or joint:N for joint N. Exit 0 when the check holds, 1 (with a message) otherwise.
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
 #include <string>
+#include <utility>
 
 #include "imps/character.h"
 #include "imps/scene_reader.h"
@@ -50,9 +51,15 @@ Handle handleOf(const ViewerPipeline& pipeline, const std::string& target) {
     t = {EditTarget::Kind::Joint, std::atoi(target.c_str() + 6)};
     m.selectJoint(t.index);
   } else {
+    // NAME, NAME.point1 or NAME.point2 (a LineSeg's endpoints).
+    std::string name = target;
+    EditTarget::Kind kind = EditTarget::Kind::Primitive;
+    for (const auto& [suffix, k] : {std::pair{".point1", EditTarget::Kind::Endpoint1},
+                                    std::pair{".point2", EditTarget::Kind::Endpoint2}})
+      if (name.size() > 7 && name.ends_with(suffix)) name.resize(name.size() - 7), kind = k;
     const auto& prims = pipeline.character().primitives();
     for (size_t i = 0; i < prims.size(); ++i)
-      if (prims[i].name == target) t = {EditTarget::Kind::Primitive, int(i)};
+      if (prims[i].name == name) t = {kind, int(i)};
     if (t.index >= 0 && prims[size_t(t.index)].joint >= 0) m.selectJoint(prims[size_t(t.index)].joint);
   }
   for (const Handle& h : m.handles())
