@@ -41,8 +41,10 @@ struct LiveArgs {
   std::string scene;
   int frames = 0;
   std::string screenshot;
-  std::string polygonizer = "particles";
+  std::string polygonizer;  // "" : the one the scene file names (MarchingCubes → mc), else particles
   bool particles = false;
+  bool noManipulators = false;
+  float pointSize = 0.0f;
   bool noHud = false;
   bool printHashes = false;
   int width = 1280, height = 720;
@@ -72,9 +74,14 @@ void addCommonOptions(CLI::App* cmd, LiveArgs& a) {
   cmd->add_option("--frames", a.frames, "Render this many frames, then exit (headless use; 0 = until closed)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--screenshot", a.screenshot, "With --frames: save the last frame to this PNG file");
-  cmd->add_option("--polygonizer", a.polygonizer, "particles (the tesselator) or mc (Marching Cubes)")
+  cmd->add_option("--polygonizer", a.polygonizer,
+                  "particles (the tesselator) or mc (Marching Cubes); default: the scene file's polygonizer node")
       ->check(CLI::IsMember({"particles", "mc"}));
-  cmd->add_flag("--particles", a.particles, "Show the particles as points (key p)");
+  cmd->add_flag("--particles", a.particles, "Show the particles as points (key p; the thesis viewer's -p)");
+  cmd->add_option("--point-size", a.pointSize, "Diameter of the particle points in pixels (the thesis viewer's -s)")
+      ->check(CLI::Range(1.0f, 64.0f));
+  cmd->add_flag("--no-manipulators", a.noManipulators,
+                "No handles and no editing with the mouse, which then only orbits (the thesis viewer's -n)");
   cmd->add_flag("--no-hud", a.noHud, "Hide the heads-up display");
   cmd->add_flag("--mesh-hashes", a.printHashes, "Print a hash of every frame's mesh (determinism checks)");
   cmd->add_option("--width", a.width, "Window width in pixels")->check(CLI::Range(64, 8192));
@@ -129,7 +136,9 @@ std::unique_ptr<ViewerPipeline> makePipeline(const LiveArgs& a, int* exitCode) {
     return nullptr;
   }
   PipelineOptions o;
-  o.polygonizer = a.polygonizer == "mc" ? Polygonizer::MarchingCubes : Polygonizer::Particles;
+  const bool fileNamesMc = std::holds_alternative<MarchingCubesNode>(loaded->scene.polygonizer);
+  o.polygonizer = a.polygonizer == "mc" || (a.polygonizer.empty() && fileNamesMc) ? Polygonizer::MarchingCubes
+                                                                                 : Polygonizer::Particles;
   o.threads = a.threads;
   auto pipeline = std::make_unique<ViewerPipeline>(std::move(loaded->scene), std::move(loaded->character), o);
   for (const std::string& p : a.poses) {
@@ -156,6 +165,8 @@ ViewerOptions viewerOptions(const LiveArgs& a, const std::string& title) {
   v.frames = a.frames;
   v.screenshot = a.screenshot;
   v.showParticles = a.particles;
+  v.pointSize = a.pointSize;
+  v.manipulators = !a.noManipulators;
   v.hud = !a.noHud;
   v.msaaSamples = a.msaa;
   v.printMeshHashes = a.printHashes;

@@ -24,7 +24,7 @@ Hud::~Hud() {
 
 bool Hud::wantsMouse() const { return ImGui::GetIO().WantCaptureMouse; }
 
-void Hud::draw(const HudInfo& info) {
+void Hud::draw(const HudInfo& info, const std::function<void()>& extra) {
   const ImVec4 kDim(0.78f, 0.80f, 0.84f, 1.0f);  // secondary text, readable over the grey panel
   ImGui_ImplOpenGL3_NewFrame();
   ImGui_ImplGlfw_NewFrame();
@@ -71,7 +71,7 @@ void Hud::draw(const HudInfo& info) {
     }
     if (!info.calibrationProgress.empty())
       ImGui::TextColored(ImVec4(1.0f, 0.85f, 0.3f, 1.0f), "%s", info.calibrationProgress.c_str());
-    if (!info.selectedJoint.empty()) ImGui::Text("joint: %s (drag: turn, shift: twist)", info.selectedJoint.c_str());
+    if (!info.selectedJoint.empty()) ImGui::Text("selected: %s", info.selectedJoint.c_str());
     if (!info.message.empty()) ImGui::TextWrapped("%s", info.message.c_str());
     ImGui::PopTextWrapPos();
   }
@@ -80,11 +80,12 @@ void Hud::draw(const HudInfo& info) {
   ImGui::SetNextWindowPos(ImVec2(6, display.y - 6), ImGuiCond_Always, ImVec2(0, 1));
   ImGui::SetNextWindowBgAlpha(0.6f);
   if (ImGui::Begin("IMPS Puppeteer keys", nullptr, flags)) {
-    ImGui::TextColored(kDim, "drag: turn joint/orbit  r reset  s save  p particles  m MC  o record  k calibrate  "
-                        "F12 shot  Esc quit");
+    ImGui::TextColored(kDim, "drag: handle/limb/orbit  w e x move/turn/scale  ctrl+z undo  ctrl+shift+z redo  r reset  "
+                        "s save  p particles  m MC  o record  k calibrate  F12 shot  Esc quit");
   }
   ImGui::End();
   ImGui::PopStyleVar(2);
+  if (extra) extra();
   ImGui::Render();
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
 }

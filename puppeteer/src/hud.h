@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 
 struct GLFWwindow;
@@ -47,8 +48,9 @@ class Hud {
   Hud(const Hud&) = delete;
   Hud& operator=(const Hud&) = delete;
 
-  // Draws the HUD over the current frame.
-  void draw(const HudInfo& info);
+  // Draws the HUD over the current frame; `extra` (optional) adds its own ImGui windows in the same frame (the
+  // modeller's menu).
+  void draw(const HudInfo& info, const std::function<void()>& extra = {});
   // True when the mouse is over the HUD (the app then leaves the click to ImGui).
   bool wantsMouse() const;
 

@@ -131,4 +131,92 @@ glm::quat rotateJointLocal(const glm::quat& local, const glm::quat& parentWorld,
   return glm::normalize(glm::inverse(parentWorld) * worldRotation * parentWorld * local);
 }
 
+bool handleLayout(const ScreenView& view, const glm::vec3& origin, const glm::quat& frame, float lengthPixels,
+                  HandleLayout* layout) {
+  HandleLayout out;
+  if (!projectToWindow(view, origin, &out.center)) return false;
+  // Pixels per metre at the origin's depth, measured along the screen's right axis (no field of view needed).
+  const float probe = 1e-3f * std::max(1e-3f, glm::length(view.eye - origin));
+  glm::vec2 side;
+  if (!projectToWindow(view, origin + probe * view.right, &side)) return false;
+  const float pixelsPerMetre = glm::length(side - out.center) / probe;
+  if (!(pixelsPerMetre > 0.0f)) return false;
+  out.worldLength = lengthPixels / pixelsPerMetre;
+  for (int a = 0; a < 3; ++a) {
+    glm::vec3 axis(0.0f);
+    axis[a] = 1.0f;
+    if (!projectToWindow(view, origin + out.worldLength * (frame * axis), &out.tips[a])) out.tips[a] = out.center;
+  }
+  *layout = out;
+  return true;
+}
+
+namespace {
+float distanceToSegment(const glm::vec2& p, const glm::vec2& a, const glm::vec2& b) {
+  const glm::vec2 ab = b - a;
+  const float len2 = glm::dot(ab, ab);
+  const float t = len2 > 0.0f ? std::clamp(glm::dot(p - a, ab) / len2, 0.0f, 1.0f) : 0.0f;
+  return glm::length(p - (a + t * ab));
+}
+}  // namespace
+
+HandlePart pickHandlePart(const HandleLayout& layout, const glm::vec2& cursor, float tolerance, float* distance) {
+  const float toCenter = glm::length(cursor - layout.center);
+  if (toCenter <= tolerance) {
+    if (distance) *distance = toCenter;
+    return HandlePart::Center;
+  }
+  HandlePart best = HandlePart::None;
+  float bestDistance = tolerance;
+  for (int a = 0; a < 3; ++a) {
+    // Only the outer part of an axis grabs it, so a press near the centre is never taken for an axis.
+    const glm::vec2 start = layout.center + 0.25f * (layout.tips[a] - layout.center);
+    const float d = distanceToSegment(cursor, start, layout.tips[a]);
+    if (glm::length(layout.tips[a] - layout.center) > 4.0f && d <= bestDistance)
+      bestDistance = d, best = static_cast<HandlePart>(int(HandlePart::AxisX) + a);
+  }
+  if (distance) *distance = best == HandlePart::None ? toCenter : bestDistance;
+  return best;
+}
+
+namespace {
+// The parameter s of the point origin + s * axis nearest the pick ray through `pixel`; false when the two are
+// (almost) parallel.
+bool nearestOnAxis(const ScreenView& view, const glm::vec3& origin, const glm::vec3& axis, const glm::vec2& pixel,
+                   float* s) {
+  const PickRay ray = pickRay(view, pixel);
+  const glm::vec3 w = origin - ray.origin;
+  const float b = glm::dot(axis, ray.direction);
+  const float denominator = 1.0f - b * b;  // |axis| = |direction| = 1
+  if (denominator < 1e-4f) return false;
+  *s = (b * glm::dot(ray.direction, w) - glm::dot(axis, w)) / denominator;
+  return true;
+}
+}  // namespace
+
+float axisDrag(const ScreenView& view, const glm::vec3& origin, const glm::vec3& axis, const glm::vec2& from,
+               const glm::vec2& to) {
+  const glm::vec3 unit = glm::normalize(axis);
+  float s0 = 0.0f, s1 = 0.0f;
+  if (!nearestOnAxis(view, origin, unit, from, &s0) || !nearestOnAxis(view, origin, unit, to, &s1)) return 0.0f;
+  return s1 - s0;
+}
+
+glm::vec3 planeDrag(const ScreenView& view, const glm::vec3& origin, const glm::vec2& from, const glm::vec2& to) {
+  auto hit = [&](const glm::vec2& pixel) {
+    const PickRay ray = pickRay(view, pixel);
+    const float along = glm::dot(ray.direction, view.towardsViewer);
+    if (std::fabs(along) < 1e-6f) return origin;
+    const float t = glm::dot(origin - ray.origin, view.towardsViewer) / along;
+    return ray.origin + t * ray.direction;
+  };
+  return hit(to) - hit(from);
+}
+
+float scaleFactor(const glm::vec2& center, const glm::vec2& press, const glm::vec2& cursor, float minRadius) {
+  const float r0 = glm::length(press - center), r1 = glm::length(cursor - center);
+  const float scale = std::max(r0, std::max(minRadius, 1e-3f));
+  return std::clamp((scale + r1 - r0) / scale, 0.01f, 100.0f);
+}
+
 }  // namespace imps::app

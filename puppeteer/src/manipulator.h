@@ -87,4 +87,42 @@ glm::quat twistRotation(const glm::vec2& center, const glm::vec2& from, const gl
 // world rotation is thereby expressed in the parent's frame. Normalised.
 glm::quat rotateJointLocal(const glm::quat& local, const glm::quat& parentWorld, const glm::quat& worldRotation);
 
+// --- Handles (the modeller's visible manipulators) ---
+//
+// A handle sits at a world point with three axes (a frame's x, y, z; drawn red, green, blue) of a fixed length on
+// screen. Its centre translates in the screen plane, an axis along itself; in scale mode the distance from the centre
+// sets the factor. All window pixels.
+
+// Where a handle's parts fall in the window: its centre and the tips of its three axes (world length chosen so that
+// an axis lying in the screen plane is `lengthPixels` long; axes pointing at the viewer are foreshortened). False
+// when the centre is behind the camera.
+struct HandleLayout {
+  glm::vec2 center{0.0f};
+  glm::vec2 tips[3] = {};
+  float worldLength = 0.0f;  // metres: the world length of each axis
+};
+bool handleLayout(const ScreenView& view, const glm::vec3& origin, const glm::quat& frame, float lengthPixels,
+                  HandleLayout* layout);
+
+// Which part of a handle lies under `cursor`: the centre (within `tolerance` pixels of it), else the axis whose
+// segment (centre → tip) passes nearest within `tolerance`, else None. *distance (optional) receives that distance.
+enum class HandlePart { None, Center, AxisX, AxisY, AxisZ };
+HandlePart pickHandlePart(const HandleLayout& layout, const glm::vec2& cursor, float tolerance, float* distance);
+
+// Translation along a world axis (unit `axis` through `origin`) for a drag from window point `from` to `to`: the
+// change in the parameter of the axis point nearest the pick ray (metres). 0 when the axis points (almost) at the
+// viewer, where a drag along it is undefined.
+float axisDrag(const ScreenView& view, const glm::vec3& origin, const glm::vec3& axis, const glm::vec2& from,
+               const glm::vec2& to);
+
+// Translation in the screen plane through `origin` (world metres) for a drag from `from` to `to`: the point under
+// the cursor follows it, so origin + result projects to origin's pixel + (to - from).
+glm::vec3 planeDrag(const ScreenView& view, const glm::vec3& origin, const glm::vec2& from, const glm::vec2& to);
+
+// The scale factor of a drag that started at `press` and is now at `cursor`, around a handle drawn at `center`, from
+// their distances r0, r1 from the centre: r1 / r0 for a press at least `minRadius` pixels out (an axis tip), else
+// 1 + (r1 - r0) / minRadius (a press near the centre scales smoothly, doubling `minRadius` pixels further out);
+// clamped to [0.01, 100]. 1 while the cursor has not moved.
+float scaleFactor(const glm::vec2& center, const glm::vec2& press, const glm::vec2& cursor, float minRadius);
+
 }  // namespace imps::app

@@ -5,6 +5,7 @@
 #include <GL/glcorearb.h>
 
 #include <algorithm>
+#include <cstddef>
 #include <cstring>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -104,6 +105,18 @@ out vec4 fragColor;
 void main() { fragColor = vec4(vColor, 1.0); }
 )";
 
+// The overlay: window-pixel positions, colours in linear light.
+const char* const kOverlayVertex = "#version 330 core\n" IMPS_GLSL_SRGB R"(
+layout(location = 0) in vec2 aPixel;
+layout(location = 1) in vec3 aColor;
+uniform vec2 uWindow;
+out vec3 vColor;
+void main() {
+  vColor = srgb(aColor);
+  gl_Position = vec4(aPixel.x / uWindow.x * 2.0 - 1.0, 1.0 - aPixel.y / uWindow.y * 2.0, 0.0, 1.0);
+}
+)";
+
 // Compiles and links one program; returns 0 and appends to `error` on failure.
 GLuint buildProgram(const char* vertex, const char* fragment, const char* name, std::string& error) {
   auto compile = [&](GLenum type, const char* source) -> GLuint {
@@ -163,6 +176,17 @@ Renderer::Renderer() {
   meshProgram_ = buildProgram(kMeshVertex, kMeshFragment, "mesh", error_);
   pointProgram_ = buildProgram(kPointVertex, kPointFragment, "particle", error_);
   backgroundProgram_ = buildProgram(kBackgroundVertex, kBackgroundFragment, "background", error_);
+  overlayProgram_ = buildProgram(kOverlayVertex, kBackgroundFragment, "overlay", error_);
+  glGenVertexArrays(1, &overlayVao_);
+  glGenBuffers(1, &overlayBuffer_);
+  glBindVertexArray(overlayVao_);
+  glBindBuffer(GL_ARRAY_BUFFER, overlayBuffer_);
+  glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, sizeof(OverlayVertex),
+                        reinterpret_cast<const void*>(offsetof(OverlayVertex, pixel)));
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(OverlayVertex),
+                        reinterpret_cast<const void*>(offsetof(OverlayVertex, color)));
+  glEnableVertexAttribArray(0);
+  glEnableVertexAttribArray(1);
   glGenVertexArrays(1, &meshVao_);
   glGenVertexArrays(1, &pointVao_);
   glGenVertexArrays(1, &backgroundVao_);
@@ -191,7 +215,9 @@ Renderer::~Renderer() {
   glDeleteBuffers(5, buffers);
   const GLuint arrays[3] = {meshVao_, pointVao_, backgroundVao_};
   glDeleteVertexArrays(3, arrays);
-  for (GLuint p : {meshProgram_, pointProgram_, backgroundProgram_})
+  glDeleteBuffers(1, &overlayBuffer_);
+  glDeleteVertexArrays(1, &overlayVao_);
+  for (GLuint p : {meshProgram_, pointProgram_, backgroundProgram_, overlayProgram_})
     if (p) glDeleteProgram(p);
 }
 
@@ -268,10 +294,24 @@ void Renderer::draw(const Camera& camera, int width, int height, bool particles)
     glEnable(GL_PROGRAM_POINT_SIZE);
     glUseProgram(pointProgram_);
     setMatrices(pointProgram_, view, projection);
-    glUniform1f(glGetUniformLocation(pointProgram_, "uPointSize"), height >= 600 ? 4.0f : 3.0f);
+    glUniform1f(glGetUniformLocation(pointProgram_, "uPointSize"),
+                pointSize_ > 0.0f ? pointSize_ : height >= 600 ? 4.0f : 3.0f);
     glBindVertexArray(pointVao_);
     glDrawArrays(GL_POINTS, 0, pointCount_);
   }
+  glBindVertexArray(0);
+  glUseProgram(0);
+}
+
+void Renderer::drawOverlay(std::span<const OverlayVertex> triangles, int width, int height) {
+  if (triangles.empty()) return;
+  glViewport(0, 0, width, height);
+  glDisable(GL_DEPTH_TEST);
+  glUseProgram(overlayProgram_);
+  glUniform2f(glGetUniformLocation(overlayProgram_, "uWindow"), float(std::max(1, width)), float(std::max(1, height)));
+  glBindVertexArray(overlayVao_);
+  orphanAndFill(GL_ARRAY_BUFFER, overlayBuffer_, triangles.data(), triangles.size_bytes());
+  glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(triangles.size()));
   glBindVertexArray(0);
   glUseProgram(0);
 }

@@ -8,12 +8,19 @@
 #include <vector>
 
 #include <glm/mat4x4.hpp>
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
 #include "imps/mesh.h"
 #include "snapshot.h"
 
 namespace imps::app {
+
+// A vertex of a 2D overlay: window pixels (origin top-left, y down) and a linear RGB colour.
+struct OverlayVertex {
+  glm::vec2 pixel{0.0f};
+  glm::vec3 color{1.0f};
+};
 
 // Owns the GL objects (program, vertex arrays, buffers). Every call needs the GL 3.3 core context that was current
 // at construction to be current; not thread-safe. Colours and lighting follow SnapshotOptions (linear RGB in,
@@ -38,6 +45,12 @@ class Renderer {
   void draw(const Camera& camera, int width, int height, bool particles);
 
   // The default framebuffer's back buffer as RGBA8, rows from the top (call after draw(), before swapping).
+  // Draws triangles (three vertices each) given in window pixels over everything drawn so far, without depth test:
+  // the modeller's handles. Call after draw().
+  void drawOverlay(std::span<const OverlayVertex> triangles, int width, int height);
+  // Diameter of the particle points in pixels; <= 0: the default (4, or 3 below 600 pixels of height).
+  void setPointSize(float pixels) { pointSize_ = pixels; }
+
   static std::vector<uint8_t> readPixels(int width, int height);
 
   static glm::mat4 viewMatrix(const Camera& camera);
@@ -48,8 +61,9 @@ class Renderer {
 
  private:
   std::string error_;
-  unsigned meshProgram_ = 0, pointProgram_ = 0, backgroundProgram_ = 0;
-  unsigned meshVao_ = 0, pointVao_ = 0, backgroundVao_ = 0;
+  unsigned meshProgram_ = 0, pointProgram_ = 0, backgroundProgram_ = 0, overlayProgram_ = 0;
+  unsigned meshVao_ = 0, pointVao_ = 0, backgroundVao_ = 0, overlayVao_ = 0, overlayBuffer_ = 0;
+  float pointSize_ = 0.0f;
   unsigned positionBuffer_ = 0, normalBuffer_ = 0, colorBuffer_ = 0, indexBuffer_ = 0, pointBuffer_ = 0;
   int32_t indexCount_ = 0, pointCount_ = 0;
   bool meshHasNormals_ = false, meshHasColors_ = false;

@@ -59,10 +59,18 @@ std::expected<std::vector<ScriptedEvent>, std::string> parseScriptedKeys(std::st
     // "[" and "]" cannot be confused with '@'; split at the last '@'.
     const size_t at = item.rfind('@');
     ScriptedEvent e;
+    std::string_view key = at == std::string_view::npos ? std::string_view() : item.substr(0, at);
+    for (bool more = true; more;) {
+      const std::string prefix = lower(key.substr(0, std::min<size_t>(key.size(), 6)));
+      more = key.size() > 5 && prefix.starts_with("ctrl+");
+      if (more) e.mods |= GLFW_MOD_CONTROL, key.remove_prefix(5);
+      if (!more && key.size() > 6 && prefix == "shift+") e.mods |= GLFW_MOD_SHIFT, key.remove_prefix(6), more = true;
+    }
     if (at == std::string_view::npos || at == 0 || !parseInt(item.substr(at + 1), &e.frame) ||
-        (e.key = keyCode(item.substr(0, at))) == 0)
+        (e.key = keyCode(key)) == 0)
       return std::unexpected("--keys: '" + std::string(item) +
-                             "': expected KEY@FRAME (KEY: a-z, 0-9, [, ], F12, Esc, Backspace; FRAME >= 0)");
+                             "': expected [ctrl+][shift+]KEY@FRAME (KEY: a-z, 0-9, [, ], F12, Esc, Backspace; "
+                             "FRAME >= 0)");
     e.keyName = std::string(item.substr(0, at));
     events.push_back(std::move(e));
     start = end + 1;

@@ -15,14 +15,16 @@ struct ScriptedEvent {
   enum class Kind { Key, Drag } kind = Kind::Key;
   int frame = 0;
   int key = 0;             // Kind::Key: a GLFW key code (GLFW_KEY_K …)
-  std::string keyName;     // as written ("k", "F12", "Esc" …)
+  int mods = 0;            // Kind::Key: GLFW modifier bits (GLFW_MOD_CONTROL, GLFW_MOD_SHIFT)
+  std::string keyName;     // as written ("k", "F12", "Esc", "ctrl+z" …)
   float x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // Kind::Drag: window pixels, from (x0, y0) to (x1, y1)
   bool shift = false;      // Kind::Drag: with Shift held (the twist manipulator)
   int steps = 8;           // Kind::Drag: cursor moves between press and release
 };
 
-// Parses a --keys list: comma-separated KEY@FRAME, KEY one of a–z, 0–9, "[", "]", F12, Esc, Backspace (case
-// insensitive for the names). Errors: "--keys: 'x@': expected KEY@FRAME …".
+// Parses a --keys list: comma-separated KEY@FRAME, KEY one of a–z, 0–9, "[", "]", F12, Esc, Backspace, optionally
+// after modifiers "ctrl+" and "shift+" (ctrl+z, ctrl+shift+z); case insensitive for the names. Errors: "--keys:
+// 'x@': expected KEY@FRAME …".
 std::expected<std::vector<ScriptedEvent>, std::string> parseScriptedKeys(std::string_view text);
 
 // Parses one --drag: X0,Y0,X1,Y1@FRAME, optionally followed by "+shift". Coordinates are window pixels (non-negative

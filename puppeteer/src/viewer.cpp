@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <functional>
 #include <cstdio>
 #include <memory>
 #include <mutex>
@@ -24,6 +25,8 @@
 #include "cli.h"
 #include "imps/scene_writer.h"
 #include "manipulator.h"
+#include "modeller.h"
+#include "modeller_menu.h"
 #include "png.h"
 #include "renderer.h"
 #include "snapshot.h"
@@ -36,32 +39,19 @@ int64_t steadyNowNs() {
       .count();
 }
 
-// An orbit camera around a target: yaw about +y, pitch above the horizon, distance in metres.
-struct Orbit {
-  glm::vec3 target{0.0f};
-  float yaw = 0.0f, pitch = 0.0f, distance = 3.0f;
-  float verticalFov = 0.6f;
-  Camera camera() const {
-    const glm::vec3 dir(std::cos(pitch) * std::sin(yaw), std::sin(pitch), std::cos(pitch) * std::cos(yaw));
-    return Camera{target + distance * dir, target, glm::vec3(0, 1, 0), verticalFov};
-  }
-};
-
 // Everything the GLFW callbacks (and the scripted input) touch, reached through the window's user pointer.
 struct ViewerState {
   ViewerPipeline* pipeline = nullptr;
   PoseSource* source = nullptr;
   Hud* hud = nullptr;
-  Orbit orbit;
+  Modeller* modeller = nullptr;
+  OrbitCamera orbit;
   float sceneRadius = 2.0f;
   int width = 0, height = 0;
   bool showParticles = false;
+  float pointSize = 0.0f;  // particle points, pixels (0: the renderer's default)
   bool poseDirty = false;
-  int selectedJoint = -1;
-  // Orbit: turn the camera. Arcball: turn the picked joint with an arcball centred on it (manipulator.h). Twist:
-  // turn it about the view axis (Shift).
-  enum class Drag { None, Orbit, Arcball, Twist } drag = Drag::None;
-  float arcballRadius = 60.0f;  // pixels, set at the press
+  bool orbiting = false;  // a drag that turns the camera (else the modeller has it, if it grabbed anything)
   double lastX = 0, lastY = 0;
   bool screenshotRequested = false;
   bool resetRequested = false;
@@ -75,74 +65,41 @@ ScreenView currentView(const ViewerState& s) {
   return screenView(s.orbit.camera(), s.width, s.height, s.sceneRadius);
 }
 
-// The joint whose bone passes within 24 pixels of the cursor (nearest first), or -1.
-int pickJointAt(const ViewerState& s, double x, double y) {
-  const SkeletonCache& skeleton = s.pipeline->skeleton();
-  const auto& joints = skeleton.character().joints();
-  std::vector<int> parents(joints.size());
-  std::vector<glm::vec3> world(joints.size());
-  for (size_t j = 0; j < joints.size(); ++j) parents[j] = joints[j].parent, world[j] = skeleton.world(int(j)).translation;
-  const ScreenView view = currentView(s);
-  const std::vector<Bone> bones = skeletonBones(parents, world);
-  return pickJoint(pickRay(view, glm::vec2(float(x), float(y))), bones,
-                   pixelsToAngle(24.0f, s.height, s.orbit.verticalFov));
+// Shows and prints a message (a key's result, an edit).
+void report(ViewerState& s, std::string message) {
+  if (message.empty()) return;
+  std::printf("puppeteer: %s\n", message.c_str());
+  std::fflush(stdout);
+  s.message = std::move(message);
 }
 
-// The manipulators: the picked joint turns about its own origin, by the arcball (the grabbed limb follows the
-// cursor; near the joint, dragging right/down turns the side facing the viewer right/down) or by the twist (the
-// angle swept around the joint on screen, about the view axis).
-void rotateJoint(ViewerState& s, double x0, double y0, double x1, double y1) {
-  SkeletonCache& skeleton = s.pipeline->skeleton();
-  const int j = s.selectedJoint;
-  const ScreenView view = currentView(s);
-  glm::vec2 c;
-  if (!projectToWindow(view, skeleton.world(j).translation, &c)) return;
-  const glm::vec2 from{float(x0), float(y0)}, to{float(x1), float(y1)};
-  const glm::quat q = s.drag == ViewerState::Drag::Twist ? twistRotation(c, from, to, view)
-                                                         : arcballRotation(c, s.arcballRadius, from, to, view);
-  const int parent = skeleton.character().joints()[size_t(j)].parent;
-  const glm::quat parentWorld = parent >= 0 ? skeleton.world(parent).rotation : glm::quat(1, 0, 0, 0);
-  skeleton.setRotation(j, rotateJointLocal(skeleton.local(j).rotation, parentWorld, q));
-  s.poseDirty = true;
-}
-
-// Left press at (x, y): pick a joint (its bone under the cursor) and turn it; Shift: twist the picked joint from
-// anywhere; elsewhere (or any other button): orbit.
+// Left press at (x, y): the modeller grabs a handle or a bone (modeller.h); elsewhere (or any other button): orbit.
 void pressButton(ViewerState& s, int button, double x, double y, bool shift) {
   s.lastX = x, s.lastY = y;
-  if (button != GLFW_MOUSE_BUTTON_LEFT) {
-    s.drag = ViewerState::Drag::Orbit;
-    return;
-  }
-  const int j = pickJointAt(s, x, y);
-  if (j >= 0) s.selectedJoint = j;
-  if (s.selectedJoint >= 0) {
-    // The arcball through the press point: the grabbed limb follows the cursor around its joint.
-    glm::vec2 c;
-    s.arcballRadius = projectToWindow(currentView(s), s.pipeline->skeleton().world(s.selectedJoint).translation, &c)
-                          ? arcballRadius(c, glm::vec2(float(x), float(y)), 0.03f * float(s.height))
-                          : 0.03f * float(s.height);
-  }
-  if (j >= 0 || (shift && s.selectedJoint >= 0))
-    s.drag = shift ? ViewerState::Drag::Twist : ViewerState::Drag::Arcball;
-  else
-    s.drag = ViewerState::Drag::Orbit;
+  s.orbiting = button != GLFW_MOUSE_BUTTON_LEFT ||
+               !s.modeller->press(currentView(s), glm::vec2(float(x), float(y)), shift);
 }
 
 void moveCursor(ViewerState& s, double x, double y) {
-  if (s.drag == ViewerState::Drag::Orbit) {
+  if (s.orbiting) {
     s.orbit.yaw -= float(x - s.lastX) * 0.008f;
     s.orbit.pitch = std::clamp(s.orbit.pitch + float(y - s.lastY) * 0.008f, -1.5f, 1.5f);
-  } else if ((s.drag == ViewerState::Drag::Arcball || s.drag == ViewerState::Drag::Twist) && s.selectedJoint >= 0) {
-    rotateJoint(s, s.lastX, s.lastY, x, y);
+  } else if (s.modeller->dragging()) {
+    s.modeller->drag(currentView(s), glm::vec2(float(x), float(y)));
+    s.poseDirty = true;
   }
   s.lastX = x, s.lastY = y;
+}
+
+void releaseButton(ViewerState& s) {
+  s.orbiting = false;
+  if (s.modeller->dragging()) report(s, s.modeller->release());
 }
 
 void onMouseButton(GLFWwindow* w, int button, int action, int mods) {
   ViewerState& s = state(w);
   if (action == GLFW_RELEASE) {
-    s.drag = ViewerState::Drag::None;
+    releaseButton(s);
     return;
   }
   if (s.hud && s.hud->wantsMouse()) return;
@@ -159,16 +116,17 @@ void onScroll(GLFWwindow* w, double /*dx*/, double dy) {
   s.orbit.distance = std::clamp(s.orbit.distance * std::pow(0.9f, float(dy)), 0.05f, 100.0f);
 }
 
-// Shows and prints a key's result.
-void report(ViewerState& s, std::string message) {
-  if (message.empty()) return;
-  std::printf("puppeteer: %s\n", message.c_str());
-  std::fflush(stdout);
-  s.message = std::move(message);
-}
-
-void handleKey(GLFWwindow* w, ViewerState& s, int key) {
+void handleKey(GLFWwindow* w, ViewerState& s, int key, int mods) {
   const int joints = int(s.pipeline->character().joints().size());
+  Modeller& m = *s.modeller;
+  if (mods & GLFW_MOD_CONTROL) {
+    // Ctrl+Z undo, Ctrl+Shift+Z (or Ctrl+Y) redo.
+    if (key == GLFW_KEY_Z || key == GLFW_KEY_Y) {
+      report(s, key == GLFW_KEY_Z && !(mods & GLFW_MOD_SHIFT) ? m.undo() : m.redo());
+      s.poseDirty = true;
+    }
+    return;
+  }
   switch (key) {
     case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(w, GLFW_TRUE); break;
     case GLFW_KEY_R: s.resetRequested = true; break;
@@ -178,6 +136,9 @@ void handleKey(GLFWwindow* w, ViewerState& s, int key) {
       s.pipeline->setPolygonizer(s.pipeline->polygonizer() == Polygonizer::Particles ? Polygonizer::MarchingCubes
                                                                                      : Polygonizer::Particles);
       break;
+    case GLFW_KEY_W: m.setMode(ManipulatorMode::Translate); break;
+    case GLFW_KEY_E: m.setMode(ManipulatorMode::Rotate); break;
+    case GLFW_KEY_X: m.setMode(ManipulatorMode::Scale); break;
     case GLFW_KEY_F12:
     case GLFW_KEY_C: s.screenshotRequested = true; break;
     case GLFW_KEY_BACKSPACE:
@@ -191,40 +152,39 @@ void handleKey(GLFWwindow* w, ViewerState& s, int key) {
     case GLFW_KEY_K:
       report(s, s.source ? s.source->recalibrate() : "re-calibration needs a live device (puppeteer live)");
       break;
-    case GLFW_KEY_LEFT_BRACKET: s.selectedJoint = joints > 0 ? (s.selectedJoint + joints - 1) % joints : -1; break;
-    case GLFW_KEY_RIGHT_BRACKET: s.selectedJoint = joints > 0 ? (s.selectedJoint + 1) % joints : -1; break;
-    case GLFW_KEY_0: s.selectedJoint = -1; break;
+    case GLFW_KEY_LEFT_BRACKET:
+      m.selectJoint(joints > 0 ? (std::max(m.selectedJoint(), 0) + joints - 1) % joints : -1);
+      break;
+    case GLFW_KEY_RIGHT_BRACKET: m.selectJoint(joints > 0 ? (m.selectedJoint() + 1) % joints : -1); break;
+    case GLFW_KEY_0: m.selectJoint(-1); break;
     default:
-      if (key >= GLFW_KEY_1 && key <= GLFW_KEY_9 && key - GLFW_KEY_1 < joints) s.selectedJoint = key - GLFW_KEY_1;
+      if (key >= GLFW_KEY_1 && key <= GLFW_KEY_9 && key - GLFW_KEY_1 < joints) m.selectJoint(key - GLFW_KEY_1);
       break;
   }
 }
 
-void onKey(GLFWwindow* w, int key, int /*scancode*/, int action, int /*mods*/) {
+void onKey(GLFWwindow* w, int key, int /*scancode*/, int action, int mods) {
   if (action != GLFW_PRESS) return;
-  handleKey(w, state(w), key);
+  handleKey(w, state(w), key, mods);
 }
 
 // Delivers a scripted event through the same handlers as the callbacks.
 void deliver(GLFWwindow* w, ViewerState& s, const ScriptedEvent& e) {
   if (e.kind == ScriptedEvent::Kind::Key) {
     std::printf("puppeteer: key %s\n", e.keyName.c_str());
-    handleKey(w, s, e.key);
+    handleKey(w, s, e.key, e.mods);
     return;
   }
   pressButton(s, GLFW_MOUSE_BUTTON_LEFT, e.x0, e.y0, e.shift);
-  const char* mode = s.drag == ViewerState::Drag::Orbit ? "orbit" : s.drag == ViewerState::Drag::Twist ? "twist" : "arcball";
-  std::printf("puppeteer: drag %.0f,%.0f -> %.0f,%.0f: %s%s%s\n", double(e.x0), double(e.y0), double(e.x1),
-              double(e.y1), mode, s.selectedJoint >= 0 && s.drag != ViewerState::Drag::Orbit ? " " : "",
-              s.selectedJoint >= 0 && s.drag != ViewerState::Drag::Orbit
-                  ? s.pipeline->character().joints()[size_t(s.selectedJoint)].name.c_str()
-                  : "");
+  const std::string what = s.orbiting ? "orbit" : s.modeller->grabbed();
+  std::printf("puppeteer: drag %.0f,%.0f -> %.0f,%.0f: %s\n", double(e.x0), double(e.y0), double(e.x1),
+              double(e.y1), what.c_str());
   const int steps = std::max(1, e.steps);
   for (int i = 1; i <= steps; ++i) {
     const float t = float(i) / float(steps);
     moveCursor(s, e.x0 + t * (e.x1 - e.x0), e.y0 + t * (e.y1 - e.y0));
   }
-  s.drag = ViewerState::Drag::None;
+  releaseButton(s);
 }
 
 void onFramebufferSize(GLFWwindow* w, int width, int height) {
@@ -363,18 +323,15 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
     int64_t arrivalNs = 0;
     if (source && source->poll(pipeline.skeleton(), &arrivalNs)) pipeline.skeleton().update();
     pipeline.frame();
-    {
-      const MeshBounds box = pipeline.restBounds().empty() ? bounds(pipeline.mesh()) : pipeline.restBounds();
-      const Camera cam = frameBox(box, kFrontThreeQuarter, float(s.width) / float(std::max(1, s.height)));
-      const glm::vec3 d = glm::normalize(cam.eye - cam.target);
-      s.orbit.target = cam.target;
-      s.orbit.distance = glm::length(cam.eye - cam.target);
-      s.orbit.yaw = std::atan2(d.x, d.z);
-      s.orbit.pitch = std::asin(std::clamp(d.y, -1.0f, 1.0f));
-      s.orbit.verticalFov = cam.verticalFov;
-      s.sceneRadius = box.empty() ? 1.0f : 0.5f * glm::length(box.max - box.min);
-      renderer->setSceneRadius(s.sceneRadius);
-    }
+    s.orbit = initialOrbit(pipeline, s.width, s.height, &s.sceneRadius);
+    renderer->setSceneRadius(s.sceneRadius);
+    renderer->setPointSize(options.pointSize);
+    Modeller modeller(pipeline);
+    modeller.setEnabled(options.manipulators);
+    s.modeller = &modeller;
+    MenuSettings menu{options.showParticles, options.pointSize};
+    // Menu changes, run where the pipeline is idle (after the worker's wait, with the input events).
+    std::vector<std::function<void(ViewerPipeline&, Modeller&)>> menuActions;
 
     HudInfo info;
     std::vector<double> latencies, frameTimes;  // ms
@@ -435,6 +392,10 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
       }
       glfwPollEvents();
       for (const ScriptedEvent& e : eventsAt(options.script, frame)) deliver(window, s, e);
+      for (auto& action : std::exchange(menuActions, {})) {
+        action(pipeline, modeller);
+        s.poseDirty = true;
+      }
       phaseStart = steadyNowNs();
       if (!worker) {
         // 2. Polygonize.
@@ -471,6 +432,8 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
       }
       // 4. Draw.
       renderer->draw(s.orbit.camera(), s.width, s.height, drawParticles);
+      renderer->drawOverlay(handleOverlay(currentView(s), modeller.handles(), modeller.selected(), modeller.mode()),
+                            s.width, s.height);
       lap(kDraw);
 
       // HUD.
@@ -482,10 +445,15 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
           info.mapping.clear();
           info.state = "posing";
         }
-        info.selectedJoint =
-            s.selectedJoint >= 0 ? pipeline.character().joints()[size_t(s.selectedJoint)].name : std::string();
+        info.selectedJoint = modeller.selected()
+                                 ? targetName(pipeline.character(), *modeller.selected()) + " (" +
+                                       modeName(modeller.mode()) + ")"
+                                 : std::string();
         info.message = s.message;
-        hud->draw(info);
+        menu.showParticles = s.showParticles;
+        hud->draw(info, [&] { drawModellerMenu(pipeline, modeller, menu, menuActions); });
+        s.showParticles = menu.showParticles;
+        renderer->setPointSize(menu.pointSize);
       }
       lap(kHud);
 
@@ -558,6 +526,7 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
                   allLatencies.size(), median, p99);
     }
     s.hud = nullptr;
+    s.modeller = nullptr;
   }
   glfwDestroyWindow(window);
   return exitCode;

@@ -44,6 +44,8 @@ struct ViewerOptions {
   // Written after the last frame when frames > 0 (PNG).
   std::string screenshot;
   bool showParticles = false;
+  float pointSize = 0.0f;     // particle points in pixels (the thesis's -s); 0: 4, or 3 below 600 pixels of height
+  bool manipulators = true;   // the modeller's handles and mouse edits (off: the thesis's -n)
   bool hud = true;
   // Multisampling samples (0 off); -1: 4 on a GPU, off under a software renderer (llvmpipe), where it costs more
   // than the rest of the frame.

@@ -11,25 +11,6 @@
 namespace imps::app {
 namespace {
 
-// Writes local joint transforms into every named RigidTransform under `node`.
-void writePose(SceneNode& node, const Character& character, const SkeletonCache& skeleton) {
-  if (auto* t = std::get_if<TransformNode>(&node)) {
-    const int j = t->name.empty() ? -1 : character.findJoint(t->name);
-    if (j >= 0) {
-      const Rigid& local = skeleton.local(j);
-      t->translation = local.translation;
-      const glm::quat q = glm::normalize(local.rotation);
-      const float angle = 2.0f * std::acos(std::clamp(q.w, -1.0f, 1.0f));
-      const glm::vec3 v(q.x, q.y, q.z);
-      const float s = glm::length(v);
-      t->rotation = s > 1e-7f ? Rotation{v / s, angle} : Rotation{glm::vec3(0, 0, 1), 0.0f};
-    }
-    for (SceneNode& c : t->children) writePose(c, character, skeleton);
-  } else if (auto* b = std::get_if<BlendNode>(&node)) {
-    for (SceneNode& c : b->children) writePose(c, character, skeleton);
-  }
-}
-
 }  // namespace
 
 ViewerPipeline::ViewerPipeline(Scene scene, Character character, const PipelineOptions& options)
@@ -87,8 +68,34 @@ void ViewerPipeline::frame() {
 
 Scene ViewerPipeline::posedScene() const {
   Scene out = scene_;
-  if (SceneNode* root = out.sceneGraph()) writePose(*root, *character_, *skeleton_);
+  writePose(out, pose());
   return out;
+}
+
+std::vector<Rigid> ViewerPipeline::pose() const {
+  std::vector<Rigid> out(character_->joints().size());
+  for (size_t j = 0; j < out.size(); ++j) out[j] = skeleton_->local(int(j));
+  return out;
+}
+
+std::optional<Diagnostics> ViewerPipeline::setState(DocumentState state) {
+  auto compiled = Character::fromScene(state.scene);
+  if (!compiled) return compiled.error();
+  auto character = std::make_unique<Character>(std::move(*compiled));
+  auto skeleton = std::make_unique<SkeletonCache>(*character);
+  for (size_t j = 0; j < character->joints().size() && j < state.pose.size(); ++j) {
+    skeleton->setRotation(int(j), state.pose[j].rotation);
+    skeleton->setTranslation(int(j), state.pose[j].translation);
+  }
+  skeleton->update();
+  const bool samePrimitives = character->primitives().size() == character_->primitives().size();
+  // The old cache goes before the character it points to.
+  skeleton_ = std::move(skeleton);
+  character_ = std::move(character);
+  scene_ = std::move(state.scene);
+  if (!samePrimitives) resetPolygonizer();  // particles name their owners by primitive index
+  mcValid_ = false;
+  return std::nullopt;
 }
 
 uint64_t meshHash(const Mesh& mesh) {

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,7 @@
 #include "imps/scene.h"
 #include "imps/skeleton_cache.h"
 #include "imps/tesselator.h"
+#include "scene_edit.h"
 
 namespace imps::app {
 
@@ -62,8 +64,19 @@ class ViewerPipeline {
   const MeshBounds& restBounds() const { return restBounds_; }
 
   // The scene document with the current pose written into its RigidTransforms' rotations and translations
-  // (joints are matched by name), ready for saveSceneFile().
+  // (joints are matched by their place in the document, named or not), ready for saveSceneFile().
   Scene posedScene() const;
+
+  // Every joint's current local transform (the skeleton cache's), in joint order.
+  std::vector<Rigid> pose() const;
+  // The document and the pose (DocumentState{scene(), pose()}).
+  DocumentState state() const { return DocumentState{scene_, pose()}; }
+  // Replaces the document and the pose (an edit, an undo): recompiles the character and the skeleton cache and sets
+  // every joint's local transform from state.pose (one per joint; missing entries keep the new document's rest
+  // pose). The particles stay (they follow the new surface; when the number of primitives changed they are
+  // dropped); Marching Cubes runs again; the camera's rest bounds stay. When the document does not compile, nothing
+  // changes and the diagnostics are returned.
+  std::optional<Diagnostics> setState(DocumentState state);
 
  private:
   Scene scene_;

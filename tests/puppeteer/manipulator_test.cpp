@@ -162,5 +162,78 @@ TEST(Manipulator, WorldRotationBecomesLocalUnderATurnedParent) {
   EXPECT_NEAR(glm::length(newLocal), 1.0f, 1e-6f);
 }
 
+// --- Handles ---
+
+TEST(Manipulator, HandleLayoutHasAxesOfTheGivenScreenLength) {
+  const ScreenView v = screenView(Camera{{1.5f, 0.5f, 4}, {0, 0, 0}, {0, 1, 0}, 0.6f}, 1280, 720, 2.0f);
+  HandleLayout layout;
+  ASSERT_TRUE(handleLayout(v, {0.2f, 0.1f, 0}, glm::quat(1, 0, 0, 0), 70.0f, &layout));
+  EXPECT_LT(glm::length(layout.center - project(v, {0.2f, 0.1f, 0})), 1e-3f);
+  // An axis lying in the screen plane (the screen's right axis as the handle's x) is 70 pixels long.
+  const glm::quat toRight(glm::vec3(1, 0, 0), v.right);
+  ASSERT_TRUE(handleLayout(v, {0.2f, 0.1f, 0}, toRight, 70.0f, &layout));
+  EXPECT_NEAR(glm::length(layout.tips[0] - layout.center), 70.0f, 0.5f);
+  // Seen from the front, the z axis points at the viewer and collapses to the centre.
+  ASSERT_TRUE(handleLayout(frontView(), {0, 0, 0}, glm::quat(1, 0, 0, 0), 70.0f, &layout));
+  EXPECT_NEAR(glm::length(layout.tips[0] - layout.center), 70.0f, 0.5f);
+  EXPECT_NEAR(layout.tips[1].y, layout.center.y - 70.0f, 0.5f);  // y up on screen
+  EXPECT_LT(glm::length(layout.tips[2] - layout.center), 1.0f);
+  EXPECT_FALSE(handleLayout(frontView(), {0, 0, 6}, glm::quat(1, 0, 0, 0), 70.0f, &layout));  // behind the eye
+}
+
+TEST(Manipulator, PickHandlePart) {
+  HandleLayout layout;
+  ASSERT_TRUE(handleLayout(frontView(), {0, 0, 0}, glm::quat(1, 0, 0, 0), 70.0f, &layout));
+  const glm::vec2 c = layout.center;
+  float d = -1.0f;
+  EXPECT_EQ(pickHandlePart(layout, c + glm::vec2(3, -2), 10.0f, &d), HandlePart::Center);
+  EXPECT_NEAR(d, std::sqrt(13.0f), 1e-4f);
+  EXPECT_EQ(pickHandlePart(layout, c + glm::vec2(60, 4), 10.0f, &d), HandlePart::AxisX);
+  EXPECT_NEAR(d, 4.0f, 1e-3f);
+  EXPECT_EQ(pickHandlePart(layout, c + glm::vec2(-3, -50), 10.0f, nullptr), HandlePart::AxisY);
+  // Beyond the tip, beside the axes, and the z axis that points at the viewer: nothing.
+  EXPECT_EQ(pickHandlePart(layout, c + glm::vec2(90, 0), 10.0f, nullptr), HandlePart::None);
+  EXPECT_EQ(pickHandlePart(layout, c + glm::vec2(40, 40), 10.0f, nullptr), HandlePart::None);
+  EXPECT_EQ(pickHandlePart(layout, c + glm::vec2(-40, 0), 10.0f, nullptr), HandlePart::None);
+}
+
+TEST(Manipulator, PlaneDragKeepsThePointUnderTheCursor) {
+  const ScreenView v = screenView(Camera{{1.5f, 0.5f, 4}, {0, 0.3f, 0}, {0, 1, 0}, 0.6f}, 1280, 720, 2.0f);
+  const glm::vec3 origin(-0.4f, 0.6f, 0.3f);
+  const glm::vec2 from = project(v, origin), to = from + glm::vec2(55.0f, -31.0f);
+  const glm::vec3 d = planeDrag(v, origin, from, to);
+  EXPECT_LT(glm::length(project(v, origin + d) - to), 0.01f);
+  EXPECT_NEAR(glm::dot(d, v.towardsViewer), 0.0f, 1e-5f);  // in the screen plane: the depth does not change
+  expectNear(planeDrag(v, origin, from, from), glm::vec3(0.0f));
+}
+
+TEST(Manipulator, AxisDragFollowsTheCursorAlongTheAxis) {
+  const ScreenView v = frontView();
+  const glm::vec3 origin(0.3f, -0.2f, 0.0f);
+  const glm::vec2 from = project(v, origin);
+  // Along x, seen from the front: the point under the cursor follows it.
+  const float s = axisDrag(v, origin, {1, 0, 0}, from, from + glm::vec2(40.0f, 0.0f));
+  EXPECT_GT(s, 0.0f);
+  EXPECT_NEAR(project(v, origin + glm::vec3(s, 0, 0)).x, from.x + 40.0f, 0.01f);
+  // Dragging up moves along +y.
+  EXPECT_GT(axisDrag(v, origin, {0, 1, 0}, from, from + glm::vec2(0.0f, -30.0f)), 0.0f);
+  // On the line of sight: a drag across the x axis does not move along it, and the z axis, pointing at the
+  // viewer, cannot be dragged.
+  const glm::vec2 centre = project(v, {0, 0, 0});
+  EXPECT_NEAR(axisDrag(v, {0, 0, 0}, {1, 0, 0}, centre, centre + glm::vec2(0.0f, 30.0f)), 0.0f, 1e-5f);
+  EXPECT_EQ(axisDrag(v, {0, 0, 0}, {0, 0, 1}, centre, centre + glm::vec2(30.0f, 10.0f)), 0.0f);
+}
+
+TEST(Manipulator, ScaleFactorIsTheRatioOfDistancesFromTheCentre) {
+  const glm::vec2 c(100, 100);
+  EXPECT_FLOAT_EQ(scaleFactor(c, {170, 100}, {240, 100}, 70.0f), 2.0f);
+  EXPECT_FLOAT_EQ(scaleFactor(c, {180, 100}, {100, 140}, 70.0f), 0.5f);
+  EXPECT_FLOAT_EQ(scaleFactor(c, {180, 100}, {180, 100}, 70.0f), 1.0f);
+  // A press near the centre: no jump at the press, double 70 pixels further out.
+  EXPECT_FLOAT_EQ(scaleFactor(c, {102, 100}, {102, 100}, 70.0f), 1.0f);
+  EXPECT_FLOAT_EQ(scaleFactor(c, {102, 100}, {172, 100}, 70.0f), 2.0f);
+  EXPECT_FLOAT_EQ(scaleFactor(c, {170, 100}, {100, 100}, 70.0f), 0.01f);  // clamped
+}
+
 }  // namespace
 }  // namespace imps::app

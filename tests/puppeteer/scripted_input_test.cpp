@@ -28,8 +28,22 @@ TEST(ScriptedInput, Keys) {
   EXPECT_EQ((*keys)[0].kind, ScriptedEvent::Kind::Key);
 }
 
+TEST(ScriptedInput, KeysWithModifiers) {
+  auto keys = parseScriptedKeys("ctrl+z@3,Ctrl+Shift+Z@4,z@5,shift+w@6");
+  ASSERT_TRUE(keys) << keys.error();
+  ASSERT_EQ(keys->size(), 4u);
+  EXPECT_EQ((*keys)[0].key, GLFW_KEY_Z);
+  EXPECT_EQ((*keys)[0].mods, GLFW_MOD_CONTROL);
+  EXPECT_EQ((*keys)[1].mods, GLFW_MOD_CONTROL | GLFW_MOD_SHIFT);
+  EXPECT_EQ((*keys)[1].keyName, "Ctrl+Shift+Z");
+  EXPECT_EQ((*keys)[2].mods, 0);
+  EXPECT_EQ((*keys)[3].mods, GLFW_MOD_SHIFT);
+  EXPECT_EQ((*keys)[3].key, GLFW_KEY_W);
+}
+
 TEST(ScriptedInput, BadKeys) {
-  for (const char* bad : {"", "o", "o@", "@5", "o@-1", "o@x", "ctrl@3", "o@5,", "o@5,,k@6", "F13@1"}) {
+  for (const char* bad : {"", "o", "o@", "@5", "o@-1", "o@x", "ctrl@3", "o@5,", "o@5,,k@6", "F13@1", "ctrl+@3",
+                          "ctrl+shift+@3", "alt+z@3", "ctrl+zz@3"}) {
     auto keys = parseScriptedKeys(bad);
     ASSERT_FALSE(keys) << bad;
     EXPECT_NE(keys.error().find("--keys"), std::string::npos) << keys.error();
