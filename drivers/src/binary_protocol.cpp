@@ -482,20 +482,35 @@ void BinaryDecoder::skip(size_t n) {
 }
 
 void BinaryDecoder::reset() {
+  discard();
+  haveSequence_ = false;
+}
+
+void BinaryDecoder::discard() {
   skip(in_.size());
   in_.clear();
   lastFrameSize_ = 0;
-  haveSequence_ = false;
+}
+
+void BinaryDecoder::resync() {
+  lastFrameSize_ = 0;
+  if (in_.size() == 0) return;
+  ++stats_.truncatedFrames;
+  skip(1);
 }
 
 std::span<const uint8_t> BinaryDecoder::lastFrame() const {
   return std::span<const uint8_t>(in_.data() + lastFrameBegin_, lastFrameSize_);
 }
 
-void BinaryDecoder::trackSequence(uint32_t sequence) {
+bool BinaryDecoder::trackSequence(uint32_t sequence) {
   if (haveSequence_) {
     const uint32_t delta = sequence - lastSequence_;  // modulo 2^32: wrapping is not a gap
-    if (delta == 0 || delta > 0x80000000u) {
+    if (delta == 0) {
+      ++stats_.duplicateSamples;
+      return false;
+    }
+    if (delta > 0x80000000u) {
       ++stats_.sequenceResets;
     } else if (delta > 1) {
       ++stats_.sequenceGaps;
@@ -504,6 +519,7 @@ void BinaryDecoder::trackSequence(uint32_t sequence) {
   }
   haveSequence_ = true;
   lastSequence_ = sequence;
+  return true;
 }
 
 std::optional<Message> BinaryDecoder::next() {
@@ -569,14 +585,14 @@ std::optional<Message> BinaryDecoder::next() {
       ++stats_.malformedFrames;
       continue;
     }
-    ++stats_.framesOk;
     if (auto* f = std::get_if<msg::SampleFrame>(&m.payload)) {
+      if (!trackSequence(m.sequence)) continue;  // the same sample again (a retransmission): stored once
       f->sample.arrivalTimeNs = arrivalTimeNs_;
       ++stats_.samples;
-      trackSequence(m.sequence);
-    } else if (m.type() == MessageType::Hello) {
+    } else if (m.type() == MessageType::Hello && (m.flags & kFlagReply) == 0) {
       haveSequence_ = false;  // the device (re)booted: its sample sequence restarts
     }
+    ++stats_.framesOk;
     lastFrameBegin_ = begin;
     lastFrameSize_ = total;
     return m;

@@ -88,10 +88,15 @@ struct DeviceSession::Io {
     raise(c.bytesReceived, b.bytesReceived + l.bytesReceived + h.bytes);
     raise(c.garbageBytes, b.bytesSkipped + l.bytesSkipped);
     raise(c.crcErrors, b.headerCrcErrors + b.crcErrors);
-    raise(c.malformedFrames, b.malformedFrames + b.unknownTypes + b.unsupportedVersions + b.oversizeFrames +
-                                 h.unknownReportIds + h.shortReports);
+    raise(c.malformedFrames, b.malformedFrames + h.unknownReportIds + h.shortReports);
+    raise(c.unknownTypes, b.unknownTypes);
+    raise(c.unsupportedVersions, b.unsupportedVersions);
+    raise(c.oversizeFrames, b.oversizeFrames);
+    raise(c.truncatedFrames, b.truncatedFrames);
     raise(c.parseErrors, l.errors());
     raise(c.samplesDropped, b.samplesDropped + h.samplesDropped);
+    raise(c.duplicateSamples, b.duplicateSamples);
+    raise(c.sequenceResets, b.sequenceResets + h.sequenceResets);
   }
 
   // Reads what arrives within waitMs and feeds the active decoder. False when the transport failed.
@@ -213,7 +218,8 @@ struct DeviceSession::Io {
         return std::nullopt;
       }
       bump(s.counters_.timeouts);
-      binary.reset();  // a half frame from before the timeout must not join later bytes
+      // A frame that has not completed by now never will (in poll mode nothing more comes): rescan behind it.
+      binary.resync();
     }
     return std::nullopt;
   }
@@ -310,7 +316,7 @@ struct DeviceSession::Io {
         // A whole sampleTimeout without a HELLO: were there samples? waitFor only returns on timeout.
         if (steadyNs() - lastSampleNs >= o.sampleTimeoutMs * kMs) {
           bump(s.counters_.timeouts);
-          binary.reset();
+          binary.resync();
           if (++consecutiveTimeouts >= o.timeoutsBeforeLost) {
             s.setError("no samples for " + std::to_string(o.sampleTimeoutMs * o.timeoutsBeforeLost) + " ms");
             return End::Lost;
@@ -338,10 +344,11 @@ struct DeviceSession::Io {
           haveSample = true;
           DeviceInfo info;
           info.name = lines.banner().empty() ? "line-protocol armature" : lines.banner().front();
-          info.channelCount = lines.channelCount();
+          info.channelCount = sample->channelCount;
           info.bitsPerChannel = 32;
           for (int i = 0; i < info.channelCount; ++i) info.channelNames.push_back("ch" + std::to_string(i));
           info.hasDeviceTimestamp = sample->deviceTimeNs != 0;
+          layoutChannels = info.channelCount;
           {
             std::lock_guard lock(s.mutex_);
             s.info_ = info;
@@ -349,12 +356,26 @@ struct DeviceSession::Io {
           }
           connected();
         }
+        if (sample->channelCount != layoutChannels) followLayout(sample->channelCount);
         publish(*sample);
         lastSample = steadyNs();
       }
       syncCounters();
       if (silenceLost(lastSample, haveSample, "sample lines")) return End::Lost;
     }
+  }
+
+  // The line decoder re-locked to a new channel count: the description follows before its first sample is
+  // published, so a recorder that sees the new count finds it in deviceInfo().
+  int layoutChannels = 0;
+  void followLayout(int channels) {
+    layoutChannels = channels;
+    bump(s.counters_.layoutChanges);
+    std::lock_guard lock(s.mutex_);
+    if (!s.info_) return;
+    s.info_->channelCount = channels;
+    s.info_->channelNames.clear();
+    for (int i = 0; i < channels; ++i) s.info_->channelNames.push_back("ch" + std::to_string(i));
   }
 
   // Stream protocols without a handshake (lines, HID reports): before the first sample the device may take a while
@@ -380,7 +401,8 @@ struct DeviceSession::Io {
       s.setError("internal: HID reports need a HID transport (hid: spec)");
       return End::Lost;
     }
-    hid.setLayout(d->layout);
+    // The same device back (same layout): keep sequence tracking so reports lost while away count as dropped.
+    if (!(hid.layout() == d->layout)) hid.setLayout(d->layout);
     {
       std::lock_guard lock(s.mutex_);
       s.info_ = d->info;
@@ -460,8 +482,9 @@ void DeviceSession::run() {
       warnings_ = io.transport->warnings();
       banner_.clear();
     }
-    // A fresh connection: nothing from before may join what comes now; the device may have rebooted.
-    io.binary.reset();
+    // A fresh connection: nothing from before may join what comes now. Sequence tracking goes on (samples lost
+    // while disconnected are counted) unless the device says HELLO unasked: it rebooted.
+    io.binary.discard();
     io.lines.reset();
     io.textBeforeHello.clear();
     io.consecutiveTimeouts = 0;
@@ -496,15 +519,50 @@ DeviceSessionStats DeviceSession::stats() const {
   out.garbageBytes = get(counters_.garbageBytes);
   out.crcErrors = get(counters_.crcErrors);
   out.malformedFrames = get(counters_.malformedFrames);
+  out.unknownTypes = get(counters_.unknownTypes);
+  out.unsupportedVersions = get(counters_.unsupportedVersions);
+  out.oversizeFrames = get(counters_.oversizeFrames);
+  out.truncatedFrames = get(counters_.truncatedFrames);
   out.parseErrors = get(counters_.parseErrors);
   out.samplesDropped = get(counters_.samplesDropped);
+  out.duplicateSamples = get(counters_.duplicateSamples);
+  out.sequenceResets = get(counters_.sequenceResets);
   out.timeouts = get(counters_.timeouts);
   out.deviceErrors = get(counters_.deviceErrors);
   out.deviceResets = get(counters_.deviceResets);
+  out.layoutChanges = get(counters_.layoutChanges);
   out.connections = get(counters_.connections);
   out.reconnects = get(counters_.reconnects);
   out.openFailures = get(counters_.openFailures);
   return out;
+}
+
+std::vector<NamedCounter> namedCounters(const DeviceSessionStats& st) {
+  return {
+      {"samplesDropped", "dropped by the device link", st.samplesDropped},
+      {"duplicateSamples", "repeated samples (stored once)", st.duplicateSamples},
+      {"timeouts", "timeouts", st.timeouts},
+      {"reconnects", "reconnects", st.reconnects},
+      {"deviceResets", "device reboots", st.deviceResets},
+      {"sequenceResets", "sequence restarts without a reboot", st.sequenceResets},
+      {"crcErrors", "CRC errors", st.crcErrors},
+      {"malformedFrames", "malformed frames", st.malformedFrames},
+      {"unknownTypes", "frames of unknown type", st.unknownTypes},
+      {"unsupportedVersions", "frames of another protocol version", st.unsupportedVersions},
+      {"oversizeFrames", "oversize frames", st.oversizeFrames},
+      {"truncatedFrames", "frames that never completed", st.truncatedFrames},
+      {"garbageBytes", "garbage bytes", st.garbageBytes},
+      {"parseErrors", "line parse errors", st.parseErrors},
+      {"layoutChanges", "channel-count changes", st.layoutChanges},
+      {"deviceErrors", "device ERROR reports", st.deviceErrors},
+      {"openFailures", "failed opens", st.openFailures},
+  };
+}
+
+const char* counterLabel(std::string_view name) {
+  for (const NamedCounter& c : namedCounters({}))
+    if (name == c.name) return c.label;
+  return nullptr;
 }
 
 std::optional<DeviceInfo> DeviceSession::deviceInfo() const {

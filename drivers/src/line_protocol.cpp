@@ -45,6 +45,9 @@ LineDecoder::LineDecoder(LineDecoderOptions options) : options_(options) {
     options_.expectedChannelCount = 0;
   channelCount_ = options_.expectedChannelCount;
   in_.reserve(options_.maxLineLength + 4096);
+  const auto waiting = static_cast<size_t>(std::max({options_.settleLines, options_.relockAfter, 1}));
+  pending_.reserve(waiting);
+  ready_.reserve(waiting);
 }
 
 void LineDecoder::feed(std::span<const uint8_t> bytes, int64_t arrivalTimeNs) {
@@ -62,9 +65,14 @@ void LineDecoder::reset() {
   skip(in_.size());
   in_.clear();
   discarding_ = false;
+  if (seenSample_)
+    dropPending();
+  else
+    pendingToBanner();
+  ready_.clear();
+  readyAt_ = 0;
   channelCount_ = options_.expectedChannelCount;
   seenSample_ = false;
-  candidateCount_ = candidateRun_ = 0;
   nextSequence_ = 0;
   banner_.clear();
 }
@@ -103,49 +111,99 @@ bool LineDecoder::parseLine(const char* p, const char* end, Sample& out) const {
   return true;
 }
 
+void LineDecoder::addBanner(const char* begin, const char* end) {
+  ++stats_.bannerLines;
+  if (banner_.size() < options_.maxBannerLines) banner_.emplace_back(begin, end);
+}
+
+// The lines that waited to settle the first layout disagree with what follows: they were banner after all.
+void LineDecoder::pendingToBanner() {
+  for (const std::string& text : pendingText_) addBanner(text.data(), text.data() + text.size());
+  pending_.clear();
+  pendingText_.clear();
+  pendingJunk_ = 0;
+}
+
+// A run of lines of another channel count ended before it re-locked: they were mismatches.
+void LineDecoder::dropPending() {
+  stats_.channelCountMismatches += pending_.size();
+  pending_.clear();
+}
+
+// Numbers a sample and counts it.
+std::optional<Sample> LineDecoder::accept(Sample s) {
+  seenSample_ = true;
+  s.sequence = nextSequence_++;
+  ++stats_.samples;
+  return s;
+}
+
+// Queues a well-formed line of a not-yet-adopted channel count (a new run drops the previous one).
+std::optional<Sample> LineDecoder::hold(const Sample& s, const char* begin, const char* end) {
+  if (!pending_.empty() && pending_.front().channelCount != s.channelCount) {
+    if (seenSample_)
+      dropPending();
+    else
+      pendingToBanner();
+  }
+  pending_.push_back(s);
+  if (!seenSample_) pendingText_.emplace_back(begin, end);
+  const int needed = seenSample_ ? options_.relockAfter : std::max(options_.settleLines, 1);
+  if (static_cast<int>(pending_.size()) < needed) return std::nullopt;
+  if (seenSample_) ++stats_.channelCountChanges;
+  channelCount_ = s.channelCount;
+  return releasePending();
+}
+
+// The waiting run settled its layout: its lines become samples, in order.
+std::optional<Sample> LineDecoder::releasePending() {
+  ready_.clear();
+  readyAt_ = 0;
+  for (const Sample& p : pending_) ready_.push_back(*accept(p));
+  stats_.malformedLines += pendingJunk_;  // junk between the lines that settled the layout is junk in the data
+  pendingJunk_ = 0;
+  pending_.clear();
+  pendingText_.clear();
+  return ready_.empty() ? std::nullopt : std::optional<Sample>(ready_[readyAt_++]);
+}
+
 std::optional<Sample> LineDecoder::acceptLine(const char* begin, const char* end) {
   ++stats_.lines;
   Sample s;
   const bool wellFormed = parseLine(begin, end, s);
-  // Before the first sample, anything that is not an acceptable sample line is banner.
-  if (!seenSample_ &&
-      (!wellFormed || (channelCount_ != 0 && s.channelCount != channelCount_))) {
-    ++stats_.bannerLines;
-    if (banner_.size() < options_.maxBannerLines) banner_.emplace_back(begin, end);
-    return std::nullopt;
+  s.arrivalTimeNs = arrivalTimeNs_;
+  const bool inferring = options_.expectedChannelCount == 0;
+  if (!seenSample_) {
+    // Before the first layout, anything that is not an acceptable sample line is banner. Junk among lines waiting
+    // to settle a layout waits with them: malformed if they settle it, banner with them if they do not.
+    if (inferring && !wellFormed && !pending_.empty()) {
+      pendingText_.emplace_back(begin, end);
+      ++pendingJunk_;
+      return std::nullopt;
+    }
+    if (!wellFormed || (!inferring && s.channelCount != channelCount_)) {
+      addBanner(begin, end);
+      return std::nullopt;
+    }
+    if (!inferring) return accept(s);
+    return hold(s, begin, end);
   }
   if (!wellFormed) {
     ++stats_.malformedLines;
     return std::nullopt;
   }
-  if (channelCount_ == 0) channelCount_ = s.channelCount;
-  if (s.channelCount != channelCount_) {
-    ++stats_.channelCountMismatches;
-    if (options_.expectedChannelCount == 0 && options_.relockAfter > 0) {
-      if (s.channelCount == candidateCount_) {
-        ++candidateRun_;
-      } else {
-        candidateCount_ = s.channelCount;
-        candidateRun_ = 1;
-      }
-      if (candidateRun_ >= options_.relockAfter) {
-        channelCount_ = candidateCount_;
-        candidateRun_ = 0;
-        ++stats_.channelCountChanges;
-      }
-    }
-    return std::nullopt;
+  if (s.channelCount == channelCount_) {
+    dropPending();
+    return accept(s);
   }
-  candidateRun_ = 0;
-  seenSample_ = true;
-  s.sequence = nextSequence_++;
-  s.arrivalTimeNs = arrivalTimeNs_;
-  ++stats_.samples;
-  return s;
+  if (inferring && options_.relockAfter > 0) return hold(s, begin, end);
+  ++stats_.channelCountMismatches;
+  return std::nullopt;
 }
 
 std::optional<Sample> LineDecoder::next() {
   for (;;) {
+    if (readyAt_ < ready_.size()) return ready_[readyAt_++];
     if (in_.size() == 0) return std::nullopt;
     const uint8_t* base = in_.data();
     if (discarding_) {

@@ -39,6 +39,8 @@ enum RecordType : uint16_t {
   kMarker = 5,
   kNote = 6,
   kEnd = 7,
+  kLayout = 8,
+  kCounters = 9,
 };
 
 // SAMPLE encoding byte.
@@ -316,6 +318,52 @@ std::expected<void, std::string> SessionWriter::appendNote(std::string_view text
   return appendRecord(kNote, std::span(reinterpret_cast<const uint8_t*>(text.data()), text.size()));
 }
 
+std::expected<uint16_t, std::string> SessionWriter::appendLayoutChange(const DeviceInfo& device, uint16_t previous) {
+  if (auto r = usable(); !r) return std::unexpected(r.error());
+  if (auto problem = checkDevice(device); !problem.empty())
+    return std::unexpected(path_.string() + ": error: " + problem);
+  if (previous >= devices_.size() || devices_.size() >= 0xFFFF)
+    return std::unexpected(path_.string() + ": error: layout change of device " + std::to_string(previous) +
+                           " but there are " + std::to_string(devices_.size()) + " devices");
+  const auto index = static_cast<uint16_t>(devices_.size());
+  scratch_.clear();
+  encodeDevice(scratch_, index, device);
+  if (auto r = appendRecord(kDeviceInfo, scratch_); !r) return std::unexpected(r.error());
+  scratch_.clear();
+  putU16(scratch_, index);
+  putU16(scratch_, previous);
+  if (auto r = appendRecord(kLayout, scratch_); !r) return std::unexpected(r.error());
+  devices_.push_back(device);
+  return index;
+}
+
+std::expected<void, std::string> SessionWriter::appendLayout(uint16_t device, uint16_t previous) {
+  if (auto r = usable(); !r) return r;
+  if (device >= devices_.size() || previous >= device)
+    return std::unexpected(path_.string() + ": error: layout change of device " + std::to_string(previous) +
+                           " to device " + std::to_string(device));
+  scratch_.clear();
+  putU16(scratch_, device);
+  putU16(scratch_, previous);
+  return appendRecord(kLayout, scratch_);
+}
+
+std::expected<void, std::string> SessionWriter::appendCounters(uint16_t device,
+                                                               std::span<const SessionCounter> counters) {
+  if (auto r = usable(); !r) return r;
+  if (device >= devices_.size() || counters.size() > 0xFFFF)
+    return std::unexpected(path_.string() + ": error: counters for device " + std::to_string(device) +
+                           " of " + std::to_string(devices_.size()));
+  scratch_.clear();
+  putU16(scratch_, device);
+  putU16(scratch_, static_cast<uint16_t>(counters.size()));
+  for (const SessionCounter& c : counters) {
+    putString(scratch_, c.name);
+    putU64(scratch_, c.value);
+  }
+  return appendRecord(kCounters, scratch_);
+}
+
 std::expected<void, std::string> SessionWriter::appendSkeleton(const SessionSkeleton& skeleton) {
   if (auto r = usable(); !r) return r;
   scratch_.clear();
@@ -543,6 +591,39 @@ std::expected<Session, std::string> readSessionBytes(std::span<const uint8_t> by
           s.skeleton = std::move(k);
         break;
       }
+      case kLayout: {
+        SessionLayoutChange change;
+        change.device = r.u16();
+        change.previous = r.u16();
+        change.firstSample = s.samples.size();
+        if (!r.ok() || r.remaining() != 0)
+          invalid = "LAYOUT payload is not 4 bytes";
+        else if (change.device >= s.devices.size() || change.previous >= change.device)
+          invalid = "LAYOUT of device " + std::to_string(change.device) + " from device " +
+                    std::to_string(change.previous) + " (" + std::to_string(s.devices.size()) + " devices declared)";
+        else
+          s.layoutChanges.push_back(change);
+        break;
+      }
+      case kCounters: {
+        SessionCounters counters;
+        counters.device = r.u16();
+        const uint16_t n = r.u16();
+        for (uint16_t i = 0; i < n && r.ok(); ++i) {
+          SessionCounter c;
+          c.name = r.string();
+          c.value = r.u64();
+          counters.values.push_back(std::move(c));
+        }
+        if (!r.ok() || r.remaining() != 0)
+          invalid = "COUNTERS payload does not match its length";
+        else if (counters.device >= s.devices.size())
+          invalid = "COUNTERS for device " + std::to_string(counters.device) + " which has no DEVICE_INFO";
+        if (!invalid.empty()) break;
+        std::erase_if(s.counters, [&](const SessionCounters& c) { return c.device == counters.device; });
+        s.counters.push_back(std::move(counters));
+        break;
+      }
       case kEnd: {
         const uint64_t count = r.u64();
         if (!r.ok() || r.remaining() != 0)
@@ -597,8 +678,12 @@ std::expected<void, std::string> saveSession(const std::filesystem::path& path, 
       if (auto r = writer->appendSkeleton(*session.skeleton); !r) return r;
     for (const auto& note : session.notes)
       if (auto r = writer->appendNote(note); !r) return r;
-    size_t calibration = 0, marker = 0;
+    size_t calibration = 0, marker = 0, layout = 0;
     for (size_t i = 0; i <= session.samples.size(); ++i) {
+      for (; layout < session.layoutChanges.size() && session.layoutChanges[layout].firstSample <= i; ++layout)
+        if (auto r = writer->appendLayout(session.layoutChanges[layout].device, session.layoutChanges[layout].previous);
+            !r)
+          return r;
       for (; calibration < session.calibrations.size() && session.calibrations[calibration].firstSample <= i;
            ++calibration)
         if (auto r = writer->appendCalibration(session.calibrations[calibration].json); !r) return r;
@@ -608,10 +693,16 @@ std::expected<void, std::string> saveSession(const std::filesystem::path& path, 
         if (auto r = writer->append(session.samples[i], session.sampleDevice[i]); !r) return r;
     }
     // Anything indexed past the last sample still belongs to the session.
+    for (; layout < session.layoutChanges.size(); ++layout)
+      if (auto r = writer->appendLayout(session.layoutChanges[layout].device, session.layoutChanges[layout].previous);
+          !r)
+        return r;
     for (; calibration < session.calibrations.size(); ++calibration)
       if (auto r = writer->appendCalibration(session.calibrations[calibration].json); !r) return r;
     for (; marker < session.markers.size(); ++marker)
       if (auto r = writer->appendMarker(session.markers[marker].timeNs, session.markers[marker].label); !r) return r;
+    for (const SessionCounters& c : session.counters)
+      if (auto r = writer->appendCounters(c.device, c.values); !r) return r;
     return writer->close();
   }();
   if (!result) {

@@ -545,12 +545,78 @@ TEST(BinaryProtocol, SequenceGapsWrapAndResetsAreCounted) {
   s = run({0xFFFFFFFF, 1});
   EXPECT_EQ(s.sequenceGaps, 1u);
   EXPECT_EQ(s.samplesDropped, 1u);
-  s = run({10, 11, 3, 4, 4});
-  EXPECT_EQ(s.sequenceResets, 2u);
+  s = run({10, 11, 3, 4});
+  EXPECT_EQ(s.sequenceResets, 1u);
   EXPECT_EQ(s.sequenceGaps, 0u);
   s = run({10, 11, -1, 0, 1});  // the device rebooted and said hello: not a reset
   EXPECT_EQ(s.sequenceResets, 0u);
   EXPECT_EQ(s.samples, 4u);
+}
+
+// Issue 14 item 4: a repeated frame is one sample, counted as a duplicate (it used to be returned twice).
+TEST(BinaryProtocol, RepeatedSampleIsReturnedOnceAndCounted) {
+  const Bytes a = encode(sampleMessage(testSample(4, 2, 8), 8, false, false));
+  const Bytes b = encode(sampleMessage(testSample(5, 2, 8), 8, false, false));
+  Bytes stream = a;
+  stream.insert(stream.end(), a.begin(), a.end());
+  stream.insert(stream.end(), b.begin(), b.end());
+  BinaryDecoder d;
+  const auto got = decodeAll(d, stream);
+  ASSERT_EQ(got.size(), 2u);
+  EXPECT_EQ(got[0].sequence, 4u);
+  EXPECT_EQ(got[1].sequence, 5u);
+  const auto& s = d.stats();
+  EXPECT_EQ(s.duplicateSamples, 1u);
+  EXPECT_EQ(s.samples, 2u);
+  EXPECT_EQ(s.sequenceResets, 0u);
+  EXPECT_EQ(s.framesOk + s.malformedFrames + s.unknownTypes + s.unsupportedVersions + s.duplicateSamples, 3u);
+}
+
+// Issue 14 item 2: only an unsolicited HELLO (a reboot) restarts sequence tracking; the HELLO answering HOST_HELLO
+// after a reconnect, a timeout's resync() and a reconnect's discard() keep it, so lost samples are counted.
+TEST(BinaryProtocol, OnlyAnUnsolicitedHelloRestartsSequenceTracking) {
+  auto sample = [](uint32_t q) { return encode(sampleMessage(testSample(q, 2, 8), 8, false, false)); };
+  BinaryDecoder d;
+  decodeAll(d, sample(10));
+  decodeAll(d, encode({3, kFlagReply, msg::Hello{1, testInfo()}}));  // answer to HOST_HELLO: not a reboot
+  decodeAll(d, sample(15));
+  EXPECT_EQ(d.stats().samplesDropped, 4u);
+  d.resync();
+  d.discard();
+  decodeAll(d, sample(20));
+  EXPECT_EQ(d.stats().samplesDropped, 8u);
+  decodeAll(d, encode({0, 0, msg::Hello{1, testInfo()}}));  // unasked: the device rebooted
+  decodeAll(d, sample(0));
+  EXPECT_EQ(d.stats().samplesDropped, 8u);
+  EXPECT_EQ(d.stats().sequenceResets, 0u);
+  d.reset();  // forgets the sequence too
+  decodeAll(d, sample(7));
+  EXPECT_EQ(d.stats().samplesDropped, 8u);
+}
+
+// Issue 14 item 3: in poll mode nothing follows a header that claims more bytes than will ever come. After the
+// timeout, resync() drops its sync byte and the intact sample behind it is found.
+TEST(BinaryProtocol, ResyncRescansBytesBehindAHeaderThatNeverCompletes) {
+  const Bytes forged = rawFrame(1, 0x03, kFlagReply, 9, Bytes(2000, 0x11));
+  Bytes stream(forged.begin(), forged.begin() + kFrameHeaderSize);  // a valid header claiming 2000 bytes
+  const Sample intact = testSample(9, 4, 12);
+  const Bytes good = encode(sampleMessage(intact, 12, false, true, kFlagReply));
+  stream.insert(stream.end(), good.begin(), good.end());
+  BinaryDecoder d;
+  d.feed(stream, 5);
+  EXPECT_FALSE(d.next());  // waiting for the 2000 bytes
+  d.resync();
+  auto m = d.next();
+  ASSERT_TRUE(m);
+  Sample got = std::get<msg::SampleFrame>(m->payload).sample;
+  EXPECT_EQ(got.arrivalTimeNs, 5);
+  got.arrivalTimeNs = intact.arrivalTimeNs;
+  EXPECT_EQ(got, intact);
+  EXPECT_EQ(d.stats().truncatedFrames, 1u);
+  EXPECT_EQ(d.stats().bytesSkipped, kFrameHeaderSize);
+  EXPECT_EQ(d.buffered(), 0u);
+  d.resync();  // nothing buffered: nothing to abandon
+  EXPECT_EQ(d.stats().truncatedFrames, 1u);
 }
 
 TEST(BinaryProtocol, ArrivalTimeIsThatOfTheChunkCompletingTheFrame) {

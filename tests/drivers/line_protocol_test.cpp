@@ -32,7 +32,15 @@ std::vector<std::vector<uint32_t>> countsOf(const std::vector<Sample>& samples) 
 void expectStatsAddUp(const LineDecoder& d) {
   const auto& s = d.stats();
   EXPECT_EQ(s.bytesReceived, s.bytesInLines + s.bytesSkipped + d.buffered());
-  EXPECT_EQ(s.lines, s.samples + s.bannerLines + s.malformedLines + s.channelCountMismatches + s.overlongLines);
+  EXPECT_EQ(s.lines,
+            s.samples + s.bannerLines + s.malformedLines + s.channelCountMismatches + s.overlongLines + d.pendingLines());
+}
+
+// A decoder that takes the first well-formed line as the layout (tests of line parsing, not of settling).
+LineDecoder lockingAtOnce() {
+  LineDecoderOptions options;
+  options.settleLines = 1;
+  return LineDecoder(options);
 }
 
 using Rows = std::vector<std::vector<uint32_t>>;
@@ -51,11 +59,11 @@ TEST(LineProtocol, LineEndingsLfCrCrlfAndMixed) {
 TEST(LineProtocol, SeparatorsCommasSpacesTabs) {
   for (std::string_view text : {"10,20,30\n", "10 20 30\n", "10\t20\t30\n", "10, 20 ,30\n", "  10 \t 20   30  \n",
                                 "10,20,30,\n", "10, 20, 30, \n", "\t10,\t20,\t30\n"}) {
-    LineDecoder d;
+    LineDecoder d = lockingAtOnce();
     EXPECT_EQ(countsOf(decodeAll(d, text)), (Rows{{10, 20, 30}})) << text;
   }
   // Largest count, and a 64-channel line.
-  LineDecoder d;
+  LineDecoder d = lockingAtOnce();
   std::string line;
   for (int i = 0; i < 64; ++i) line += std::to_string(4294967295u - static_cast<uint32_t>(i)) + " ";
   const auto got = decodeAll(d, line + "\n");
@@ -88,8 +96,8 @@ TEST(LineProtocol, BannerLinesBeforeTheFirstSampleAreRecorded) {
 
   // reset() (the Arduino rebooted) accepts a new banner and restarts the sequence.
   d.reset();
-  const auto again = decodeAll(d, "booting\n7 8\n");
-  EXPECT_EQ(countsOf(again), (Rows{{7, 8}}));
+  const auto again = decodeAll(d, "booting\n7 8\n9 10\n");
+  EXPECT_EQ(countsOf(again), (Rows{{7, 8}, {9, 10}}));
   EXPECT_EQ(again[0].sequence, 0u);
   EXPECT_EQ(d.banner(), std::vector<std::string>{"booting"});
   EXPECT_EQ(d.channelCount(), 2);
@@ -97,7 +105,7 @@ TEST(LineProtocol, BannerLinesBeforeTheFirstSampleAreRecorded) {
   LineDecoderOptions few;
   few.maxBannerLines = 2;
   LineDecoder capped(few);
-  decodeAll(capped, "a\nb\nc\nd\n1\n");
+  decodeAll(capped, "a\nb\nc\nd\n1\n2\n");
   EXPECT_EQ(capped.banner().size(), 2u);
   EXPECT_EQ(capped.stats().bannerLines, 4u);
 }
@@ -117,7 +125,7 @@ TEST(LineProtocol, Timestamps) {
   EXPECT_EQ(d.stats().malformedLines, 1u);  // the timestamp that overflows int64 nanoseconds
   for (std::string_view bad : {"t=,1,2\n", "t=5\n", "t5,1,2\n", "t=5s,1,2\n", "t=5 ms,1,2\n", "t=-5,1,2\n"}) {
     LineDecoder e;
-    decodeAll(e, "1,2\n");
+    decodeAll(e, "1,2\n1,2\n");
     EXPECT_TRUE(decodeAll(e, bad).empty()) << bad;
     EXPECT_EQ(e.stats().malformedLines, 1u) << bad;
   }
@@ -130,7 +138,7 @@ TEST(LineProtocol, NonNumericJunkIsCountedAndSkipped) {
                                "38 39 40 41 42 43 44 45 46 47 48 49 50 51 52 53 54 55 56 57 58 59 60 61 62 63 64 "
                                "65\n"}) {
     LineDecoder d;
-    decodeAll(d, "1,2\n");
+    decodeAll(d, "1,2\n1,2\n");
     EXPECT_TRUE(decodeAll(d, bad).empty()) << bad;
     const auto ok = decodeAll(d, "3,4\n");
     EXPECT_EQ(countsOf(ok), (Rows{{3, 4}})) << bad;
@@ -139,19 +147,33 @@ TEST(LineProtocol, NonNumericJunkIsCountedAndSkipped) {
   }
   // An embedded NUL makes the line junk.
   LineDecoder d;
-  decodeAll(d, "1,2\n");
+  decodeAll(d, "1,2\n1,2\n");
   decodeAll(d, std::string_view("1,\0002\n", 5));
   EXPECT_EQ(d.stats().malformedLines, 1u);
 }
 
-TEST(LineProtocol, ChannelCountIsLockedByTheFirstSample) {
+TEST(LineProtocol, ChannelCountIsSettledByAgreeingLines) {
   LineDecoder d;
-  const auto got = decodeAll(d, "1 2 3\n4 5\n6 7 8 9\n10 11 12\n");
-  EXPECT_EQ(countsOf(got), (Rows{{1, 2, 3}, {10, 11, 12}}));
+  const auto got = decodeAll(d, "1 2 3\n4 5 6\n4 5\n6 7 8 9\n10 11 12\n");
+  EXPECT_EQ(countsOf(got), (Rows{{1, 2, 3}, {4, 5, 6}, {10, 11, 12}}));
   EXPECT_EQ(d.channelCount(), 3);
   EXPECT_EQ(d.stats().channelCountMismatches, 2u);
   EXPECT_EQ(d.stats().errors(), 2u);
   expectStatsAddUp(d);
+
+  // Lines that disagree before the layout settled are banner, not samples of another layout.
+  LineDecoder e;
+  EXPECT_EQ(countsOf(decodeAll(e, "1 2 3\n4 5\n6 7 8 9\n10 11 12\n13 14 15\n")), (Rows{{10, 11, 12}, {13, 14, 15}}));
+  EXPECT_EQ(e.stats().bannerLines, 3u);
+  EXPECT_EQ(e.stats().errors(), 0u);
+  expectStatsAddUp(e);
+
+  // A single line waits for the next one to agree.
+  LineDecoder f;
+  EXPECT_TRUE(decodeAll(f, "1 2\n").empty());
+  EXPECT_EQ(f.pendingLines(), 1u);
+  expectStatsAddUp(f);
+  EXPECT_EQ(countsOf(decodeAll(f, "3 4\n")), (Rows{{1, 2}, {3, 4}}));
 
   // An expected count makes other counts banner before the first sample and mismatches after.
   LineDecoderOptions options;
@@ -162,27 +184,51 @@ TEST(LineProtocol, ChannelCountIsLockedByTheFirstSample) {
   EXPECT_EQ(fixed.stats().channelCountMismatches, 1u);
 }
 
-TEST(LineProtocol, ConsistentNewChannelCountReLocks) {
+// Issue 14 item 1: the docs' own banner (a baud rate on a line of its own) must not become a 1-channel layout.
+TEST(LineProtocol, NumericBannerLineIsBannerNotTheFirstSample) {
+  LineDecoder d;
+  std::string text = "115200\n";
+  for (int i = 0; i < 20; ++i) text += std::to_string(i) + " 2 3 4 5 6 7 8\n";
+  const auto got = decodeAll(d, text, 5, 42);
+  ASSERT_EQ(got.size(), 20u);
+  for (size_t i = 0; i < got.size(); ++i) {
+    EXPECT_EQ(got[i].channelCount, 8);
+    EXPECT_EQ(got[i].counts[0], i);
+    EXPECT_EQ(got[i].sequence, i);
+    EXPECT_EQ(got[i].arrivalTimeNs, 42);
+  }
+  EXPECT_EQ(d.banner(), std::vector<std::string>{"115200"});
+  EXPECT_EQ(d.stats().errors(), 0u);
+  EXPECT_EQ(d.stats().channelCountChanges, 0u);
+  expectStatsAddUp(d);
+}
+
+TEST(LineProtocol, ConsistentNewChannelCountReLocksWithoutLosingItsLines) {
   LineDecoderOptions options;
   options.relockAfter = 3;
   LineDecoder d(options);
-  // "2024" in the banner looks like a 1-channel sample; three 2-channel lines re-lock to 2.
-  const auto got = decodeAll(d, "2024\n1 2\n3 4\n5 6\n7 8\n9 10\n");
-  EXPECT_EQ(countsOf(got), (Rows{{2024}, {7, 8}, {9, 10}}));
+  // Two numeric banner lines agree and settle a 1-channel layout; three 2-channel lines re-lock to 2 and are
+  // samples of the new layout, in order.
+  const auto got = decodeAll(d, "2024\n2025\n1 2\n3 4\n5 6\n7 8\n9 10\n");
+  EXPECT_EQ(countsOf(got), (Rows{{2024}, {2025}, {1, 2}, {3, 4}, {5, 6}, {7, 8}, {9, 10}}));
+  for (size_t i = 0; i < got.size(); ++i) EXPECT_EQ(got[i].sequence, i);
   EXPECT_EQ(d.channelCount(), 2);
   EXPECT_EQ(d.stats().channelCountChanges, 1u);
-  EXPECT_EQ(d.stats().channelCountMismatches, 3u);
+  EXPECT_EQ(d.stats().channelCountMismatches, 0u);
+  expectStatsAddUp(d);
 
   // Interleaved different counts do not re-lock; an accepted sample breaks the run.
   LineDecoder e(options);
-  decodeAll(e, "1 2\n1 2 3\n1 2 3 4\n1 2 3\n1 2\n1 2 3\n1 2 3\n1 2\n");
+  decodeAll(e, "1 2\n1 2\n1 2 3\n1 2 3 4\n1 2 3\n1 2\n1 2 3\n1 2 3\n1 2\n");
   EXPECT_EQ(e.channelCount(), 2);
   EXPECT_EQ(e.stats().channelCountChanges, 0u);
-  EXPECT_EQ(e.stats().samples, 3u);
+  EXPECT_EQ(e.stats().samples, 4u);
+  EXPECT_EQ(e.stats().channelCountMismatches, 5u);
+  expectStatsAddUp(e);
 
   options.relockAfter = 0;
   LineDecoder never(options);
-  decodeAll(never, "1\n1 2\n1 2\n1 2\n1 2\n1 2\n1 2\n1 2\n1 2\n1 2\n1 2\n");
+  decodeAll(never, "1\n1\n1 2\n1 2\n1 2\n1 2\n1 2\n1 2\n1 2\n1 2\n1 2\n1 2\n");
   EXPECT_EQ(never.channelCount(), 1);
   EXPECT_EQ(never.stats().channelCountMismatches, 10u);
 }
@@ -216,7 +262,7 @@ TEST(LineProtocol, OverlongLinesAreSkippedWithoutUnboundedBuffering) {
     EXPECT_LE(d.buffered(), 16u);
   }
   EXPECT_EQ(d.stats().overlongLines, 1u);
-  d.feed(bytes("\n9 9\n"));
+  d.feed(bytes("\n9 9\n9 9\n"));
   EXPECT_TRUE(d.next());
   expectStatsAddUp(d);
 }

@@ -95,7 +95,7 @@ void fuzzPayloads(std::span<const uint8_t> in) {
   checkStats(d);
   FUZZ_CHECK(s.framesOk == ok);
   FUZZ_CHECK(s.bytesSkipped == 0 && d.buffered() == 0 && s.bytesInFrames == stream.size());
-  FUZZ_CHECK(s.framesOk + s.malformedFrames + s.unknownTypes + s.unsupportedVersions == frames);
+  FUZZ_CHECK(s.framesOk + s.malformedFrames + s.unknownTypes + s.unsupportedVersions + s.duplicateSamples == frames);
 }
 
 }  // namespace

@@ -15,7 +15,8 @@ namespace {
 void checkStats(const LineDecoder& d) {
   const auto& s = d.stats();
   FUZZ_CHECK(s.bytesReceived == s.bytesInLines + s.bytesSkipped + d.buffered());
-  FUZZ_CHECK(s.lines == s.samples + s.bannerLines + s.malformedLines + s.channelCountMismatches + s.overlongLines);
+  FUZZ_CHECK(s.lines == s.samples + s.bannerLines + s.malformedLines + s.channelCountMismatches + s.overlongLines +
+                            d.pendingLines());
   FUZZ_CHECK(d.banner().size() <= d.options().maxBannerLines);
   FUZZ_CHECK(d.channelCount() >= 0 && d.channelCount() <= kMaxChannels);
 }

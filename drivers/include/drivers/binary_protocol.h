@@ -163,7 +163,7 @@ std::expected<DeviceInfo, std::string> decodeDeviceInfo(std::span<const uint8_t>
 // Every byte fed ends up in exactly one of bytesInFrames, bytesSkipped or BinaryDecoder::buffered():
 //   bytesReceived == bytesInFrames + bytesSkipped + buffered()
 // and every frame whose CRCs check out is exactly one of:
-//   framesOk + malformedFrames + unknownTypes + unsupportedVersions.
+//   framesOk + malformedFrames + unknownTypes + unsupportedVersions + duplicateSamples.
 struct BinaryDecoderStats {
   uint64_t bytesReceived = 0;
   uint64_t bytesInFrames = 0;  // bytes of frames whose header and frame CRC matched (decoded or not)
@@ -178,7 +178,9 @@ struct BinaryDecoderStats {
   uint64_t unsupportedVersions = 0;  // CRC good, header version != kProtocolVersion: skipped
   uint64_t sequenceGaps = 0;     // Sample messages whose sequence was not previous + 1 (forward jumps)
   uint64_t samplesDropped = 0;   // sequence numbers missing across those gaps
-  uint64_t sequenceResets = 0;   // a Sample sequence that repeated or went backwards (e.g. device reboot)
+  uint64_t sequenceResets = 0;   // a Sample sequence that went backwards without a HELLO (e.g. a missed reboot)
+  uint64_t duplicateSamples = 0;  // a Sample repeating the previous one's sequence: skipped, not returned
+  uint64_t truncatedFrames = 0;   // a frame that never completed: abandoned by resync() (a timeout)
   bool operator==(const BinaryDecoderStats&) const = default;
 };
 
@@ -191,7 +193,8 @@ struct BinaryDecoderStats {
 // Bad input never throws or crashes: garbage, corrupt, truncated, oversize, unknown-type and unsupported-version
 // frames are counted in stats() and skipped; after a bad header or CRC the decoder rescans from the byte after
 // the rejected sync byte, so a good frame right behind a bad one is still found.
-// Sequence tracking: a Hello message restarts it (the device rebooted).
+// Sequence tracking: only an unsolicited Hello (no REPLY flag: the device rebooted) restarts it; a Hello answering
+// HOST_HELLO, a timeout (resync()) or a reconnect (discard()) do not, so samples lost across them are counted.
 class BinaryDecoder {
  public:
   BinaryDecoder();
@@ -206,9 +209,15 @@ class BinaryDecoder {
   // The exact bytes of the frame last returned by next(); valid until the next feed(), next() or reset().
   std::span<const uint8_t> lastFrame() const;
 
-  // Discards buffered bytes (counted as skipped) and sequence tracking; keeps stats. Call after a timeout or a
-  // reconnect so a half frame from before cannot join bytes from after.
+  // Discards buffered bytes (counted as skipped) and sequence tracking; keeps stats.
   void reset();
+  // A reconnect: discards buffered bytes (counted as skipped) so nothing from before joins bytes from after;
+  // keeps sequence tracking.
+  void discard();
+  // A timeout: the frame whose header starts the buffer will not complete (its length may be forged or corrupt),
+  // so its sync byte is dropped (counted in truncatedFrames and bytesSkipped) and the bytes behind it are scanned
+  // again by next(). Keeps sequence tracking. No-op when nothing is buffered.
+  void resync();
 
   // Bytes fed but not yet consumed as a frame or skipped.
   size_t buffered() const { return in_.size(); }
@@ -216,7 +225,7 @@ class BinaryDecoder {
 
  private:
   void skip(size_t n);
-  void trackSequence(uint32_t sequence);
+  bool trackSequence(uint32_t sequence);  // false: a duplicate
 
   ReceiveBuffer in_;
   size_t lastFrameBegin_ = 0, lastFrameSize_ = 0;

@@ -9,6 +9,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -65,16 +66,35 @@ struct DeviceSessionStats {
   uint64_t samples = 0;          // published to the mailbox
   uint64_t garbageBytes = 0;     // bytes skipped by the decoder while resynchronising (plus overlong lines)
   uint64_t crcErrors = 0;        // binary: header + frame CRC failures
-  uint64_t malformedFrames = 0;  // binary: good CRC, bad payload (plus unknown types and versions)
+  uint64_t malformedFrames = 0;  // binary: good CRC, bad payload; HID: unknown report IDs and short reports
+  uint64_t unknownTypes = 0;     // binary: good CRC, message type unknown to this version (skipped)
+  uint64_t unsupportedVersions = 0;  // binary: good CRC, another protocol version (skipped)
+  uint64_t oversizeFrames = 0;   // binary: a header claiming more than 2048 payload bytes
+  uint64_t truncatedFrames = 0;  // binary: a frame that never completed before a timeout (bytes behind it rescanned)
   uint64_t parseErrors = 0;      // lines: malformed, mismatched-count and overlong lines
-  uint64_t samplesDropped = 0;   // binary: sequence numbers missing in the stream
+  uint64_t samplesDropped = 0;   // sequence numbers missing, across timeouts, polls and reconnects (binary, HID)
+  uint64_t duplicateSamples = 0; // binary: a sample repeating the previous sequence number (published once)
+  uint64_t sequenceResets = 0;   // binary, HID: the sequence went backwards without a HELLO
   uint64_t timeouts = 0;         // commands unanswered and streams gone quiet
   uint64_t deviceErrors = 0;     // ERROR messages from the device
-  uint64_t deviceResets = 0;     // unsolicited HELLO while streaming (the device rebooted)
+  uint64_t deviceResets = 0;     // unsolicited HELLO (the device rebooted): the only restart of sequence tracking
+  uint64_t layoutChanges = 0;    // lines: the channel count re-locked while streaming (deviceInfo() follows it)
   uint64_t connections = 0;      // times the state reached Streaming
   uint64_t reconnects = 0;       // of which after a loss
   uint64_t openFailures = 0;
 };
+
+// One counter of DeviceSessionStats with a stable name (as stored in session files) and a label for people.
+struct NamedCounter {
+  const char* name;   // camelCase, e.g. "crcErrors"; never renamed (session files store it)
+  const char* label;  // e.g. "CRC errors"
+  uint64_t value;
+};
+// The fault and link counters of `stats` (not state, bytesReceived, samples or connections), in a fixed order:
+// what `record` prints, `info` shows from the session file and the HUD lists when non-zero.
+std::vector<NamedCounter> namedCounters(const DeviceSessionStats& stats);
+// The label for a counter name, or nullptr for a name this build does not know (a newer writer's).
+const char* counterLabel(std::string_view name);
 
 // Owns one device's I/O thread. Thread-safety: construct, start(), stop() and destroy from one controlling
 // thread; state(), stats(), deviceInfo(), lastError(), banner(), warnings() and waitForState() may be called
@@ -122,8 +142,9 @@ class DeviceSession {
 
   struct Counters {
     std::atomic<uint64_t> bytesReceived{0}, samples{0}, garbageBytes{0}, crcErrors{0}, malformedFrames{0},
-        parseErrors{0}, samplesDropped{0}, timeouts{0}, deviceErrors{0}, deviceResets{0}, connections{0},
-        reconnects{0}, openFailures{0};
+        unknownTypes{0}, unsupportedVersions{0}, oversizeFrames{0}, truncatedFrames{0}, parseErrors{0},
+        samplesDropped{0}, duplicateSamples{0}, sequenceResets{0}, timeouts{0}, deviceErrors{0}, deviceResets{0},
+        layoutChanges{0}, connections{0}, reconnects{0}, openFailures{0};
   };
   Counters counters_;
 

@@ -85,6 +85,28 @@ struct SessionSkeleton {
   bool operator==(const SessionSkeleton&) const = default;
 };
 
+// Device `device` is the armature of device `previous` with a new channel layout (a line-protocol device whose
+// channel count re-locked mid-take), in force from sample index `firstSample` on: one armature, not two.
+struct SessionLayoutChange {
+  uint16_t device = 0;
+  uint16_t previous = 0;
+  uint64_t firstSample = 0;  // number of samples recorded before the change
+  bool operator==(const SessionLayoutChange&) const = default;
+};
+
+// One counter of the device link while recording (names as drivers::namedCounters() gives them: "crcErrors", …).
+struct SessionCounter {
+  std::string name;
+  uint64_t value = 0;
+  bool operator==(const SessionCounter&) const = default;
+};
+// The link's counters for one device, as last recorded (a later COUNTERS record replaces an earlier one).
+struct SessionCounters {
+  uint16_t device = 0;
+  std::vector<SessionCounter> values;
+  bool operator==(const SessionCounters&) const = default;
+};
+
 // What the reader could and could not use. A file cut off by a crash is not an error: it reads back up to its last
 // whole record, and this report says what was lost.
 struct SessionRecovery {
@@ -109,6 +131,8 @@ struct Session {
   std::vector<SessionMarker> markers;
   std::vector<std::string> notes;
   std::optional<SessionSkeleton> skeleton;
+  std::vector<SessionLayoutChange> layoutChanges;
+  std::vector<SessionCounters> counters;  // at most one per device, the last one recorded
   SessionRecovery recovery;
 };
 
@@ -156,6 +180,15 @@ class SessionWriter {
   std::expected<void, std::string> appendMarker(int64_t timeNs, std::string_view label);
   // Buffers a free-text note.
   std::expected<void, std::string> appendNote(std::string_view text);
+  // Declares a new device (DEVICE_INFO) that continues device `previous` with another channel layout (LAYOUT), for
+  // the samples appended from now on; returns its device index. Errors: a bad DeviceInfo, no such device.
+  std::expected<uint16_t, std::string> appendLayoutChange(const DeviceInfo& device, uint16_t previous);
+  // Buffers a LAYOUT record alone: device `device`, already declared, continues device `previous` (< device).
+  // For copying a session whose devices were all declared up front (saveSession).
+  std::expected<void, std::string> appendLayout(uint16_t device, uint16_t previous);
+  // Buffers the link's counters for `device` (COUNTERS); a later call supersedes an earlier one for readers.
+  std::expected<void, std::string> appendCounters(uint16_t device, std::span<const SessionCounter> counters);
+  size_t deviceCount() const { return devices_.size(); }
   // Buffers the BVH skeleton the channels map onto (see SessionSkeleton).
   std::expected<void, std::string> appendSkeleton(const SessionSkeleton& skeleton);
   // Writes everything buffered with one write() (and fdatasync() if syncOnFlush).
