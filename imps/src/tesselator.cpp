@@ -401,6 +401,14 @@ void computeForces(Tesselator::State& s, const Field& field, const TesselatorOpt
   const size_t n = s.size(), chunks = (n + kChunk - 1) / kChunk;
   const float h = o.desiredRadius, iso = field.iso();
   const float q2 = o.queryRadius * o.queryRadius;
+  s.vel.resize(n);
+  s.fuse.resize(n * kMaxFuse);
+  s.fuseCount.resize(n);
+  s.sigmaRate.resize(n);
+  s.energy.resize(n);
+  s.value.resize(n);
+  s.dead.assign(n, 0);
+  if (s.scratch.size() < chunks) s.scratch.resize(chunks);
   s.chunkTransfers.assign(chunks, 0);
   s.chunkBlocked.assign(chunks, 0);
   parallelFor(chunks, o.numThreads, [&](size_t c) {
@@ -526,18 +534,8 @@ void Tesselator::step(const Field& field, const SkeletonCache*) {
   const bool cached = s.cacheValid && s.field == &field && s.fieldStamp != ~0ull && s.cacheStamp == s.fieldStamp &&
                       s.cacheValue.size() == n;
   s.field = &field;
-  s.vel.resize(n);
-  s.fuse.resize(n * kMaxFuse);
-  s.fuseCount.resize(n);
-  s.sigmaRate.resize(n);
-  s.energy.resize(n);
-  s.value.resize(n);
-  s.dead.assign(n, 0);
-  const size_t chunks = (n + kChunk - 1) / kChunk;
-  if (s.scratch.size() < chunks) s.scratch.resize(chunks);
-
   computeForces(s, field, o, cached);
-  for (size_t c = 0; c < chunks; ++c) {
+  for (size_t c = 0; c < s.chunkTransfers.size(); ++c) {
     stats_.transfers += s.chunkTransfers[c];
     stats_.blockedTransfers += s.chunkBlocked[c];
   }
@@ -559,14 +557,26 @@ void Tesselator::frame(const SkeletonCache& skeleton, Mesh& mesh) {
 
 int Tesselator::settle(const SkeletonCache& skeleton, Mesh& mesh, int maxUpdates) {
   std::vector<size_t> counts;
+  const TesselatorOptions& o = options_;
+  auto cancelled = [&] { return o.cancel && o.cancel->load(std::memory_order_relaxed); };
+  stats_.cancelled = false;
   for (int u = 1; u <= maxUpdates; ++u) {
+    if (cancelled()) {
+      mesh.clear();
+      stats_.cancelled = true;
+      return u - 1;
+    }
     update(skeleton);
+    if (o.progress) o.progress(float(u) / float(maxUpdates));
     counts.push_back(stats_.particles);
     if (u >= 20 && u % 5 == 0) {
       const auto [lo, hi] = std::minmax_element(counts.end() - 10, counts.end());
       if (double(*hi - *lo) <= 0.01 * double(*hi)) {
         triangulate(mesh);
-        if (stats_.boundaryEdges == 0) return u;
+        if (stats_.boundaryEdges == 0) {
+          if (o.progress) o.progress(1.0f);
+          return u;
+        }
       }
     }
   }

@@ -160,7 +160,8 @@ void writeMesh(const Tesselator::State& s, const TesselatorOptions& o, Mesh& mes
 // Compute (parallel, fixed partition): per particle its field sample (the cache of the last triangulation when
 // `cached`), stray test (s.dead), ownership transfer to a blend neighbour (counted in s.chunkTransfers /
 // chunkBlocked), its kMaxFuse nearest (s.fuse), repulsion velocity constrained to the surface (s.vel), energy and
-// radius rate. Reads others' positions and radii; writes only particle i's outputs.
+// radius rate. Sizes every per-particle output and clears s.dead first. Reads others' positions and radii; writes
+// only particle i's outputs.
 void computeForces(Tesselator::State& s, const Field& field, const TesselatorOptions& o, bool cached);
 // Integration (parallel): the clamped step along s.vel and the radius rate, then one Newton step back onto the
 // surface along the compute phase's gradient; particles carried off the surface are marked dead.
