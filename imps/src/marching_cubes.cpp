@@ -1,5 +1,6 @@
-// Marching Cubes over blocks of 8^3 cells: bin primitives to blocks, skip blocks by field bounds, sample, find edge
-// vertices, triangulate from a face-consistent case table, concatenate in block order.
+// Marching Cubes over blocks of 8^3 cells, as a list of named passes (marching_cubes_passes.h): grid, bin primitives,
+// thin features, then per block cull, sample, classify, edge roots and shading; number vertices, triangulate from a
+// face-consistent case table, gather in block order.
 // Based on: Lorensen & Cline 1987; Nielson & Hamann 1991 (asymptotic decider).
 #include "imps/marching_cubes.h"
 
@@ -15,21 +16,10 @@
 
 #include "imps/check.h"
 #include "imps/parallel.h"
+#include "marching_cubes_passes.h"
 
-namespace imps {
+namespace imps::mc {
 namespace {
-
-constexpr int kBlock = 8;                          // cells per block side
-constexpr int kBlockVerts = kBlock + 1;            // samples per block side
-constexpr int kBlockSamples = kBlockVerts * kBlockVerts * kBlockVerts;
-constexpr int kBlockEdges = 3 * kBlock * kBlock * kBlock;  // edges owned by a block (start vertex in [0, B)^3)
-static_assert(kBlockEdges <= INT16_MAX, "a block's local vertex indices fit BlockResult::edgeVertex");
-constexpr uint32_t kCellBits = (1u << kBlock) - 1;  // the cells (or owned edges) of one row, as bits
-constexpr int kCentre = 12;                        // table code of a cell's first loop-centre vertex
-constexpr uint32_t kProvisional = 0x80000000u;     // triangle index of a centre vertex before final numbering
-
-inline int sampleIndex(int i, int j, int k) { return i + kBlockVerts * (j + kBlockVerts * k); }
-inline int ownedEdgeIndex(int axis, int i, int j, int k) { return axis * kBlock * kBlock * kBlock + i + kBlock * (j + kBlock * k); }
 
 // ---- The case table ------------------------------------------------------------------------------------------
 // Corners: c = x | y << 1 | z << 2. Edge e = axis * 4 + m, starting at the corner with that axis' bit clear, m the
@@ -250,27 +240,140 @@ inline float lnPositive(float x) {
   return s * series + float(e) * 0.69314718f;
 }
 
-// ---- Grid and blocks -----------------------------------------------------------------------------------------
 
-struct Grid {
-  glm::vec3 origin{0.0f}, cell{1.0f};
-  glm::ivec3 cells{0};   // multiple of kBlock
-  glm::ivec3 blocks{0};
-  glm::vec3 vertex(int i, int j, int k) const {
-    return {origin.x + float(i) * cell.x, origin.y + float(j) * cell.y, origin.z + float(k) * cell.z};
+// Skeleton points of primitive p at spacing <= step.
+void skeletonPoints(const Primitive& p, float step, std::vector<glm::vec3>& out) {
+  out.clear();
+  glm::vec3 a = p.center, b = p.center;
+  if (p.kind == PrimitiveKind::LineSeg) {
+    a = p.p1;
+    b = p.p2;
+  } else if (p.kind == PrimitiveKind::Ellipsoid) {
+    const int major = p.radii.x >= p.radii.y && p.radii.x >= p.radii.z ? 0 : p.radii.y >= p.radii.z ? 1 : 2;
+    const float minor = std::min({p.radii.x, p.radii.y, p.radii.z});
+    glm::vec3 axis(0.0f);
+    axis[major] = p.radii[major] - minor;
+    axis = p.rotation * axis;
+    a = p.center - axis;
+    b = p.center + axis;
   }
-  glm::ivec3 verts() const { return cells + 1; }
-  size_t blockIndex(int bx, int by, int bz) const { return size_t(bx) + size_t(blocks.x) * (size_t(by) + size_t(blocks.y) * size_t(bz)); }
-  Box blockBox(int bx, int by, int bz) const {
-    Box b;
-    b.lo = vertex(bx * kBlock, by * kBlock, bz * kBlock);
-    b.hi = vertex((bx + 1) * kBlock, (by + 1) * kBlock, (bz + 1) * kBlock);
-    return b;
+  const int n = std::max(1, int(std::ceil(glm::length(b - a) / step)));
+  for (int s = 0; s <= n; ++s) out.push_back(a + (b - a) * (float(s) / float(n)));
+}
+
+// Whether options.cancel is set (relaxed: a late view only costs one more block).
+bool cancelled(const MarchingCubesOptions& o) { return o.cancel && o.cancel->load(std::memory_order_relaxed); }
+
+// The mean of a loop-centre vertex's loop, moved onto the surface by up to three Newton steps.
+FieldSample centreVertex(const Field& field, glm::vec3 mean, FieldScratch& scratch, glm::vec3& x) {
+  const float iso = field.iso();
+  x = mean;
+  FieldSample fs = field.sample(x, scratch);
+  for (int step = 0; step < 3; ++step) {
+    const float g2 = glm::dot(fs.gradient, fs.gradient);
+    if (g2 <= 0.0f) break;
+    x -= (fs.value - iso) / g2 * fs.gradient;
+    fs = field.sample(x, scratch);
   }
-  int64_t vertexKey(int i, int j, int k) const {
-    return int64_t(i) + int64_t(verts().x) * (int64_t(j) + int64_t(verts().y) * int64_t(k));
+  return fs;
+}
+
+// The faces of cell (i, j, k) (case code cs) whose inside corners are joined, as bits: each ambiguous face decided
+// by its bilinear saddle value (the asymptotic decider), from the face's four samples only.
+int joinedFaces(const CaseTable& table, const BlockResult& r, int i, int j, int k, int cs, float iso) {
+  int joined = 0;
+  const uint8_t ambiguous = table.ambiguousFaces[size_t(cs)];
+  if (!ambiguous) return 0;
+  float f[8];
+  for (int c = 0; c < 8; ++c) f[c] = r.samples[sampleIndex(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1))];
+  for (int face = 0; face < 6; ++face) {
+    if (!((ambiguous >> face) & 1)) continue;
+    const auto& cc = table.faces[size_t(face)].canonical;
+    const float a = f[cc[0]] - iso, bb = f[cc[1]] - iso, c2 = f[cc[2]] - iso, d = f[cc[3]] - iso;
+    // Bilinear saddle value: inside corners are joined when it is inside.
+    const float denom = a + c2 - bb - d;
+    const float saddle = denom != 0.0f ? (a * c2 - bb * d) / denom : 0.0f;
+    if (saddle >= 0.0f) joined |= 1 << face;
+  }
+  return joined;
+}
+
+// The block owning a cube edge of one of block b's cells, and the edge vertex's local number in it.
+struct EdgeRef {
+  const BlockResult* owner;
+  uint32_t local;
+};
+
+// Resolves the cube edges of block b's cells to their vertices (the block itself or a +x, +y, +z neighbour).
+struct EdgeResolver {
+  const CaseTable& table;
+  const Grid& g;
+  const std::vector<BlockResult>& blocks;
+  const BlockResult& r;
+  glm::ivec3 block;
+
+  // Cell (i, j, k)'s cube edge e, wherever it is owned.
+  EdgeRef any(int i, int j, int k, int e) const {
+    const int corner = table.edgeStartCorner[size_t(e)], axis = e / 4;
+    const int vi = i + (corner & 1), vj = j + ((corner >> 1) & 1), vk = k + ((corner >> 2) & 1);
+    const int ox = vi / kBlock, oy = vj / kBlock, oz = vk / kBlock;  // 1 on the far faces: the next block owns it
+    const BlockResult& owner = (ox | oy | oz) ? blocks[g.blockIndex(block.x + ox, block.y + oy, block.z + oz)] : r;
+    IMPS_DCHECK(owner.hasSurface);
+    const int32_t local = owner.edgeVertex[size_t(ownedEdgeIndex(axis, vi - ox * kBlock, vj - oy * kBlock,
+                                                                 vk - oz * kBlock))];
+    IMPS_DCHECK_GE(local, 0);
+    return {&owner, uint32_t(local)};
+  }
+  // The same for a cell off the block's far faces (every edge owned by this block): a table offset finds it.
+  uint32_t interior(uint32_t cellIndex, int e) const {
+    const int32_t local = r.edgeVertex[size_t(int(cellIndex) + table.ownedEdgeOffset[size_t(e)])];
+    IMPS_DCHECK_GE(local, 0);
+    return uint32_t(local);
+  }
+  EdgeRef of(uint32_t cellIndex, bool inside, int i, int j, int k, int e) const {
+    return inside ? EdgeRef{&r, interior(cellIndex, e)} : any(i, j, k, e);
   }
 };
+
+// Appends cell `cell`'s loop-centre vertices (table entry entryIndex) to r, their provisional indices to centreIndex.
+// The field is prepared (block b's candidates) the first time one is needed.
+void centreVertices(const Field& field, const MarchingCubesOptions& options, const EdgeResolver& edges,
+                    uint32_t cell, size_t entryIndex, std::span<const uint32_t> candidates, bool& prepared,
+                    FieldScratch& scratch, BlockResult& r, uint32_t (&centreIndex)[2]) {
+  const CaseTable& table = edges.table;
+  const auto& entry = table.entries[entryIndex];
+  const uint32_t index = cell & 0xFFFFu;
+  const int i = int(index) % kBlock, j = int(index) / kBlock % kBlock, k = int(index) / (kBlock * kBlock);
+  const bool inside = i < kBlock - 1 && j < kBlock - 1 && k < kBlock - 1;
+  const int centres = table.centreCount[entryIndex];
+  for (int centre = 0; centre < centres; ++centre) {
+    glm::vec3 sum(0.0f);
+    int count = 0;
+    for (int t = 0; t < entry[0]; ++t) {
+      if (entry[size_t(1 + 3 * t)] != kCentre + centre) continue;
+      const auto [owner, local] = edges.of(index, inside, i, j, k, entry[size_t(2 + 3 * t)]);
+      sum += glm::vec3(owner->positions[3 * local], owner->positions[3 * local + 1], owner->positions[3 * local + 2]);
+      ++count;
+    }
+    if (count == 0) break;
+    if (!prepared) {
+      field.prepare(candidates, scratch);
+      prepared = true;
+    }
+    glm::vec3 x;
+    const FieldSample fs = centreVertex(field, sum / float(count), scratch, x);
+    centreIndex[centre] = kProvisional | uint32_t(r.centrePositions.size() / 3);
+    r.centrePositions.insert(r.centrePositions.end(), {x.x, x.y, x.z});
+    const float len = glm::length(fs.gradient);
+    const glm::vec3 n = len > 0.0f ? -fs.gradient / len : glm::vec3(0, 0, 1);
+    if (options.computeNormals) r.centreNormals.insert(r.centreNormals.end(), {n.x, n.y, n.z});
+    if (options.computeColors) r.centreColors.insert(r.centreColors.end(), {fs.color.x, fs.color.y, fs.color.z});
+  }
+}
+
+}  // namespace
+
+// ---- 1. Grid -------------------------------------------------------------------------------------------------
 
 // The cell size and the cells needed along each axis (one cell of margin on each side so no surface touches the
 // grid boundary, rounded up to whole blocks), counted in floating point so that no cell size overflows an int; or
@@ -319,85 +422,57 @@ Grid makeGrid(const Field& field, const MarchingCubesOptions& o) {
   return g;
 }
 
-// A grid vertex moved onto a skeleton point.
-struct Snap {
-  int64_t key;
-  glm::vec3 position;
-  float value;
-};
-
-struct BlockResult {
-  bool sampled = false, hasSurface = false;
-  std::vector<float> samples;                   // kBlockSamples
-  std::vector<int16_t> edgeVertex;              // kBlockEdges: local vertex index or -1 (16 bits: half the cache
-                                                // lines for the triangles' lookups, often from the other core)
-  std::vector<uint32_t> cells;                  // surface cells: index i + B (j + B k), case code << 16
-  std::vector<float> positions, normals, colors;
-  std::vector<uint32_t> triangles;              // global indices (centre vertices provisional until step 6)
-  std::vector<float> centrePositions, centreNormals, centreColors;  // loop-centre vertices of this block
-  std::vector<std::pair<int, glm::vec3>> moved;  // sample index -> moved position
-  uint32_t base = 0;
-};
-
-// Root finding state of one crossing edge: the bracket [ta, tb] along pa -> pb with transformed values ga, gb.
-struct EdgeRoot {
-  glm::vec3 pa, pb;
-  float ta = 0.0f, tb = 1.0f, ga = 0.0f, gb = 0.0f, t = 0.0f, tolerance = 0.0f;
-  int side = 0, iterations = 0;
-};
-
-}  // namespace
-
-struct MarchingCubes::State {
-  std::vector<BlockResult> blocks;
-  std::vector<uint32_t> binOffsets, binMembers;
-  std::vector<uint32_t> work;  // the blocks a parallel phase visits
-};
-
-MarchingCubes::MarchingCubes() : state_(std::make_unique<State>()) {}
-MarchingCubes::~MarchingCubes() = default;
-
-std::expected<glm::ivec3, std::string> planGrid(const Field& field, const MarchingCubesOptions& options) {
-  const GridPlan p = planGridCells(field, options);
-  if (!p.error.empty()) return std::unexpected(p.error);
-  return glm::ivec3(p.cells);
+BlockAxes::BlockAxes(const Grid& g, glm::ivec3 block) {
+  for (int v = 0; v < kBlockVerts; ++v) {
+    const glm::vec3 p = g.vertex(block.x * kBlock + v, block.y * kBlock + v, block.z * kBlock + v);
+    xs[size_t(v)] = p.x;
+    ys[size_t(v)] = p.y;
+    zs[size_t(v)] = p.z;
+  }
 }
 
-Mesh polygonize(const Field& field, const MarchingCubesOptions& options, MarchingCubesStats* stats) {
-  MarchingCubes mc;
-  Mesh mesh;
-  mc.polygonize(field, options, mesh, stats);
-  return mesh;
+// ---- 2. Bin primitives ---------------------------------------------------------------------------------------
+
+void binPrimitives(const Field& field, const Grid& g, Bins& bins) {
+  const size_t blockCount = g.blockCount();
+  bins.offsets.assign(blockCount + 1, 0);
+  auto blockRange = [&](const Box& b, glm::ivec3& lo, glm::ivec3& hi) {
+    lo = glm::clamp(glm::ivec3(glm::floor((b.lo - g.cell - g.origin) / (g.cell * float(kBlock)))), glm::ivec3(0),
+                    g.blocks - 1);
+    hi = glm::clamp(glm::ivec3(glm::floor((b.hi + g.cell - g.origin) / (g.cell * float(kBlock)))), glm::ivec3(0),
+                    g.blocks - 1);
+  };
+  // Two passes over the same ranges: count, then (after the prefix sum) fill.
+  for (int pass = 0; pass < 2; ++pass) {
+    if (pass == 1) {
+      for (size_t b = 0; b < blockCount; ++b) bins.offsets[b + 1] += bins.offsets[b];
+      bins.members.resize(bins.offsets[blockCount]);
+      bins.cursor.assign(bins.offsets.begin(), bins.offsets.end() - 1);
+    }
+    for (size_t i = 0; i < field.size() && blockCount > 0; ++i) {
+      glm::ivec3 lo, hi;
+      blockRange(field.supportBox(i), lo, hi);
+      for (int z = lo.z; z <= hi.z; ++z)
+        for (int y = lo.y; y <= hi.y; ++y)
+          for (int x = lo.x; x <= hi.x; ++x) {
+            const size_t b = g.blockIndex(x, y, z);
+            if (pass == 0) ++bins.offsets[b + 1];
+            else bins.members[bins.cursor[b]++] = uint32_t(i);
+          }
+    }
+  }
 }
+
+// ---- 3. Thin features ----------------------------------------------------------------------------------------
 
 namespace {
 
-// Skeleton points of primitive i at spacing <= step.
-void skeletonPoints(const Primitive& p, float step, std::vector<glm::vec3>& out) {
-  out.clear();
-  glm::vec3 a = p.center, b = p.center;
-  if (p.kind == PrimitiveKind::LineSeg) {
-    a = p.p1;
-    b = p.p2;
-  } else if (p.kind == PrimitiveKind::Ellipsoid) {
-    const int major = p.radii.x >= p.radii.y && p.radii.x >= p.radii.z ? 0 : p.radii.y >= p.radii.z ? 1 : 2;
-    const float minor = std::min({p.radii.x, p.radii.y, p.radii.z});
-    glm::vec3 axis(0.0f);
-    axis[major] = p.radii[major] - minor;
-    axis = p.rotation * axis;
-    a = p.center - axis;
-    b = p.center + axis;
-  }
-  const int n = std::max(1, int(std::ceil(glm::length(b - a) / step)));
-  for (int s = 0; s <= n; ++s) out.push_back(a + (b - a) * (float(s) / float(n)));
-}
-
-std::vector<Snap> thinFeatureSnaps(const Field& field, const Grid& g) {
-  std::vector<Snap> snaps;
+// The grid vertices moved onto skeleton points, one per vertex (the deepest point wins), sorted by key.
+void thinFeatureSnaps(const Field& field, const Grid& g, std::vector<glm::vec3>& points, FieldScratch& scratch,
+                      std::vector<Snap>& snaps) {
+  snaps.clear();
   const float iso = field.iso();
   const float step = 0.5f * std::min({g.cell.x, g.cell.y, g.cell.z});
-  std::vector<glm::vec3> points;
-  FieldScratch scratch;
   auto nearest = [&](const glm::vec3& p) { return glm::ivec3(glm::round((p - g.origin) / g.cell)); };
   auto valueAt = [&](const glm::vec3& x) { return field.value(x, scratch); };
   auto consider = [&](const glm::ivec3& v, const glm::vec3& p, float fp) {
@@ -449,72 +524,24 @@ std::vector<Snap> thinFeatureSnaps(const Field& field, const Grid& g) {
       previousValue = fp;
     }
   }
-  // One snap per vertex: the deepest skeleton point wins.
   std::sort(snaps.begin(), snaps.end(), [](const Snap& a, const Snap& b) {
     return a.key != b.key ? a.key < b.key : a.value > b.value;
   });
   snaps.erase(std::unique(snaps.begin(), snaps.end(), [](const Snap& a, const Snap& b) { return a.key == b.key; }),
               snaps.end());
-  return snaps;
 }
 
-}  // namespace
-
-void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& options, Mesh& out,
-                               MarchingCubesStats* stats) {
-  const auto start = std::chrono::steady_clock::now();
-  auto lap = [last = start]() mutable {
-    const auto now = std::chrono::steady_clock::now();
-    const double ms = std::chrono::duration<double, std::milli>(now - last).count();
-    last = now;
-    return ms;
-  };
-  double phaseMs[5] = {};
-  out.clear();
-  const CaseTable& table = caseTable();
-  const Grid g = makeGrid(field, options);
-  const float iso = field.iso();
-  const size_t blockCount = size_t(g.blocks.x) * size_t(g.blocks.y) * size_t(g.blocks.z);
-  State& st = *state_;
-  st.blocks.resize(blockCount);
-
-  // 1. Bin primitives into the blocks their support boxes overlap (grown by a cell for moved vertices).
-  st.binOffsets.assign(blockCount + 1, 0);
-  auto blockRange = [&](const Box& b, glm::ivec3& lo, glm::ivec3& hi) {
-    lo = glm::clamp(glm::ivec3(glm::floor((b.lo - g.cell - g.origin) / (g.cell * float(kBlock)))), glm::ivec3(0), g.blocks - 1);
-    hi = glm::clamp(glm::ivec3(glm::floor((b.hi + g.cell - g.origin) / (g.cell * float(kBlock)))), glm::ivec3(0), g.blocks - 1);
-  };
-  for (int pass = 0; pass < 2; ++pass) {
-    std::vector<uint32_t> cursor;
-    if (pass == 1) {
-      for (size_t b = 0; b < blockCount; ++b) st.binOffsets[b + 1] += st.binOffsets[b];
-      st.binMembers.resize(st.binOffsets[blockCount]);
-      cursor.assign(st.binOffsets.begin(), st.binOffsets.end() - 1);
-    }
-    for (size_t i = 0; i < field.size() && blockCount > 0; ++i) {
-      glm::ivec3 lo, hi;
-      blockRange(field.supportBox(i), lo, hi);
-      for (int z = lo.z; z <= hi.z; ++z)
-        for (int y = lo.y; y <= hi.y; ++y)
-          for (int x = lo.x; x <= hi.x; ++x) {
-            const size_t b = g.blockIndex(x, y, z);
-            if (pass == 0) ++st.binOffsets[b + 1];
-            else st.binMembers[cursor[b]++] = uint32_t(i);
-          }
-    }
-  }
-
-  phaseMs[0] = lap();
-  // 2. Thin features: grid vertices moved onto skeleton points. Blocks holding one must be sampled.
-  const std::vector<Snap> snaps = options.preserveThinFeatures && blockCount > 0 ? thinFeatureSnaps(field, g)
-                                                                                 : std::vector<Snap>{};
-  std::vector<uint8_t> forced(blockCount, 0);
+// forced[b] = 1 for every block whose closed vertex range holds a snapped vertex.
+void markForcedBlocks(std::span<const Snap> snaps, const Grid& g, std::vector<uint8_t>& forced) {
+  forced.assign(g.blockCount(), 0);
   for (const Snap& s : snaps) {
-    const int64_t vx = s.key % g.verts().x, vy = (s.key / g.verts().x) % g.verts().y, vz = s.key / (int64_t(g.verts().x) * g.verts().y);
+    const int64_t vx = s.key % g.verts().x, vy = (s.key / g.verts().x) % g.verts().y,
+                  vz = s.key / (int64_t(g.verts().x) * g.verts().y);
     for (int dz = -1; dz <= 0; ++dz)
       for (int dy = -1; dy <= 0; ++dy)
         for (int dx = -1; dx <= 0; ++dx) {
-          // The block whose closed vertex range holds (vx, vy, vz): floor(v / B) and, on a block boundary, the one below.
+          // The block whose closed vertex range holds (vx, vy, vz): floor(v / B) and, on a block boundary, the one
+          // below.
           const int64_t bx = (vx + dx * (vx % kBlock == 0 ? 1 : 0)) / kBlock;
           const int64_t by = (vy + dy * (vy % kBlock == 0 ? 1 : 0)) / kBlock;
           const int64_t bz = (vz + dz * (vz % kBlock == 0 ? 1 : 0)) / kBlock;
@@ -522,390 +549,347 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
             forced[g.blockIndex(int(bx), int(by), int(bz))] = 1;
         }
   }
+}
 
-  phaseMs[1] = lap();
-  // 3. Per block: bound test, samples, owned edge vertices.
-  const int threads = options.threads;
-  const bool logSpace = field.blend().kind == BlendKind::Exponential;
-  const float logIso = lnPositive(iso);
-  // Root finding runs on a distance-like g for the exponential blend, so that the first interpolation is already
-  // near the root. One term is F = exp(B (d - 1)) with d the squared normalised distance to the skeleton, so
-  // d = 1 + ln F / B and g = (ln F - ln iso) / (sqrt(d_iso) + sqrt(d)) = B (sqrt(d) - sqrt(d_iso)) is linear in the
-  // distance (ln F alone is quadratic in it). Written as a quotient, g has exactly the sign of ln F - ln iso and
-  // its full precision near the root; the floor only guards the denominator where both roots are 0 (F and iso both
-  // at least exp(-B)).
-  // F is exactly 0 beyond every support; clamping at the smallest non-zero term keeps ln F finite.
-  const float invB = logSpace ? 1.0f / field.blend().defaultParam : 0.0f;
-  const float rootIso = std::sqrt(std::max(1.0f + logIso * invB, 0.0f));
-  // (Captured by value: a reference could alias the values it transforms, which would keep its loops scalar.)
-  auto transform = [logSpace, logIso, invB, rootIso, iso](float v) {
-    if (!logSpace) return v - iso;
-    const float lnF = lnPositive(std::max(v, kExponentialCutoff));
-    return (lnF - logIso) / std::max(rootIso + std::sqrt(std::max(1.0f + lnF * invB, 0.0f)), 1e-6f);
-  };
-  // Only blocks with candidates (or thin-feature vertices) can hold surface; spreading just those over the threads
-  // balances the load (surface blocks cluster in index order).
-  std::vector<uint32_t>& work = st.work;
-  work.clear();
-  for (size_t b = 0; b < blockCount; ++b) {
-    if (st.binOffsets[b + 1] > st.binOffsets[b] || forced[b]) work.push_back(uint32_t(b));
-    else st.blocks[b].sampled = st.blocks[b].hasSurface = false;
+}  // namespace
+
+void findThinFeatures(const Field& field, const Grid& g, MarchingCubes::State& st) {
+  thinFeatureSnaps(field, g, st.skeleton, st.workers.at(0).field, st.snaps);
+  markForcedBlocks(st.snaps, g, st.forced);
+}
+
+// ---- 4. Per block: cull, sample, classify, edge roots, shading -----------------------------------------------
+
+bool cullBlock(const Field& field, const Grid& g, size_t b, std::span<const uint32_t> cand, bool forced,
+               WorkerScratch& ws) {
+  if (cand.empty() && !forced) return false;
+  if (forced) {
+    field.prepare(cand, ws.field);
+    return true;
   }
-  parallelFor(work.size(), threads, [&](size_t w) {
-    thread_local FieldScratch scratch;
-    const size_t b = work[w];
-    BlockResult& r = st.blocks[b];
-    r.sampled = r.hasSurface = false;
-    r.positions.clear();
-    r.normals.clear();
-    r.colors.clear();
-    r.triangles.clear();
-    r.moved.clear();
-    const int bx = int(b % size_t(g.blocks.x)), by = int((b / size_t(g.blocks.x)) % size_t(g.blocks.y)),
-              bz = int(b / (size_t(g.blocks.x) * size_t(g.blocks.y)));
-    const Box box = g.blockBox(bx, by, bz);
-    const std::span<const uint32_t> cand(st.binMembers.data() + st.binOffsets[b], st.binOffsets[b + 1] - st.binOffsets[b]);
-    if (cand.empty() && !forced[b]) return;
-    if (forced[b]) {
-      field.prepare(cand, scratch);
-    } else {
-      // Binning used support *boxes*; drop the candidates whose support cannot reach this block at all. Their terms
-      // are exactly zero here, so every value stays bit-identical (x + 0 = x) with fewer primitives to evaluate.
-      thread_local std::vector<uint32_t> reaching;
-      thread_local std::vector<float> reachingDistances;  // each reaching candidate's minDistance() to the block
-      reaching.clear();
-      reachingDistances.clear();
-      // For the additive blends, the sum of every reaching candidate's largest term in the block bounds each blend
-      // set's sum from above (float addition of non-negative terms is monotone): most empty blocks stop here,
-      // before the blend sets are prepared for the tighter upperBound().
-      float largestTermsSum = 0.0f;
-      for (uint32_t i : cand) {
-        const Primitive& p = field.primitive(i);
-        const float skip = field.supportDistance(i) * (1.0f + 1e-3f) + 1e-3f;
-        // A line segment's cheap bound (never above the tight one) already puts most candidates beyond the support;
-        // only the others pay for the refinement. (The other kinds have only the one bound.)
-        float d = p.minDistance(box, /*tight=*/false);
-        if (d > skip) continue;
-        if (p.kind == PrimitiveKind::LineSeg) d = p.minDistance(box);
-        if (d > skip) continue;
-        reaching.push_back(i);
-        reachingDistances.push_back(d);
-        largestTermsSum += field.blend().term(d, field.param(i));
+  const glm::ivec3 bc = g.blockCoords(b);
+  const Box box = g.blockBox(bc.x, bc.y, bc.z);
+  const float iso = field.iso();
+  // Binning used support *boxes*; drop the candidates whose support cannot reach this block at all. Their terms
+  // are exactly zero here, so every value stays bit-identical (x + 0 = x) with fewer primitives to evaluate.
+  ws.reaching.clear();
+  ws.reachingDistances.clear();
+  // For the additive blends, the sum of every reaching candidate's largest term in the block bounds each blend
+  // set's sum from above (float addition of non-negative terms is monotone): most empty blocks stop here,
+  // before the blend sets are prepared for the tighter upperBound().
+  float largestTermsSum = 0.0f;
+  for (uint32_t i : cand) {
+    const Primitive& p = field.primitive(i);
+    const float skip = field.supportDistance(i) * (1.0f + 1e-3f) + 1e-3f;
+    // A line segment's cheap bound (never above the tight one) already puts most candidates beyond the support;
+    // only the others pay for the refinement. (The other kinds have only the one bound.)
+    float d = p.minDistance(box, /*tight=*/false);
+    if (d > skip) continue;
+    if (p.kind == PrimitiveKind::LineSeg) d = p.minDistance(box);
+    if (d > skip) continue;
+    ws.reaching.push_back(i);
+    ws.reachingDistances.push_back(d);
+    largestTermsSum += field.blend().term(d, field.param(i));
+  }
+  if (ws.reaching.empty()) return false;
+  if (field.blend().additive() && largestTermsSum < iso * (1.0f - 1e-3f)) return false;
+  field.prepare(ws.reaching, ws.field);
+  if (field.upperBound(ws.reachingDistances, ws.field) < iso * (1.0f - 1e-3f)) return false;
+  if (field.lowerBound(box, ws.field) > iso * (1.0f + 1e-3f)) return false;
+  return true;
+}
+
+void sampleBlock(const Field& field, const Grid& g, glm::ivec3 block, const BlockAxes& axes,
+                 std::span<const Snap> snaps, BlockResult& r, WorkerScratch& ws) {
+  r.samples.resize(kBlockSamples);
+  field.latticeValues(axes.xs, axes.ys, axes.zs, r.samples, ws.field);
+  if (snaps.empty()) return;
+  for (int k = 0; k < kBlockVerts; ++k)
+    for (int j = 0; j < kBlockVerts; ++j) {
+      const int64_t rowKey = g.vertexKey(block.x * kBlock, block.y * kBlock + j, block.z * kBlock + k);
+      auto it = std::lower_bound(snaps.begin(), snaps.end(), rowKey,
+                                 [](const Snap& s, int64_t key) { return s.key < key; });
+      for (; it != snaps.end() && it->key <= rowKey + kBlock; ++it) {
+        const int s = sampleIndex(int(it->key - rowKey), j, k);
+        r.samples[size_t(s)] = it->value;
+        r.moved.emplace_back(s, it->position);
       }
-      if (reaching.empty()) return;
-      if (field.blend().additive() && largestTermsSum < iso * (1.0f - 1e-3f)) return;
-      field.prepare(reaching, scratch);
-      if (field.upperBound(reachingDistances, scratch) < iso * (1.0f - 1e-3f)) return;
-      if (field.lowerBound(box, scratch) > iso * (1.0f + 1e-3f)) return;
     }
-    r.sampled = true;
-    std::array<float, kBlockVerts> xs, ys, zs;  // the samples' coordinates along each axis (g.vertex()'s)
-    for (int v = 0; v < kBlockVerts; ++v) {
-      const glm::vec3 p = g.vertex(bx * kBlock + v, by * kBlock + v, bz * kBlock + v);
-      xs[size_t(v)] = p.x;
-      ys[size_t(v)] = p.y;
-      zs[size_t(v)] = p.z;
-    }
-    r.samples.resize(kBlockSamples);
-    field.latticeValues(xs, ys, zs, r.samples, scratch);
-    if (!snaps.empty()) {
-      for (int k = 0; k < kBlockVerts; ++k)
-        for (int j = 0; j < kBlockVerts; ++j) {
-          const int64_t rowKey = g.vertexKey(bx * kBlock, by * kBlock + j, bz * kBlock + k);
-          auto it = std::lower_bound(snaps.begin(), snaps.end(), rowKey, [](const Snap& s, int64_t key) { return s.key < key; });
-          for (; it != snaps.end() && it->key <= rowKey + kBlock; ++it) {
-            const int s = sampleIndex(int(it->key - rowKey), j, k);
-            r.samples[s] = it->value;
-            r.moved.emplace_back(s, it->position);
-          }
-        }
-    }
+}
 
-    // Inside bits, one 9-bit mask per row of samples: rows[j + 9k] bit i is sample (i, j, k).
-    // The comparisons run as one vectorised pass into bytes (0 or 1); a row's first eight bytes, read as a
-    // little-endian word, become bits by one multiplication: byte i (bit 8i) times 2^(56 - 7i) lands on bit 56 + i,
-    // and no two products share a bit, so nothing carries.
-    static_assert(std::endian::native == std::endian::little);
-    std::array<uint8_t, kBlockSamples + 7> inside{};  // padded so the last row's 8-byte read stays inside
-    for (int s = 0; s < kBlockSamples; ++s) inside[size_t(s)] = r.samples[size_t(s)] >= iso;
-    std::array<uint32_t, kBlockVerts * kBlockVerts> rows;
-    for (int row = 0; row < kBlockVerts * kBlockVerts; ++row) {
-      uint64_t bytes;
-      std::memcpy(&bytes, inside.data() + row * kBlockVerts, sizeof bytes);
-      rows[size_t(row)] =
-          uint32_t((bytes * 0x0102040810204080ull) >> 56) | uint32_t(inside[size_t(row * kBlockVerts + 8)]) << 8;
-    }
-    auto rowMask = [&](int j, int k) { return rows[size_t(j + kBlockVerts * k)]; };
-    // Sample (i, j, k)'s position, and whether it was moved onto a skeleton point.
-    auto samplePosition = [&](int i, int j, int k, bool& moved) -> glm::vec3 {
-      for (const auto& [s, p] : r.moved)
-        if (s == sampleIndex(i, j, k)) {
-          moved = true;
-          return p;
-        }
-      return {xs[size_t(i)], ys[size_t(j)], zs[size_t(k)]};
-    };
+namespace {
 
-    // Surface cells (case code and cell index) and the crossing edges this block owns, in the order that numbers
-    // their vertices: cells (i, j, k) ascending with i fastest, axes x, y, z within a cell.
-    thread_local std::vector<EdgeRoot> edges;
-    thread_local std::vector<float> ends;  // F at each edge's two ends, then their transformed values
-    edges.clear();
-    ends.clear();
-    r.cells.clear();
-    r.edgeVertex.assign(kBlockEdges, -1);
-    for (int k = 0; k < kBlock; ++k)
-      for (int j = 0; j < kBlock; ++j) {
-        const uint32_t r00 = rowMask(j, k), r10 = rowMask(j + 1, k), r01 = rowMask(j, k + 1), r11 = rowMask(j + 1, k + 1);
-        const uint32_t anyIn = r00 | r10 | r01 | r11, allIn = r00 & r10 & r01 & r11;
-        for (uint32_t mixed = (anyIn | anyIn >> 1) & ~(allIn & allIn >> 1) & kCellBits; mixed != 0; mixed &= mixed - 1) {
-          const int i = std::countr_zero(mixed);
-          const uint32_t cs = ((r00 >> i) & 3u) | ((r10 >> i) & 3u) << 2 | ((r01 >> i) & 3u) << 4 | ((r11 >> i) & 3u) << 6;
-          r.cells.push_back(uint32_t(i + kBlock * (j + kBlock * k)) | cs << 16);
-        }
-        const std::array<uint32_t, 3> crossing = {(r00 ^ r00 >> 1) & kCellBits, (r00 ^ r10) & kCellBits, (r00 ^ r01) & kCellBits};
-        for (uint32_t any = crossing[0] | crossing[1] | crossing[2]; any != 0; any &= any - 1) {
-          const int i = std::countr_zero(any);
-          const int s0 = sampleIndex(i, j, k);
-          for (int axis = 0; axis < 3; ++axis) {
-            if (!((crossing[size_t(axis)] >> i) & 1u)) continue;
-            const int s1 = s0 + (axis == 0 ? 1 : axis == 1 ? kBlockVerts : kBlockVerts * kBlockVerts);
-            const float f0 = r.samples[s0], f1 = r.samples[s1];
-            r.edgeVertex[ownedEdgeIndex(axis, i, j, k)] = int16_t(edges.size());
-            EdgeRoot e;
-            bool moved = false;
-            e.pa = samplePosition(i, j, k, moved);
-            e.pb = samplePosition(i + (axis == 0), j + (axis == 1), k + (axis == 2), moved);
-            ends.push_back(f0);
-            ends.push_back(f1);
-            // Edges from a vertex moved onto a thin limb span a much steeper field: give them more steps.
-            e.iterations = moved ? std::max(options.rootIterations, 10) : options.rootIterations;
-            edges.push_back(e);
-          }
-        }
+// Inside bits, one 9-bit mask per row of samples: rows[j + 9k] bit i is sample (i, j, k) >= iso.
+// The comparisons run as one vectorised pass into bytes (0 or 1); a row's first eight bytes, read as a
+// little-endian word, become bits by one multiplication: byte i (bit 8i) times 2^(56 - 7i) lands on bit 56 + i,
+// and no two products share a bit, so nothing carries.
+std::array<uint32_t, kBlockVerts * kBlockVerts> insideRows(std::span<const float> samples, float iso) {
+  static_assert(std::endian::native == std::endian::little);
+  std::array<uint8_t, kBlockSamples + 7> inside{};  // padded so the last row's 8-byte read stays inside
+  for (int s = 0; s < kBlockSamples; ++s) inside[size_t(s)] = samples[size_t(s)] >= iso;
+  std::array<uint32_t, kBlockVerts * kBlockVerts> rows;
+  for (int row = 0; row < kBlockVerts * kBlockVerts; ++row) {
+    uint64_t bytes;
+    std::memcpy(&bytes, inside.data() + row * kBlockVerts, sizeof bytes);
+    rows[size_t(row)] =
+        uint32_t((bytes * 0x0102040810204080ull) >> 56) | uint32_t(inside[size_t(row * kBlockVerts + 8)]) << 8;
+  }
+  return rows;
+}
+
+}  // namespace
+
+bool classifyBlock(float iso, int rootIterations, const BlockAxes& axes, BlockResult& r, WorkerScratch& ws) {
+  const auto rows = insideRows(r.samples, iso);
+  auto rowMask = [&](int j, int k) { return rows[size_t(j + kBlockVerts * k)]; };
+  // Sample (i, j, k)'s position, and whether it was moved onto a skeleton point.
+  auto samplePosition = [&](int i, int j, int k, bool& moved) -> glm::vec3 {
+    for (const auto& [s, p] : r.moved)
+      if (s == sampleIndex(i, j, k)) {
+        moved = true;
+        return p;
       }
-    r.hasSurface = !r.cells.empty();
-    if (!r.hasSurface) return;
-
-    // The ends' transformed values in one vectorised pass, then each edge's first interpolation.
-    for (float& v : ends) v = transform(v);
-    for (size_t q = 0; q < edges.size(); ++q) {
-      EdgeRoot& e = edges[q];
-      e.ga = ends[2 * q];
-      e.gb = ends[2 * q + 1];
-      e.t = e.ga / (e.ga - e.gb);
-      // Scale-free stopping rule: |g| below 5e-4 of its change along the edge puts the vertex within about
-      // 5e-4 of an edge of the root where g is near linear, which the transform makes it.
-      e.tolerance = 5e-4f * std::abs(e.ga - e.gb);
-    }
-
-    // Regula falsi root finding on the true field, every unfinished edge of the block evaluated in one batch per step.
-    thread_local std::vector<uint32_t> active, stillActive;
-    thread_local std::vector<glm::vec3> at;
-    thread_local std::vector<float> values;
-    active.clear();
-    for (uint32_t e = 0; e < edges.size(); ++e)
-      if (edges[e].iterations > 0) active.push_back(e);
-    for (int it = 0; !active.empty(); ++it) {
-      at.resize(active.size());
-      values.resize(active.size());
-      for (size_t q = 0; q < active.size(); ++q) {
-        const EdgeRoot& e = edges[active[q]];
-        at[q] = e.pa + e.t * (e.pb - e.pa);
+    return {axes.xs[size_t(i)], axes.ys[size_t(j)], axes.zs[size_t(k)]};
+  };
+  ws.edges.clear();
+  ws.ends.clear();
+  r.cells.clear();
+  r.edgeVertex.assign(kBlockEdges, -1);
+  for (int k = 0; k < kBlock; ++k)
+    for (int j = 0; j < kBlock; ++j) {
+      const uint32_t r00 = rowMask(j, k), r10 = rowMask(j + 1, k), r01 = rowMask(j, k + 1),
+                     r11 = rowMask(j + 1, k + 1);
+      const uint32_t anyIn = r00 | r10 | r01 | r11, allIn = r00 & r10 & r01 & r11;
+      for (uint32_t mixed = (anyIn | anyIn >> 1) & ~(allIn & allIn >> 1) & kCellBits; mixed != 0;
+           mixed &= mixed - 1) {
+        const int i = std::countr_zero(mixed);
+        const uint32_t cs =
+            ((r00 >> i) & 3u) | ((r10 >> i) & 3u) << 2 | ((r01 >> i) & 3u) << 4 | ((r11 >> i) & 3u) << 6;
+        r.cells.push_back(uint32_t(i + kBlock * (j + kBlock * k)) | cs << 16);
       }
-      field.values(at, values, scratch);
-      for (float& v : values) v = transform(v);  // one vectorised pass
-      stillActive.clear();
-      for (size_t q = 0; q < active.size(); ++q) {
-        EdgeRoot& e = edges[active[q]];
-        const float gt = values[q];
-        if (std::abs(gt) <= e.tolerance) continue;
-        // Anderson-Bjorck: when the same end moves twice in a row, scale the stale end's value by
-        // m = 1 - g(new) / g(old end), or halve it (Illinois) when m <= 0.
-        if ((gt > 0.0f) == (e.ga > 0.0f)) {
-          const float m = 1.0f - gt / e.ga;
-          e.ta = e.t;
-          e.ga = gt;
-          if (e.side == -1) e.gb *= m > 0.0f ? m : 0.5f;
-          e.side = -1;
-        } else {
-          const float m = 1.0f - gt / e.gb;
-          e.tb = e.t;
-          e.gb = gt;
-          if (e.side == 1) e.ga *= m > 0.0f ? m : 0.5f;
-          e.side = 1;
-        }
-        e.t = e.ta + (e.tb - e.ta) * e.ga / (e.ga - e.gb);
-        if (it + 1 < e.iterations) stillActive.push_back(active[q]);
-      }
-      active.swap(stillActive);
-    }
-
-    // Vertices, with normals and colours from one batched evaluation.
-    at.resize(edges.size());
-    for (size_t q = 0; q < edges.size(); ++q) at[q] = edges[q].pa + edges[q].t * (edges[q].pb - edges[q].pa);
-    r.positions.resize(3 * edges.size());
-    for (size_t q = 0; q < edges.size(); ++q) {
-      r.positions[3 * q] = at[q].x;
-      r.positions[3 * q + 1] = at[q].y;
-      r.positions[3 * q + 2] = at[q].z;
-    }
-    if (options.computeNormals || options.computeColors) {
-      thread_local std::vector<FieldSample> fs;
-      fs.resize(edges.size());
-      field.samples(at, fs, scratch);
-      if (options.computeNormals) r.normals.resize(3 * edges.size());
-      if (options.computeColors) r.colors.resize(3 * edges.size());
-      for (size_t q = 0; q < edges.size(); ++q) {
-        const float len = glm::length(fs[q].gradient);
-        const glm::vec3 n = len > 0.0f ? -fs[q].gradient / len
-                                       : glm::normalize(edges[q].pb - edges[q].pa) * (edges[q].ga >= 0.0f ? 1.0f : -1.0f);
-        if (options.computeNormals) {
-          r.normals[3 * q] = n.x;
-          r.normals[3 * q + 1] = n.y;
-          r.normals[3 * q + 2] = n.z;
-        }
-        if (options.computeColors) {
-          r.colors[3 * q] = fs[q].color.x;
-          r.colors[3 * q + 1] = fs[q].color.y;
-          r.colors[3 * q + 2] = fs[q].color.z;
+      const std::array<uint32_t, 3> crossing = {(r00 ^ r00 >> 1) & kCellBits, (r00 ^ r10) & kCellBits,
+                                                (r00 ^ r01) & kCellBits};
+      for (uint32_t any = crossing[0] | crossing[1] | crossing[2]; any != 0; any &= any - 1) {
+        const int i = std::countr_zero(any);
+        const int s0 = sampleIndex(i, j, k);
+        for (int axis = 0; axis < 3; ++axis) {
+          if (!((crossing[size_t(axis)] >> i) & 1u)) continue;
+          const int s1 = s0 + (axis == 0 ? 1 : axis == 1 ? kBlockVerts : kBlockVerts * kBlockVerts);
+          r.edgeVertex[size_t(ownedEdgeIndex(axis, i, j, k))] = int16_t(ws.edges.size());
+          EdgeRoot e;
+          bool moved = false;
+          e.pa = samplePosition(i, j, k, moved);
+          e.pb = samplePosition(i + (axis == 0), j + (axis == 1), k + (axis == 2), moved);
+          ws.ends.push_back(r.samples[size_t(s0)]);
+          ws.ends.push_back(r.samples[size_t(s1)]);
+          // Edges from a vertex moved onto a thin limb span a much steeper field: give them more steps.
+          e.iterations = moved ? std::max(rootIterations, 10) : rootIterations;
+          ws.edges.push_back(e);
         }
       }
     }
-  }, 1);
+  return !r.cells.empty();
+}
 
-  phaseMs[2] = lap();
-  // 4. Global vertex numbering in block order.
+// Root finding runs on a distance-like g for the exponential blend, so that the first interpolation is already
+// near the root. One term is F = exp(B (d - 1)) with d the squared normalised distance to the skeleton, so
+// d = 1 + ln F / B and g = (ln F - ln iso) / (sqrt(d_iso) + sqrt(d)) = B (sqrt(d) - sqrt(d_iso)) is linear in the
+// distance (ln F alone is quadratic in it). Written as a quotient, g has exactly the sign of ln F - ln iso and
+// its full precision near the root; the floor only guards the denominator where both roots are 0 (F and iso both
+// at least exp(-B)). F is exactly 0 beyond every support; clamping at the smallest non-zero term keeps ln F finite.
+RootTransform::RootTransform(const Field& field)
+    : logSpace(field.blend().kind == BlendKind::Exponential), iso(field.iso()), logIso(lnPositive(iso)),
+      invB(logSpace ? 1.0f / field.blend().defaultParam : 0.0f),
+      rootIso(std::sqrt(std::max(1.0f + logIso * invB, 0.0f))) {}
+
+float RootTransform::operator()(float v) const {
+  if (!logSpace) return v - iso;
+  const float lnF = lnPositive(std::max(v, kExponentialCutoff));
+  return (lnF - logIso) / std::max(rootIso + std::sqrt(std::max(1.0f + lnF * invB, 0.0f)), 1e-6f);
+}
+
+void findEdgeRoots(const Field& field, RootTransform tf, WorkerScratch& ws) {
+  // (tf is a by-value copy: a reference could alias the values it transforms, which would keep its loops scalar.)
+  std::vector<EdgeRoot>& edges = ws.edges;
+  // The ends' transformed values in one vectorised pass, then each edge's first interpolation.
+  for (float& v : ws.ends) v = tf(v);
+  for (size_t q = 0; q < edges.size(); ++q) {
+    EdgeRoot& e = edges[q];
+    e.ga = ws.ends[2 * q];
+    e.gb = ws.ends[2 * q + 1];
+    e.t = e.ga / (e.ga - e.gb);
+    // Scale-free stopping rule: |g| below 5e-4 of its change along the edge puts the vertex within about
+    // 5e-4 of an edge of the root where g is near linear, which the transform makes it.
+    e.tolerance = 5e-4f * std::abs(e.ga - e.gb);
+  }
+  // Regula falsi on the true field, every unfinished edge of the block evaluated in one batch per step.
+  ws.active.clear();
+  for (uint32_t e = 0; e < edges.size(); ++e)
+    if (edges[e].iterations > 0) ws.active.push_back(e);
+  for (int it = 0; !ws.active.empty(); ++it) {
+    ws.at.resize(ws.active.size());
+    ws.values.resize(ws.active.size());
+    for (size_t q = 0; q < ws.active.size(); ++q) {
+      const EdgeRoot& e = edges[ws.active[q]];
+      ws.at[q] = e.pa + e.t * (e.pb - e.pa);
+    }
+    field.values(ws.at, ws.values, ws.field);
+    for (float& v : ws.values) v = tf(v);  // one vectorised pass
+    ws.stillActive.clear();
+    for (size_t q = 0; q < ws.active.size(); ++q) {
+      EdgeRoot& e = edges[ws.active[q]];
+      const float gt = ws.values[q];
+      if (std::abs(gt) <= e.tolerance) continue;
+      // Anderson-Bjorck: when the same end moves twice in a row, scale the stale end's value by
+      // m = 1 - g(new) / g(old end), or halve it (Illinois) when m <= 0.
+      if ((gt > 0.0f) == (e.ga > 0.0f)) {
+        const float m = 1.0f - gt / e.ga;
+        e.ta = e.t;
+        e.ga = gt;
+        if (e.side == -1) e.gb *= m > 0.0f ? m : 0.5f;
+        e.side = -1;
+      } else {
+        const float m = 1.0f - gt / e.gb;
+        e.tb = e.t;
+        e.gb = gt;
+        if (e.side == 1) e.ga *= m > 0.0f ? m : 0.5f;
+        e.side = 1;
+      }
+      e.t = e.ta + (e.tb - e.ta) * e.ga / (e.ga - e.gb);
+      if (it + 1 < e.iterations) ws.stillActive.push_back(ws.active[q]);
+    }
+    ws.active.swap(ws.stillActive);
+  }
+}
+
+void shadeEdgeVertices(const Field& field, const MarchingCubesOptions& options, BlockResult& r, WorkerScratch& ws) {
+  const std::vector<EdgeRoot>& edges = ws.edges;
+  ws.at.resize(edges.size());
+  for (size_t q = 0; q < edges.size(); ++q) ws.at[q] = edges[q].pa + edges[q].t * (edges[q].pb - edges[q].pa);
+  r.positions.resize(3 * edges.size());
+  for (size_t q = 0; q < edges.size(); ++q) {
+    r.positions[3 * q] = ws.at[q].x;
+    r.positions[3 * q + 1] = ws.at[q].y;
+    r.positions[3 * q + 2] = ws.at[q].z;
+  }
+  if (!options.computeNormals && !options.computeColors) return;
+  // Normals and colours from one batched evaluation.
+  ws.samples.resize(edges.size());
+  field.samples(ws.at, ws.samples, ws.field);
+  if (options.computeNormals) r.normals.resize(3 * edges.size());
+  if (options.computeColors) r.colors.resize(3 * edges.size());
+  for (size_t q = 0; q < edges.size(); ++q) {
+    const FieldSample& fs = ws.samples[q];
+    const float len = glm::length(fs.gradient);
+    const glm::vec3 n = len > 0.0f ? -fs.gradient / len
+                                   : glm::normalize(edges[q].pb - edges[q].pa) * (edges[q].ga >= 0.0f ? 1.0f : -1.0f);
+    if (options.computeNormals) {
+      r.normals[3 * q] = n.x;
+      r.normals[3 * q + 1] = n.y;
+      r.normals[3 * q + 2] = n.z;
+    }
+    if (options.computeColors) {
+      r.colors[3 * q] = fs.color.x;
+      r.colors[3 * q + 1] = fs.color.y;
+      r.colors[3 * q + 2] = fs.color.z;
+    }
+  }
+}
+
+namespace {
+
+// Passes 4a-4e for block b: whether it was sampled and has surface, its edge vertices.
+void processBlock(const Field& field, const Grid& g, size_t b, const MarchingCubesOptions& options,
+                  RootTransform tf, MarchingCubes::State& st, WorkerScratch& ws) {
+  BlockResult& r = st.blocks[b];
+  r.sampled = r.hasSurface = false;
+  r.positions.clear();
+  r.normals.clear();
+  r.colors.clear();
+  r.triangles.clear();
+  r.moved.clear();
+  if (cancelled(options)) return;
+  if (!cullBlock(field, g, b, st.bins.of(b), st.forced[b] != 0, ws)) return;
+  r.sampled = true;
+  const glm::ivec3 block = g.blockCoords(b);
+  const BlockAxes axes(g, block);
+  sampleBlock(field, g, block, axes, st.snaps, r, ws);
+  r.hasSurface = classifyBlock(field.iso(), options.rootIterations, axes, r, ws);
+  if (!r.hasSurface) return;
+  findEdgeRoots(field, tf, ws);
+  shadeEdgeVertices(field, options, r, ws);
+}
+
+}  // namespace
+
+// ---- 5. Number vertices --------------------------------------------------------------------------------------
+
+uint32_t numberVertices(std::span<BlockResult> blocks, std::vector<uint32_t>& surfaceBlocks) {
   uint32_t total = 0;
-  work.clear();  // now: the blocks with surface
-  for (size_t b = 0; b < blockCount; ++b) {
-    BlockResult& r = st.blocks[b];
+  surfaceBlocks.clear();
+  for (size_t b = 0; b < blocks.size(); ++b) {
+    BlockResult& r = blocks[b];
     r.base = total;
     if (!r.hasSurface) continue;
     total += uint32_t(r.positions.size() / 3);
-    work.push_back(uint32_t(b));
+    surfaceBlocks.push_back(uint32_t(b));
   }
+  return total;
+}
 
-  // 5. Triangles: each cell's case, ambiguous faces decided from their four samples, edges mapped to the owning
-  // block's vertex.
-  parallelFor(work.size(), threads, [&](size_t w) {
-    const size_t b = work[w];
-    BlockResult& r = st.blocks[b];
-    const int bx = int(b % size_t(g.blocks.x)), by = int((b / size_t(g.blocks.x)) % size_t(g.blocks.y)),
-              bz = int(b / (size_t(g.blocks.x) * size_t(g.blocks.y)));
-    r.centrePositions.clear();
-    r.centreNormals.clear();
-    r.centreColors.clear();
-    thread_local FieldScratch scratch;
-    bool prepared = false;
-    // The block owning cell (i, j, k)'s cube edge e, and the vertex's index in it.
-    struct EdgeRef {
-      const BlockResult* owner;
-      uint32_t local;
-    };
-    auto edgeVertex = [&](int i, int j, int k, int e) -> EdgeRef {
-      const int corner = table.edgeStartCorner[size_t(e)], axis = e / 4;
-      const int vi = i + (corner & 1), vj = j + ((corner >> 1) & 1), vk = k + ((corner >> 2) & 1);
-      const int ox = vi / kBlock, oy = vj / kBlock, oz = vk / kBlock;  // 1 on the far faces: the next block owns it
-      const BlockResult& owner = (ox | oy | oz) ? st.blocks[g.blockIndex(bx + ox, by + oy, bz + oz)] : r;
-      IMPS_CHECK(owner.hasSurface);
-      const int32_t local = owner.edgeVertex[ownedEdgeIndex(axis, vi - ox * kBlock, vj - oy * kBlock, vk - oz * kBlock)];
-      IMPS_CHECK(local >= 0);
-      return {&owner, uint32_t(local)};
-    };
-    for (const uint32_t cell : r.cells) {
-      const int i = int(cell & 0xFFFFu) % kBlock, j = int(cell & 0xFFFFu) / kBlock % kBlock,
-                k = int(cell & 0xFFFFu) / (kBlock * kBlock);
-      const int cs = int(cell >> 16);
-      // A cell off the block's far faces has every edge owned by this block: a table offset finds its vertex.
-      const bool interior = i < kBlock - 1 && j < kBlock - 1 && k < kBlock - 1;
-      auto ref = [&](int e) -> EdgeRef {
-        if (!interior) return edgeVertex(i, j, k, e);
-        const int32_t local = r.edgeVertex[size_t(int(cell & 0xFFFFu) + table.ownedEdgeOffset[size_t(e)])];
-        IMPS_CHECK(local >= 0);
-        return {&r, uint32_t(local)};
-      };
-      int joined = 0;
-      const uint8_t ambiguous = table.ambiguousFaces[cs];
-      if (ambiguous) {
-        float f[8];
-        for (int c = 0; c < 8; ++c) f[c] = r.samples[sampleIndex(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1))];
-        for (int face = 0; face < 6; ++face) {
-          if (!((ambiguous >> face) & 1)) continue;
-          const auto& cc = table.faces[face].canonical;
-          const float a = f[cc[0]] - iso, bb = f[cc[1]] - iso, c2 = f[cc[2]] - iso, d = f[cc[3]] - iso;
-          // Bilinear saddle value: inside corners are joined when it is inside.
-          const float denom = a + c2 - bb - d;
-          const float saddle = denom != 0.0f ? (a * c2 - bb * d) / denom : 0.0f;
-          if (saddle >= 0.0f) joined |= 1 << face;
-        }
-      }
-      const size_t entryIndex = table.entry(cs, joined);
-      const auto& entry = table.entries[entryIndex];
-      // Loop-centre vertices: the mean of the loop's vertices, then Newton steps onto the surface.
-      uint32_t centreIndex[2] = {0, 0};
-      const int centres = table.centreCount[entryIndex];
-      for (int centre = 0; centre < centres; ++centre) {
-        glm::vec3 sum(0.0f);
-        int count = 0;
-        for (int t = 0; t < entry[0]; ++t) {
-          if (entry[1 + 3 * t] != kCentre + centre) continue;
-          const auto [owner, local] = ref(entry[2 + 3 * t]);
-          sum += glm::vec3(owner->positions[3 * local], owner->positions[3 * local + 1], owner->positions[3 * local + 2]);
-          ++count;
-        }
-        if (count == 0) break;
-        if (!prepared) {
-          field.prepare(std::span<const uint32_t>(st.binMembers.data() + st.binOffsets[b],
-                                                  st.binOffsets[b + 1] - st.binOffsets[b]), scratch);
-          prepared = true;
-        }
-        glm::vec3 x = sum / float(count);
-        FieldSample fs = field.sample(x, scratch);
-        for (int step = 0; step < 3; ++step) {
-          const float g2 = glm::dot(fs.gradient, fs.gradient);
-          if (g2 <= 0.0f) break;
-          x -= (fs.value - iso) / g2 * fs.gradient;
-          fs = field.sample(x, scratch);
-        }
-        centreIndex[centre] = kProvisional | uint32_t(r.centrePositions.size() / 3);
-        r.centrePositions.insert(r.centrePositions.end(), {x.x, x.y, x.z});
-        const float len = glm::length(fs.gradient);
-        const glm::vec3 n = len > 0.0f ? -fs.gradient / len : glm::vec3(0, 0, 1);
-        if (options.computeNormals) r.centreNormals.insert(r.centreNormals.end(), {n.x, n.y, n.z});
-        if (options.computeColors) r.centreColors.insert(r.centreColors.end(), {fs.color.x, fs.color.y, fs.color.z});
-      }
-      // The cell's triangles written in place (one size check per cell, not per index).
-      const int count = 3 * entry[0];
-      const size_t first = r.triangles.size();
-      r.triangles.resize(first + size_t(count));
-      uint32_t* indices = r.triangles.data() + first;
-      if (interior && centres == 0) {  // the common case: every index from this block's table offsets
-        for (int v = 0; v < count; ++v) {
-          const int32_t local = r.edgeVertex[size_t(int(cell & 0xFFFFu) + table.ownedEdgeOffset[entry[size_t(1 + v)]])];
-          IMPS_CHECK(local >= 0);
-          indices[v] = r.base + uint32_t(local);
-        }
-        continue;
-      }
-      for (int v = 0; v < count; ++v) {
-        const int code = entry[size_t(1 + v)];
-        if (code >= kCentre) {
-          indices[v] = centreIndex[code - kCentre];
-        } else {
-          const auto [owner, local] = ref(code);
-          indices[v] = owner->base + local;
-        }
+// ---- 6. Triangulate ------------------------------------------------------------------------------------------
+
+void triangulateBlock(const Field& field, const Grid& g, size_t b, const MarchingCubesOptions& options,
+                      MarchingCubes::State& st, FieldScratch& scratch) {
+  const CaseTable& table = caseTable();
+  const float iso = field.iso();
+  BlockResult& r = st.blocks[b];
+  r.centrePositions.clear();
+  r.centreNormals.clear();
+  r.centreColors.clear();
+  bool prepared = false;
+  const EdgeResolver edges{table, g, st.blocks, r, g.blockCoords(b)};
+  for (const uint32_t cell : r.cells) {
+    const uint32_t index = cell & 0xFFFFu;
+    const int i = int(index) % kBlock, j = int(index) / kBlock % kBlock, k = int(index) / (kBlock * kBlock);
+    const int cs = int(cell >> 16);
+    // A cell off the block's far faces has every edge owned by this block.
+    const bool inside = i < kBlock - 1 && j < kBlock - 1 && k < kBlock - 1;
+    const size_t entryIndex = table.entry(cs, joinedFaces(table, r, i, j, k, cs, iso));
+    const auto& entry = table.entries[entryIndex];
+    uint32_t centreIndex[2] = {0, 0};
+    const int centres = table.centreCount[entryIndex];
+    if (centres > 0)
+      centreVertices(field, options, edges, cell, entryIndex, st.bins.of(b), prepared, scratch, r, centreIndex);
+    // The cell's triangles written in place (one size check per cell, not per index).
+    const int count = 3 * entry[0];
+    const size_t first = r.triangles.size();
+    r.triangles.resize(first + size_t(count));
+    uint32_t* indices = r.triangles.data() + first;
+    if (inside && centres == 0) {  // the common case: every index from this block's table offsets
+      for (int v = 0; v < count; ++v) indices[v] = r.base + edges.interior(index, entry[size_t(1 + v)]);
+      continue;
+    }
+    for (int v = 0; v < count; ++v) {
+      const int code = entry[size_t(1 + v)];
+      if (code >= kCentre) {
+        indices[v] = centreIndex[code - kCentre];
+      } else {
+        const auto [owner, local] = edges.of(index, inside, i, j, k, code);
+        indices[v] = owner->base + local;
       }
     }
-  }, 1);
+  }
+}
 
-  phaseMs[3] = lap();
-  // 6. Concatenate in block order: edge vertices, then loop-centre vertices (numbered after all edge vertices).
-  uint32_t centreBase = total;
-  std::vector<uint32_t> centreBases(blockCount, 0);
+// ---- 7. Gather -----------------------------------------------------------------------------------------------
+
+void gatherMesh(uint32_t edgeVertices, MarchingCubes::State& st, Mesh& out) {
+  const size_t blockCount = st.blocks.size();
+  uint32_t centreBase = edgeVertices;
+  st.centreBases.assign(blockCount, 0);
   for (size_t b = 0; b < blockCount; ++b) {
-    centreBases[b] = centreBase;
+    st.centreBases[b] = centreBase;
     if (st.blocks[b].hasSurface) centreBase += uint32_t(st.blocks[b].centrePositions.size() / 3);
   }
   out.positions.reserve(size_t(centreBase) * 3);
@@ -929,29 +913,148 @@ void MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
     out.indices.resize(at + r.triangles.size());
     for (size_t q = 0; q < r.triangles.size(); ++q) {
       const uint32_t v = r.triangles[q];
-      out.indices[at + q] = v & kProvisional ? centreBases[b] + (v & ~kProvisional) : v;
+      out.indices[at + q] = v & kProvisional ? st.centreBases[b] + (v & ~kProvisional) : v;
     }
+  }
+}
+
+}  // namespace imps::mc
+
+// ---- The polygonizer -----------------------------------------------------------------------------------------
+
+namespace imps {
+
+std::expected<glm::ivec3, std::string> planGrid(const Field& field, const MarchingCubesOptions& options) {
+  const mc::GridPlan p = mc::planGridCells(field, options);
+  if (!p.error.empty()) return std::unexpected(p.error);
+  return glm::ivec3(p.cells);
+}
+
+MarchingCubes::MarchingCubes() : state_(std::make_unique<State>()) {}
+MarchingCubes::~MarchingCubes() = default;
+
+Mesh polygonize(const Field& field, const MarchingCubesOptions& options, MarchingCubesStats* stats) {
+  MarchingCubes mc;
+  Mesh mesh;
+  mc.polygonize(field, options, mesh, stats);
+  return mesh;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// The phase timer, cancel flag and progress reports of one polygonize() call.
+class Run {
+ public:
+  explicit Run(const MarchingCubesOptions& o) : options_(o), start_(Clock::now()), last_(start_) {}
+  // Milliseconds since the previous lap.
+  double lap() {
+    const auto now = Clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - last_).count();
+    last_ = now;
+    return ms;
+  }
+  double totalMs() const { return std::chrono::duration<double, std::milli>(Clock::now() - start_).count(); }
+  // Reports `fraction` (on the calling thread) and says whether to go on.
+  bool proceed(float fraction) {
+    if (options_.progress && !mc::cancelled(options_)) options_.progress(fraction);
+    return !mc::cancelled(options_);
+  }
+  // body(w, worker) for w in [0, count) in parallel. With a progress callback, in slices, reporting the fractions
+  // from `from` to `to` between them; stops after a slice once cancelled. Returns whether the pass completed.
+  bool forEach(size_t count, float from, float to, const std::function<void(size_t, int)>& body) {
+    const size_t slices = options_.progress ? std::min<size_t>(count, 16) : 1;
+    for (size_t s = 0; s < slices; ++s) {
+      const size_t begin = count * s / slices, end = count * (s + 1) / slices;
+      parallelForWorkers(end - begin, options_.threads, [&](size_t w, int worker) { body(begin + w, worker); });
+      if (!proceed(from + (to - from) * float(s + 1) / float(slices))) return false;
+    }
+    return slices > 0 || proceed(to);
   }
 
-  phaseMs[4] = lap();
-  if (stats) {
-    stats->setupMs = phaseMs[0];
-    stats->thinFeaturesMs = phaseMs[1];
-    stats->sampleMs = phaseMs[2];
-    stats->triangulateMs = phaseMs[3];
-    stats->gatherMs = phaseMs[4];
-    stats->cells = g.cells;
-    stats->cellSize = g.cell;
-    stats->origin = g.origin;
-    stats->blocks = blockCount;
-    stats->blocksSampled = stats->blocksWithSurface = 0;
-    for (const BlockResult& r : st.blocks) {
-      stats->blocksSampled += r.sampled;
-      stats->blocksWithSurface += r.hasSurface;
-    }
-    stats->thinFeatureVertices = snaps.size();
-    stats->milliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+ private:
+  const MarchingCubesOptions& options_;
+  Clock::time_point start_, last_;
+};
+
+void fillStats(const mc::Grid& g, const MarchingCubes::State& st, const double (&phaseMs)[5], double totalMs,
+               MarchingCubesStats& stats) {
+  stats.setupMs = phaseMs[0];
+  stats.thinFeaturesMs = phaseMs[1];
+  stats.sampleMs = phaseMs[2];
+  stats.triangulateMs = phaseMs[3];
+  stats.gatherMs = phaseMs[4];
+  stats.cells = g.cells;
+  stats.cellSize = g.cell;
+  stats.origin = g.origin;
+  stats.blocks = g.blockCount();
+  stats.blocksSampled = stats.blocksWithSurface = 0;
+  for (const mc::BlockResult& r : st.blocks) {
+    stats.blocksSampled += r.sampled;
+    stats.blocksWithSurface += r.hasSurface;
   }
+  stats.thinFeatureVertices = st.snaps.size();
+  stats.milliseconds = totalMs;
+  stats.cancelled = false;
+}
+
+}  // namespace
+
+bool MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& options, Mesh& out,
+                               MarchingCubesStats* stats) {
+  Run run(options);
+  double phaseMs[5] = {};
+  out.clear();
+  State& st = *state_;
+  st.workers.resize(size_t(resolveThreads(options.threads)));
+  auto stop = [&] {
+    out.clear();
+    if (stats) {
+      *stats = MarchingCubesStats{};
+      stats->cancelled = true;
+    }
+    return false;
+  };
+  if (!run.proceed(0.0f)) return stop();
+  const mc::Grid g = mc::makeGrid(field, options);
+  const size_t blockCount = g.blockCount();
+  st.blocks.resize(blockCount);
+  mc::binPrimitives(field, g, st.bins);
+  phaseMs[0] = run.lap();
+  st.snaps.clear();
+  st.forced.assign(blockCount, 0);
+  if (options.preserveThinFeatures && blockCount > 0) mc::findThinFeatures(field, g, st);
+  phaseMs[1] = run.lap();
+  if (!run.proceed(0.05f)) return stop();
+
+  // Only blocks with candidates (or thin-feature vertices) can hold surface; spreading just those over the threads
+  // balances the load (surface blocks cluster in index order).
+  st.work.clear();
+  for (size_t b = 0; b < blockCount; ++b) {
+    if (st.bins.offsets[b + 1] > st.bins.offsets[b] || st.forced[b]) st.work.push_back(uint32_t(b));
+    else st.blocks[b].sampled = st.blocks[b].hasSurface = false;
+  }
+  const mc::RootTransform transform(field);
+  if (!run.forEach(st.work.size(), 0.05f, 0.8f, [&](size_t w, int worker) {
+        mc::processBlock(field, g, st.work[w], options, transform, st, st.workers[size_t(worker)]);
+      }))
+    return stop();
+  phaseMs[2] = run.lap();
+
+  const uint32_t edgeVertices = mc::numberVertices(st.blocks, st.work);  // st.work: now the blocks with surface
+  if (!run.forEach(st.work.size(), 0.8f, 0.95f, [&](size_t w, int worker) {
+        if (!mc::cancelled(options))
+          mc::triangulateBlock(field, g, st.work[w], options, st, st.workers[size_t(worker)].field);
+      }))
+    return stop();
+  phaseMs[3] = run.lap();
+
+  mc::gatherMesh(edgeVertices, st, out);
+  phaseMs[4] = run.lap();
+  if (stats) fillStats(g, st, phaseMs, run.totalMs(), *stats);
+  run.proceed(1.0f);
+  return true;
 }
 
 }  // namespace imps

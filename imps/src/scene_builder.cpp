@@ -491,6 +491,45 @@ void SceneBuilder::endNodeField() {
   frame.nodeFieldSkipped = false;
 }
 
+namespace {
+
+// What a field's constraint asks ("be > 0", "... in every component") if its number(s) break it, else "". An Int
+// field's value is `i`; the others' are numbers[0 .. expectedCount(spec.type)).
+std::string constraintBroken(const FieldSpec& spec, int i, const std::array<float, 4>& numbers) {
+  const bool isInt = spec.type == FieldType::Int;
+  const size_t n = expectedCount(spec.type);
+  bool ok = true;
+  for (size_t k = 0; k < n; ++k) {
+    const double x = isInt ? double(i) : double(numbers[k]);
+    switch (spec.constraint) {
+      case Constraint::None: break;
+      case Constraint::Positive: ok = ok && x > 0.0; break;
+      case Constraint::NonNegative: ok = ok && x >= 0.0; break;
+      case Constraint::AtLeastOne: ok = ok && x >= 1.0; break;
+      case Constraint::BitsPerDim: ok = ok && x >= 1.0 && x <= 10.0; break;
+      case Constraint::UnitInterval: ok = ok && x >= 0.0 && x <= 1.0; break;
+      case Constraint::Threads: ok = ok && x >= 0.0 && x <= kMaxThreads; break;
+      case Constraint::Resolution: ok = ok && x >= 0.0 && x <= kMaxResolution; break;
+    }
+  }
+  if (ok) return "";
+  std::string rule;
+  switch (spec.constraint) {
+    case Constraint::Positive: rule = "be > 0"; break;
+    case Constraint::NonNegative: rule = "be >= 0"; break;
+    case Constraint::AtLeastOne: rule = "be >= 1"; break;
+    case Constraint::BitsPerDim: rule = "be between 1 and 10"; break;
+    case Constraint::UnitInterval: rule = "be between 0 and 1"; break;
+    case Constraint::Threads: rule = "be between 0 and " + std::to_string(kMaxThreads) + " (0: all cores)"; break;
+    case Constraint::Resolution: rule = "be between 0 and " + std::to_string(kMaxResolution) + " cells (0: unset)"; break;
+    case Constraint::None: break;
+  }
+  if (n > 1) rule += " in every component";
+  return rule;
+}
+
+}  // namespace
+
 void SceneBuilder::field(const std::string& name, const SourceLoc& nameLoc, const FieldValue& value) {
   Frame& frame = frames_.back();
   if (frame.skipped) return;
@@ -599,37 +638,7 @@ void SceneBuilder::storeField(Frame& frame, const FieldSpec& spec, const SourceL
   v.v = glm::vec3(numbers[0], numbers[1], numbers[2]);
   v.r = Rotation{glm::vec3(numbers[0], numbers[1], numbers[2]), numbers[3]};
 
-  // Constraints, checked on every component.
-  const bool isInt = spec.type == FieldType::Int;
-  bool ok = true;
-  for (size_t k = 0; k < n; ++k) {
-    const double x = isInt ? double(v.i) : double(numbers[k]);
-    switch (spec.constraint) {
-      case Constraint::None: break;
-      case Constraint::Positive: ok = ok && x > 0.0; break;
-      case Constraint::NonNegative: ok = ok && x >= 0.0; break;
-      case Constraint::AtLeastOne: ok = ok && x >= 1.0; break;
-      case Constraint::BitsPerDim: ok = ok && x >= 1.0 && x <= 10.0; break;
-      case Constraint::UnitInterval: ok = ok && x >= 0.0 && x <= 1.0; break;
-      case Constraint::Threads: ok = ok && x >= 0.0 && x <= kMaxThreads; break;
-      case Constraint::Resolution: ok = ok && x >= 0.0 && x <= kMaxResolution; break;
-    }
-  }
-  if (!ok) {
-    std::string rule;
-    switch (spec.constraint) {
-      case Constraint::Positive: rule = "be > 0"; break;
-      case Constraint::NonNegative: rule = "be >= 0"; break;
-      case Constraint::AtLeastOne: rule = "be >= 1"; break;
-      case Constraint::BitsPerDim: rule = "be between 1 and 10"; break;
-      case Constraint::UnitInterval: rule = "be between 0 and 1"; break;
-      case Constraint::Threads: rule = "be between 0 and " + std::to_string(kMaxThreads) + " (0: all cores)"; break;
-      case Constraint::Resolution:
-        rule = "be between 0 and " + std::to_string(kMaxResolution) + " cells (0: unset)";
-        break;
-      case Constraint::None: break;
-    }
-    if (n > 1) rule += " in every component";
+  if (const std::string rule = constraintBroken(spec, v.i, numbers); !rule.empty()) {
     sink_.error(loc, "field '" + fieldName + "' of " + typeName + " must " + rule + ", found " + sourceText(value));
     return;
   }

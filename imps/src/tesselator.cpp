@@ -239,7 +239,8 @@ void Tesselator::update(const SkeletonCache& skeleton) {
   if (options_.doDifferentialTransforms && s.character->hierarchical() && s.lastGeneration != ~0ull &&
       skeleton.generation() != s.lastGeneration) {
     const size_t prims = skeleton.field().size();
-    std::vector<Rigid> d(prims);
+    std::vector<Rigid>& d = s.differentials;
+    d.resize(prims);
     for (size_t i = 0; i < prims; ++i) d[i] = skeleton.primitiveDifferential(i);
     for (size_t i = 0; i < s.size(); ++i)
       if (s.owner[i] >= 0 && size_t(s.owner[i]) < prims) s.pos[i] = d[size_t(s.owner[i])].apply(s.pos[i]);
@@ -259,28 +260,143 @@ void Tesselator::update(const Field& field) {
   step(field, nullptr);
 }
 
-void Tesselator::step(const Field& field, const SkeletonCache*) {
-  State& s = *s_;
-  const TesselatorOptions& o = options_;
-  const float h = o.desiredRadius, invH = 1.0f / h;
-  const float iso = field.iso();
-  auto t0 = Clock::now();
+namespace {
 
-  if (s.size() == 0) {
-    s.nbrValid = false;
-    s.cacheValid = false;
-    seedParticles(s, field, o);
-    if (s.size() > 0) ++stats_.reseeds;
+// Particle i's ownership: the field's owner `want`, but only the current owner's blend neighbours may take it over
+// (any owner without a hierarchy). Counts the change or refusal.
+void transferOwnership(Tesselator::State& s, size_t i, int32_t want, uint64_t& transferred, uint64_t& blocked) {
+  if (want < 0 || want == s.owner[i]) return;
+  const bool ok = s.owner[i] < 0 || s.character == nullptr || s.character->blends(size_t(s.owner[i]), size_t(want));
+  if (ok) {
+    s.owner[i] = want;
+    ++transferred;
+  } else {
+    ++blocked;
   }
+}
 
-  // 2. Spatial sort and neighbour list (unless nothing moved since the last triangulation built them).
-  if (!s.nbrValid) findNeighbours(s, o);
-  const size_t n = s.size();
-  // The vertex pass of the last triangulate() sampled the field at exactly these positions (nothing moved since) and
-  // the field is the same: reuse its samples.
-  const bool cached = s.cacheValid && s.field == &field && s.fieldStamp != ~0ull && s.cacheStamp == s.fieldStamp &&
-                      s.cacheValue.size() == n;
-  s.field = &field;
+// Particle i's neighbours within queryRadius into (nd2, ni) (squared distances, indices), the nearest kMaxRepulsion
+// of them in a crowd; its kMaxFuse nearest by (distance, index) into s.fuse for the add/delete phase. Returns the
+// count.
+size_t repulsionNeighbours(Tesselator::State& s, size_t i, float q2, float* nd2, uint32_t* ni) {
+  const glm::vec3 p = s.pos[i];
+  const uint32_t* nl = &s.nbr[i * kMaxNeighbours];
+  size_t cnt = 0;
+  for (size_t k = 0; k < s.nbrCount[i]; ++k) {  // branch-free: about half are kept, unpredictably
+    const glm::vec3 d = s.pos[nl[k]] - p;
+    const float d2 = d.x * d.x + d.y * d.y + d.z * d.z;
+    nd2[cnt] = d2;
+    ni[cnt] = nl[k];
+    cnt += size_t(d2 <= q2);
+  }
+  uint64_t nearest[kMaxFuse];
+  size_t nearCount = 0;
+  for (size_t k = 0; k < cnt; ++k) {
+    const uint64_t key = sortKey(nd2[k], ni[k]);
+    if (nearCount == kMaxFuse && key >= nearest[kMaxFuse - 1]) continue;
+    size_t q = nearCount < kMaxFuse ? nearCount++ : kMaxFuse - 1;
+    for (; q > 0 && nearest[q - 1] > key; --q) nearest[q] = nearest[q - 1];
+    nearest[q] = key;
+  }
+  for (size_t k = 0; k < nearCount; ++k) s.fuse[i * kMaxFuse + k] = uint32_t(nearest[k]);
+  s.fuseCount[i] = uint8_t(nearCount);
+  if (cnt > kMaxRepulsion) {
+    uint64_t keys[kMaxNeighbours];
+    for (size_t k = 0; k < cnt; ++k) keys[k] = sortKey(nd2[k], ni[k]);
+    std::nth_element(keys, keys + kMaxRepulsion, keys + cnt);
+    cnt = kMaxRepulsion;
+    for (size_t k = 0; k < cnt; ++k) {
+      ni[k] = uint32_t(keys[k]);
+      const glm::vec3 d = s.pos[ni[k]] - p;
+      nd2[k] = d.x * d.x + d.y * d.y + d.z * d.z;
+    }
+  }
+  return cnt;
+}
+
+// Particle i's repulsion (Witkin-Heckbert, in units of desiredRadius) from its neighbours (nd2, ni): the velocity
+// constrained to the surface with feedback towards F = iso, its energy and radius rate. fs: its field sample.
+void repel(Tesselator::State& s, size_t i, const FieldSample& fs, float iso, const TesselatorOptions& o,
+           const float* nd2, const uint32_t* ni, size_t cnt) {
+  const float invH = 1.0f / o.desiredRadius, alpha = o.energyCoeff;
+  const glm::vec3 p = s.pos[i], g = fs.gradient;
+  const float g2 = glm::dot(g, g);
+  const float si = s.sigma[i] * invH;
+  const float inv2si = 0.5f / (si * si);
+  glm::vec3 P(0.0f);
+  float D = 0.0f, Ds = 0.0f;
+  for (size_t k = 0; k < cnt; ++k) {
+    const uint32_t j = ni[k];
+    const float sj = s.sigma[j] * invH;
+    const float r2 = nd2[k] * invH * invH;
+    const float ei = alpha * expAccurate(-r2 * inv2si);
+    const float ej = alpha * expAccurate(-r2 * 0.5f / (sj * sj));
+    D += ei;
+    Ds += r2 * ei;
+    P += (p - s.pos[j]) * (ei + (si * si) / (sj * sj) * ej);
+  }
+  // Velocity constrained to the surface, with feedback towards F = iso.
+  glm::vec3 v = P - (glm::dot(g, P) + o.surfaceCoeff * (fs.value - iso)) / g2 * g;
+  if (!finite3(v)) v = glm::vec3(0.0f);
+  s.vel[i] = v;
+  s.energy[i] = D;
+  // Radius rate: D-dot = -rho (D - E-hat); Pedersen divides by beta + D / sigma^3 (Witkin-Heckbert by
+  // beta + sum |r|^2 E / sigma^3).
+  const float dDot = -kRho * (D - s.eHat);
+  const float denom = kBeta + (o.useSimpleRadii ? D : Ds) / (si * si * si);
+  s.sigmaRate[i] = dDot / denom;
+}
+
+// Particle i's fission into two of radius sigma / sqrt(2), displaced in a random tangent direction (the child is
+// appended).
+void fission(Tesselator::State& s, size_t i, const TesselatorOptions& o) {
+  const float h = o.desiredRadius;
+  glm::vec3 b0, b1;
+  tangentBasis(s.nrm[i], b0, b1);
+  const float a = 6.2831853f * uniform01(o.seed, s.id[i], s.update, 1);
+  const glm::vec3 off = 0.25f * h * (std::cos(a) * b0 + std::sin(a) * b1);
+  const float child = s.sigma[i] * 0.70710678f;
+  s.sigma[i] = child;
+  const glm::vec3 p = s.pos[i];
+  s.pos[i] = p - off;
+  s.add(p + off, s.grad[i], child, s.owner[i]);
+}
+
+// Whether particle i fuses into an older, living one of its kMaxFuse nearest (recorded by the compute phase).
+bool fuses(const Tesselator::State& s, size_t i, float fuse2) {
+  for (size_t k = 0; k < s.fuseCount[i]; ++k) {
+    const uint32_t j = s.fuse[i * kMaxFuse + k];
+    if (s.dead[j] || s.id[j] > s.id[i]) continue;
+    const glm::vec3 d = s.pos[j] - s.pos[i];
+    if (glm::dot(d, d) < fuse2) return true;
+  }
+  return false;
+}
+
+// Drops the dead particles, keeping the others' order (children were appended after every parent).
+void compactParticles(Tesselator::State& s) {
+  size_t w = 0;
+  for (size_t i = 0; i < s.size(); ++i) {
+    if (s.dead[i]) continue;
+    if (w != i) {
+      s.pos[w] = s.pos[i];
+      s.grad[w] = s.grad[i];
+      s.nrm[w] = s.nrm[i];
+      s.sigma[w] = s.sigma[i];
+      s.owner[w] = s.owner[i];
+      s.id[w] = s.id[i];
+    }
+    ++w;
+  }
+  s.resizeParticles(w);
+}
+
+}  // namespace
+
+void computeForces(Tesselator::State& s, const Field& field, const TesselatorOptions& o, bool cached) {
+  const size_t n = s.size(), chunks = (n + kChunk - 1) / kChunk;
+  const float h = o.desiredRadius, iso = field.iso();
+  const float q2 = o.queryRadius * o.queryRadius;
   s.vel.resize(n);
   s.fuse.resize(n * kMaxFuse);
   s.fuseCount.resize(n);
@@ -288,15 +404,9 @@ void Tesselator::step(const Field& field, const SkeletonCache*) {
   s.energy.resize(n);
   s.value.resize(n);
   s.dead.assign(n, 0);
-  const size_t chunks = (n + kChunk - 1) / kChunk;
   if (s.scratch.size() < chunks) s.scratch.resize(chunks);
-
-  // 3. Compute phase (parallel): field sample, neighbour cache, constrained repulsion velocity, radius rate,
-  //    ownership. Reads positions and radii of others, writes only particle i's outputs.
-  const float alpha = o.energyCoeff, eHat = s.eHat;
-  const float q2 = o.queryRadius * o.queryRadius;
-  const Character* ch = s.character;
-  std::vector<uint64_t> transferred(chunks, 0), blocked(chunks, 0);  // ownership changes, per chunk
+  s.chunkTransfers.assign(chunks, 0);
+  s.chunkBlocked.assign(chunks, 0);
   parallelFor(chunks, o.numThreads, [&](size_t c) {
     const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
     FieldScratch& scratch = s.scratch[c];
@@ -330,84 +440,17 @@ void Tesselator::step(const Field& field, const SkeletonCache*) {
       s.value[i] = fs.value;
       s.grad[i] = g;
       s.nrm[i] = -g / std::sqrt(g2);
-      // Ownership: the field's owner, but only the current owner's blend neighbours may take a particle over.
-      const int32_t want = fs.owner;
-      if (want >= 0 && want != s.owner[i]) {
-        const bool ok = s.owner[i] < 0 || ch == nullptr || ch->blends(size_t(s.owner[i]), size_t(want));
-        if (ok) {
-          s.owner[i] = want;
-          ++transferred[c];
-        } else {
-          ++blocked[c];
-        }
-      }
-      // Repulsion (Witkin-Heckbert), in units of desiredRadius, over the neighbours within queryRadius (the nearest
-      // kMaxRepulsion of them in a crowd).
-      const uint32_t* nl = &s.nbr[i * kMaxNeighbours];
-      size_t cnt = 0;
-      for (size_t k = 0; k < s.nbrCount[i]; ++k) {  // branch-free: about half are kept, unpredictably
-        const glm::vec3 d = s.pos[nl[k]] - p;
-        const float d2 = d.x * d.x + d.y * d.y + d.z * d.z;
-        nd2[cnt] = d2;
-        ni[cnt] = nl[k];
-        cnt += size_t(d2 <= q2);
-      }
-      // The kMaxFuse nearest, by (distance, index), for the fusion test of the add/delete phase.
-      uint64_t nearest[kMaxFuse];
-      size_t nearCount = 0;
-      for (size_t k = 0; k < cnt; ++k) {
-        const uint64_t key = sortKey(nd2[k], ni[k]);
-        if (nearCount == kMaxFuse && key >= nearest[kMaxFuse - 1]) continue;
-        size_t q = nearCount < kMaxFuse ? nearCount++ : kMaxFuse - 1;
-        for (; q > 0 && nearest[q - 1] > key; --q) nearest[q] = nearest[q - 1];
-        nearest[q] = key;
-      }
-      for (size_t k = 0; k < nearCount; ++k) s.fuse[i * kMaxFuse + k] = uint32_t(nearest[k]);
-      s.fuseCount[i] = uint8_t(nearCount);
-      if (cnt > kMaxRepulsion) {
-        uint64_t keys[kMaxNeighbours];
-        for (size_t k = 0; k < cnt; ++k) keys[k] = sortKey(nd2[k], ni[k]);
-        std::nth_element(keys, keys + kMaxRepulsion, keys + cnt);
-        cnt = kMaxRepulsion;
-        for (size_t k = 0; k < cnt; ++k) {
-          ni[k] = uint32_t(keys[k]);
-          const glm::vec3 d = s.pos[ni[k]] - p;
-          nd2[k] = d.x * d.x + d.y * d.y + d.z * d.z;
-        }
-      }
-      const float si = s.sigma[i] * invH;
-      const float inv2si = 0.5f / (si * si);
-      glm::vec3 P(0.0f);
-      float D = 0.0f, Ds = 0.0f;
-      for (size_t k = 0; k < cnt; ++k) {
-        const uint32_t j = ni[k];
-        const float sj = s.sigma[j] * invH;
-        const float r2 = nd2[k] * invH * invH;
-        const float ei = alpha * expAccurate(-r2 * inv2si);
-        const float ej = alpha * expAccurate(-r2 * 0.5f / (sj * sj));
-        D += ei;
-        Ds += r2 * ei;
-        P += (p - s.pos[j]) * (ei + (si * si) / (sj * sj) * ej);
-      }
-      // Velocity constrained to the surface, with feedback towards F = iso.
-      glm::vec3 v = P - (glm::dot(g, P) + o.surfaceCoeff * (fs.value - iso)) / g2 * g;
-      if (!finite3(v)) v = glm::vec3(0.0f);
-      s.vel[i] = v;
-      s.energy[i] = D;
-      // Radius rate: D-dot = -rho (D - E-hat); Pedersen divides by beta + D / sigma^3 (Witkin-Heckbert by
-      // beta + sum |r|^2 E / sigma^3).
-      const float dDot = -kRho * (D - eHat);
-      const float denom = kBeta + (o.useSimpleRadii ? D : Ds) / (si * si * si);
-      s.sigmaRate[i] = dDot / denom;
+      transferOwnership(s, i, fs.owner, s.chunkTransfers[c], s.chunkBlocked[c]);
+      const size_t cnt = repulsionNeighbours(s, i, q2, nd2, ni);
+      repel(s, i, fs, iso, o, nd2, ni, cnt);
     }
   });
-  for (size_t c = 0; c < chunks; ++c) {
-    stats_.transfers += transferred[c];
-    stats_.blockedTransfers += blocked[c];
-  }
+}
 
-  // 4. Integration (parallel): clamped step, then one Newton step back onto the surface along the gradient.
-  parallelFor(chunks, o.numThreads, [&](size_t c) {
+void integrateParticles(Tesselator::State& s, const Field& field, const TesselatorOptions& o) {
+  const size_t n = s.size();
+  const float h = o.desiredRadius, invH = 1.0f / h, iso = field.iso();
+  parallelFor((n + kChunk - 1) / kChunk, o.numThreads, [&](size_t c) {
     const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
     FieldScratch& scratch = s.scratch[c];
     for (size_t i = begin; i < end; ++i) {
@@ -438,69 +481,68 @@ void Tesselator::step(const Field& field, const SkeletonCache*) {
   });
   s.nbrValid = false;  // particles moved
   s.cacheValid = false;
-  stats_.simulateMs += msSince(t0);
+}
 
-  // 5. Additions and deletions (sequential, particle order): strays, fusion, death, fission.
-  t0 = Clock::now();
+void addAndDeleteParticles(Tesselator::State& s, const TesselatorOptions& o, TesselatorStats& stats) {
+  const float h = o.desiredRadius, invH = 1.0f / h;
   const float fuse2 = kFusionDistance * kFusionDistance * h * h;
-  const size_t before = n;
+  const size_t before = s.size();
   for (size_t i = 0; i < before; ++i) {
     if (s.dead[i]) {
-      ++stats_.strays;
+      ++stats.strays;
       continue;
     }
-    // Fusion into an older, living one of the kMaxFuse nearest (recorded by the compute phase).
-    bool fused = false;
-    for (size_t k = 0; k < s.fuseCount[i] && !fused; ++k) {
-      const uint32_t j = s.fuse[i * kMaxFuse + k];
-      if (s.dead[j] || s.id[j] > s.id[i]) continue;
-      const glm::vec3 d = s.pos[j] - s.pos[i];
-      fused = glm::dot(d, d) < fuse2;
-    }
-    if (fused) {
+    if (fuses(s, i, fuse2)) {
       s.dead[i] = 1;
-      ++stats_.fusions;
+      ++stats.fusions;
       continue;
     }
     const float si = s.sigma[i] * invH;
     if (si < kSigmaDeath && uniform01(o.seed, s.id[i], s.update, 0) < kDeathChance) {
       s.dead[i] = 1;
-      ++stats_.deaths;
+      ++stats.deaths;
       continue;
     }
-    const bool fission = si >= kSigmaMax - 1e-4f || (si > kSigmaFission && s.energy[i] > o.fissioningFrac * eHat);
-    if (fission && s.size() < o.maxParticles) {
-      // Two particles of radius sigma / sqrt(2), displaced in a random tangent direction.
-      glm::vec3 b0, b1;
-      tangentBasis(s.nrm[i], b0, b1);
-      const float a = 6.2831853f * uniform01(o.seed, s.id[i], s.update, 1);
-      const glm::vec3 off = 0.25f * h * (std::cos(a) * b0 + std::sin(a) * b1);
-      const float child = s.sigma[i] * 0.70710678f;
-      s.sigma[i] = child;
-      const glm::vec3 p = s.pos[i];
-      s.pos[i] = p - off;
-      s.add(p + off, s.grad[i], child, s.owner[i]);
-      ++stats_.fissions;
+    const bool split = si >= kSigmaMax - 1e-4f || (si > kSigmaFission && s.energy[i] > o.fissioningFrac * s.eHat);
+    if (split && s.size() < o.maxParticles) {
+      fission(s, i, o);
+      ++stats.fissions;
     }
   }
-  // Compaction in particle order (children were appended after every parent).
-  size_t w = 0;
-  for (size_t i = 0; i < s.size(); ++i) {
-    if (s.dead[i]) continue;
-    if (w != i) {
-      s.pos[w] = s.pos[i];
-      s.grad[w] = s.grad[i];
-      s.nrm[w] = s.nrm[i];
-      s.sigma[w] = s.sigma[i];
-      s.owner[w] = s.owner[i];
-      s.id[w] = s.id[i];
-    }
-    ++w;
+  compactParticles(s);
+}
+
+void Tesselator::step(const Field& field, const SkeletonCache*) {
+  State& s = *s_;
+  const TesselatorOptions& o = options_;
+  auto t0 = Clock::now();
+  if (s.size() == 0) {
+    s.nbrValid = false;
+    s.cacheValid = false;
+    seedParticles(s, field, o);
+    if (s.size() > 0) ++stats_.reseeds;
   }
-  s.resizeParticles(w);
+  // Spatial sort and neighbour list (unless nothing moved since the last triangulation built them).
+  if (!s.nbrValid) findNeighbours(s, o);
+  const size_t n = s.size();
+  // The vertex pass of the last triangulate() sampled the field at exactly these positions (nothing moved since) and
+  // the field is the same: reuse its samples.
+  const bool cached = s.cacheValid && s.field == &field && s.fieldStamp != ~0ull && s.cacheStamp == s.fieldStamp &&
+                      s.cacheValue.size() == n;
+  s.field = &field;
+  computeForces(s, field, o, cached);
+  for (size_t c = 0; c < s.chunkTransfers.size(); ++c) {
+    stats_.transfers += s.chunkTransfers[c];
+    stats_.blockedTransfers += s.chunkBlocked[c];
+  }
+  integrateParticles(s, field, o);
+  stats_.simulateMs += msSince(t0);
+
+  t0 = Clock::now();
+  addAndDeleteParticles(s, o, stats_);
   ++s.update;
   ++stats_.updates;
-  stats_.particles = w;
+  stats_.particles = s.size();
   stats_.addDeleteMs = msSince(t0);
 }
 
@@ -511,14 +553,26 @@ void Tesselator::frame(const SkeletonCache& skeleton, Mesh& mesh) {
 
 int Tesselator::settle(const SkeletonCache& skeleton, Mesh& mesh, int maxUpdates) {
   std::vector<size_t> counts;
+  const TesselatorOptions& o = options_;
+  auto cancelled = [&] { return o.cancel && o.cancel->load(std::memory_order_relaxed); };
+  stats_.cancelled = false;
   for (int u = 1; u <= maxUpdates; ++u) {
+    if (cancelled()) {
+      mesh.clear();
+      stats_.cancelled = true;
+      return u - 1;
+    }
     update(skeleton);
+    if (o.progress) o.progress(float(u) / float(maxUpdates));
     counts.push_back(stats_.particles);
     if (u >= 20 && u % 5 == 0) {
       const auto [lo, hi] = std::minmax_element(counts.end() - 10, counts.end());
       if (double(*hi - *lo) <= 0.01 * double(*hi)) {
         triangulate(mesh);
-        if (stats_.boundaryEdges == 0) return u;
+        if (stats_.boundaryEdges == 0) {
+          if (o.progress) o.progress(1.0f);
+          return u;
+        }
       }
     }
   }

@@ -23,6 +23,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "imps/check.h"
 #include "imps/parallel.h"
 #include "tesselator_state.h"
 
@@ -302,23 +303,284 @@ void removeAround(Tesselator::State& s, size_t& boundary) {
   s.tris.resize(w);
 }
 
+// Particle i's vertex: up to three Newton steps from the particle onto the surface (vpos, nrm; vok whether it
+// converged), caching the field sample at the particle itself for the next compute phase.
+void projectVertex(Tesselator::State& s, const Field& field, float h, size_t i, FieldScratch& scratch,
+                   FieldSample& fs, uint32_t& winner) {
+  const float iso = field.iso();
+  const glm::vec3 p = s.pos[i];
+  glm::vec3 v = p;
+  bool converged = false;
+  for (int it = 0; it < 3; ++it) {
+    fs = field.sample(v, scratch);
+    if (it == 0) {  // at the particle itself: the next compute phase reuses it if nothing moves before it
+      winner = scratch.lastWinner;
+      s.cacheValue[i] = fs.value;
+      s.cacheGrad[i] = fs.gradient;
+      s.cacheOwner[i] = fs.owner;
+    }
+    const float g2 = glm::dot(fs.gradient, fs.gradient);
+    // A particle this far off (carried into a limb it does not blend with, about to die as a stray) would
+    // make a spike: it is left out of this render's triangulation and the gap is filled around it.
+    if (!(g2 > 1e-20f) || (it == 0 && std::fabs(fs.value - iso) > kVertexOff * h * std::sqrt(g2))) break;
+    s.nrm[i] = -fs.gradient / std::sqrt(g2);
+    if (std::fabs(fs.value - iso) < 1e-5f * h * std::sqrt(g2)) {
+      converged = true;
+      break;
+    }
+    glm::vec3 d = (iso - fs.value) / g2 * fs.gradient;
+    const float len = glm::length(d);
+    if (len > 0.5f * h) d *= 0.5f * h / len;
+    v += d;
+    // A step this short leaves an error of order len^2 / curvature radius (< 1e-4 desiredRadius on any
+    // surface the particles can resolve): no need to sample again. The particles are usually this close, as
+    // the integration ended with a Newton step.
+    if (len < 1e-2f * h) {
+      converged = true;
+      break;
+    }
+  }
+  s.vok[i] = converged ? 1 : 0;  // else no vertex this render (see kVertexOff)
+  s.vpos[i] = finite3(v) ? v : p;
+}
+
+// Particle i's colour: primitive colours weighted by term^(1/colorWidth) over `winner`, the local blend set of
+// `scratch` winning at the particle (wider = smoother), so only primitives that blend there mix their colours;
+// fs.color where no term is positive.
+glm::vec3 vertexColor(const Tesselator::State& s, const Field& field, float colorExp, size_t i,
+                      const FieldScratch& scratch, const FieldSample& fs, uint32_t winner) {
+  const glm::vec3 p = s.pos[i];
+  glm::vec3 col(0.0f);
+  float wsum = 0.0f;
+  auto addColor = [&](uint32_t k) {
+    const float t = field.blend().term(field.primitive(k).distance(p), field.param(k));
+    const float base = field.blend().additive() ? t : t + 1.0f;
+    if (base <= 0.0f) return;
+    const float w = std::pow(base, colorExp);
+    col += w * field.color(k);
+    wsum += w;
+  };
+  const int32_t ow = s.owner[i];
+  if (ow >= 0 && scratch.setCount() > 0) {
+    for (uint32_t m = scratch.setOffsets[winner]; m < scratch.setOffsets[winner + 1]; ++m)
+      addColor(scratch.candidates[scratch.setMembers[m]]);
+  } else {
+    for (uint32_t k : scratch.candidates) addColor(k);
+  }
+  return wsum > 0.0f ? col / wsum : fs.color;
+}
+
+// Particle i's fan candidates into keys (near, sorted) and farKeys (far, unsorted): agreeing neighbours within rT,
+// by (distance, index) (one 64-bit key: d2 > 0 orders like its bits). Returns the two counts.
+std::pair<size_t, size_t> fanCandidates(const Tesselator::State& s, size_t i, float rT2, float nearT2,
+                                        uint64_t* keys, uint64_t* farKeys) {
+  const glm::vec3 p = s.vpos[i], nn = s.nrm[i];
+  size_t nearCnt = 0, farCnt = 0;
+  const uint32_t* nl = &s.nbr[i * kMaxNeighbours];
+  for (size_t k = 0; k < s.nbrCount[i]; ++k) {  // branch-free: which are kept, and where, is unpredictable
+    const uint32_t j = nl[k];
+    const glm::vec3 d = s.vpos[j] - p;
+    const float d2 = d.x * d.x + d.y * d.y + d.z * d.z;
+    const size_t ok = size_t(s.vok[j] != 0) & size_t(d2 <= rT2) & size_t(d2 > 0.0f) &
+                      size_t(glm::dot(s.nrm[j], nn) >= 0.3f);
+    const size_t near = size_t(d2 <= nearT2);
+    const uint64_t key = sortKey(d2, j);
+    keys[nearCnt] = key;
+    farKeys[farCnt] = key;
+    nearCnt += ok & near;
+    farCnt += ok & (near ^ 1);
+  }
+  std::sort(keys, keys + nearCnt);
+  return {nearCnt, farCnt};
+}
+
+// Particle i's fan: its Voronoi cell among the candidates projected into its tangent plane, as the cyclic list of
+// the cell edges' labels (repeats merged).
+void buildFan(Tesselator::State& s, size_t i, float h, Cell& cell) {
+  const float rT = kFanRadius * h, rT2 = rT * rT;
+  const float nearT2 = kNearFan * kNearFan * h * h;
+  uint64_t keys[kMaxNeighbours], farKeys[kMaxNeighbours];
+  // Only the near candidates (within kNearFan) are sorted up front; the far ones are sorted only if the cell is
+  // still large enough for them to cut it (rarely: the cell shrinks to about 0.6 desiredRadius once the first ring
+  // is clipped). The processing order is the full sort's.
+  const auto [nearCnt, farCnt] = fanCandidates(s, i, rT2, nearT2, keys, farKeys);
+  const glm::vec3 p = s.vpos[i];
+  bool farSorted = false;
+  glm::vec3 b0, b1;
+  tangentBasis(s.nrm[i], b0, b1);
+  cell.init(0.5f * rT);
+  float r2 = cell.rad2;
+  const size_t total = std::min(nearCnt + farCnt, kFanCandidates);
+  for (size_t k = 0; k < total; ++k) {
+    if (k == nearCnt && !farSorted) {
+      // The near ones are used up: the far ones are needed only if they can still cut the cell.
+      if (nearT2 > 4.0f * r2) break;
+      std::sort(farKeys, farKeys + farCnt);
+      std::copy(farKeys, farKeys + std::min(farCnt, kFanCandidates - nearCnt), keys + nearCnt);
+      farSorted = true;
+    }
+    const uint32_t j = uint32_t(keys[k]);
+    const uint32_t bits = uint32_t(keys[k] >> 32);
+    float d2;
+    std::memcpy(&d2, &bits, sizeof d2);
+    if (d2 > 4.0f * r2) break;  // sorted by distance: no farther point can cut the cell
+    const glm::vec3 d = s.vpos[j] - p;
+    float x = glm::dot(d, b0), y = glm::dot(d, b1);
+    const float l2 = x * x + y * y;
+    if (l2 < 1e-12f * h * h) continue;
+    const float lift = std::sqrt(d2 / l2);  // keep the 3D distance: a local geodesic-like unfolding
+    x *= lift, y *= lift;
+    if (cell.clip(x, y, int32_t(j))) r2 = cell.rad2;
+  }
+  int32_t* f = &s.fan[i * kMaxFan];
+  size_t m = 0;
+  for (int k = 0; k < cell.n && m < kMaxFan; ++k)
+    if (m == 0 || f[m - 1] != cell.lab[k]) f[m++] = cell.lab[k];
+  if (m > 1 && f[m - 1] == f[0]) --m;
+  s.fanCount[i] = uint8_t(m);
+}
+
+// Particle i's votes: its fan slots' triangles it emits (it is their smallest proposer) into s.cand with their vote
+// counts, which slots are unanimous, and whether a label repeats among those. Returns the unanimous ones emitted.
+size_t voteFan(Tesselator::State& s, size_t i) {
+  const int32_t* f = &s.fan[i * kMaxFan];
+  uint8_t* unanimous = &s.fanUnanimous[i * kMaxFan];
+  const size_t m = s.fanCount[i];
+  size_t out = 0, unanimousOut = 0;
+  uint8_t votes = 0;  // bit v: a candidate with v votes
+  bool repeat = false;
+  uint64_t seen = 0;  // labels of the unanimous slots so far, hashed to 64 bits
+  for (size_t k = 0; k < m; ++k) {
+    unanimous[k] = 0;
+    if (m < 2) continue;
+    const int32_t a = f[k], b = f[k + 1 == m ? 0 : k + 1];
+    if (a < 0 || b < 0 || a == b) continue;
+    const uint32_t ua = uint32_t(a), ub = uint32_t(b), ui = uint32_t(i);
+    const bool byA = fanHas(s, ua, ub, ui), byB = fanHas(s, ub, ui, ua);
+    if (byA && byB) {
+      unanimous[k] = 1;
+      const uint64_t bit = uint64_t(1) << (ua & 63u);
+      if (seen & bit)  // maybe a repeat: check exactly
+        for (size_t q = 0; q < k; ++q) repeat = repeat || (unanimous[q] && f[q] == a);
+      seen |= bit;
+    }
+    uint32_t minProposer = ui;
+    if (byA) minProposer = std::min(minProposer, ua);
+    if (byB) minProposer = std::min(minProposer, ub);
+    if (minProposer != ui) continue;
+    uint32_t* slot = &s.cand[(i * kMaxFan + out++) * 3];
+    slot[0] = ua;
+    slot[1] = ub;
+    slot[2] = 1u + uint32_t(byA) + uint32_t(byB);
+    votes |= uint8_t(1u << slot[2]);
+    unanimousOut += slot[2] == 3 ? 1 : 0;
+  }
+  s.candCount[i] = uint8_t(out);
+  s.candVotes[i] = votes;
+  s.fanRepeat[i] = repeat ? 1 : 0;
+  return unanimousOut;
+}
+
+// Particle i's unanimous triangles and half-edges, written without the sequential test (see assembleTriangles):
+// its outgoing edges are the first labels of its unanimous slots; the triangles go to tri. Returns the open ones.
+size_t placeUnanimous(Tesselator::State& s, size_t i, uint32_t*& tri) {
+  const int32_t* f = &s.fan[i * kMaxFan];
+  const uint8_t* unanimous = &s.fanUnanimous[i * kMaxFan];
+  const size_t m = s.fanCount[i];
+  uint32_t* to = &s.heTo[i * kMaxHalfEdges];
+  uint32_t from[kMaxHalfEdges];  // the twins' start vertices: f[q + 1] of each unanimous slot q
+  size_t cnt = 0;
+  for (size_t k = 0; k < m; ++k)
+    if (unanimous[k]) {
+      IMPS_DCHECK_LT(cnt, kMaxHalfEdges);
+      from[cnt] = uint32_t(f[k + 1 == m ? 0 : k + 1]);
+      to[cnt++] = uint32_t(f[k]);
+    }
+  s.heCount[i] = uint8_t(cnt);
+  size_t open = 0;
+  for (size_t k = 0; k < cnt; ++k) {
+    bool twin = false;
+    for (size_t q = 0; q < cnt; ++q) twin |= from[q] == to[k];
+    open += twin ? 0 : 1;
+  }
+  s.openOut[i] = open > 0 ? 1 : 0;
+  for (size_t k = 0; k < s.candCount[i]; ++k) {
+    const uint32_t* slot = &s.cand[(i * kMaxFan + k) * 3];
+    if (slot[2] != 3) continue;
+    tri[0] = uint32_t(i), tri[1] = slot[0], tri[2] = slot[1];
+    tri += 3;
+  }
+  return open;
+}
+
+// Walks the hole loop that starts with start's e-th hole edge along unused hole edges into s.loop (marking them
+// used). Returns whether it came back to start within 4 maxHoleLoop steps.
+bool walkHoleLoop(Tesselator::State& s, uint32_t start, size_t e, int maxHoleLoop) {
+  s.loop.clear();
+  s.loop.push_back(start);
+  s.holeUsed[size_t(start) * 4 + e] = 1;
+  uint32_t cur = s.holeTo[size_t(start) * 4 + e];
+  while (s.loop.size() <= size_t(4 * maxHoleLoop)) {
+    if (cur == start) return true;
+    s.loop.push_back(cur);
+    size_t pick = 4;
+    for (size_t q = 0; q < s.holeCount[cur]; ++q)
+      if (!s.holeUsed[size_t(cur) * 4 + q]) {
+        pick = q;
+        break;
+      }
+    if (pick == 4) return false;
+    s.holeUsed[size_t(cur) * 4 + pick] = 1;
+    cur = s.holeTo[size_t(cur) * 4 + pick];
+  }
+  return false;
+}
+
+// The ear of loop L to clip next: (L[k], L[k+1], L[k+2]) with the shortest new edge whose normal agrees with the
+// vertex normals, among those that use no taken half-edge. L.size() if none.
+size_t bestEar(const Tesselator::State& s, const std::vector<uint32_t>& L, float h) {
+  size_t best = L.size();
+  float bestScore = 1e30f;
+  for (size_t k = 0; k < L.size(); ++k) {
+    const uint32_t a = L[k], b = L[(k + 1) % L.size()], c = L[(k + 2) % L.size()];
+    if (a == c || a == b || b == c || hasHalfEdge(s, c, a) || hasHalfEdge(s, a, b) || hasHalfEdge(s, b, c)) continue;
+    const glm::vec3 pa = s.vpos[a], pb = s.vpos[b], pc = s.vpos[c];
+    const glm::vec3 cr = glm::cross(pb - pa, pc - pa);
+    const float cl = glm::length(cr);
+    const glm::vec3 nv = s.nrm[a] + s.nrm[b] + s.nrm[c];
+    const float agree = cl > 0.0f ? glm::dot(cr, nv) / (cl * std::max(glm::length(nv), 1e-6f)) : -1.0f;
+    const glm::vec3 diag = pc - pa;
+    const float score = glm::dot(diag, diag) / (h * h) + 4.0f * (1.0f - agree) + (agree < 0.0f ? 100.0f : 0.0f);
+    if (score < bestScore) {
+      bestScore = score;
+      best = k;
+    }
+  }
+  return best;
+}
+
+// Closes s.loop by ear clipping: ear (a, b, c) uses the hole edges a->b, b->c and adds c->a. Returns whether the
+// loop was closed completely (else its vertices are what is left in s.loop).
+bool clipEars(Tesselator::State& s, float h, size_t& boundary) {
+  auto& L = s.loop;
+  while (L.size() > 3) {
+    const size_t best = bestEar(s, L, h);
+    if (best == L.size()) break;
+    const size_t k1 = (best + 1) % L.size();
+    addTriangle(s, L[best], L[k1], L[(best + 2) % L.size()], &boundary);
+    L.erase(L.begin() + std::ptrdiff_t(k1));
+  }
+  return L.size() == 3 && addTriangle(s, L[0], L[1], L[2], &boundary);
+}
+
 }  // namespace
 
-void Tesselator::triangulate(Mesh& mesh) {
-  State& s = *s_;
-  const TesselatorOptions& o = options_;
-  const auto t0 = std::chrono::steady_clock::now();
-  mesh.clear();
+// ---- The passes ----------------------------------------------------------------------------------------------
+
+void projectVertices(Tesselator::State& s, const TesselatorOptions& o) {
   const size_t n = s.size();
-  if (n == 0 || s.field == nullptr) {
-    stats_.triangles = stats_.boundaryEdges = stats_.filledTriangles = stats_.unfilledLoops = 0;
-    stats_.meshMs = 0.0;
-    return;
-  }
-  // Spatial sort and neighbour list at the current positions (kept for the next update if nothing moves before it).
-  if (!s.nbrValid) findNeighbours(s, o);
   const Field& field = *s.field;
-  const float h = o.desiredRadius, iso = field.iso();
+  const float h = o.desiredRadius;
   const size_t chunks = (n + kChunk - 1) / kChunk;
   if (s.scratch.size() < chunks) s.scratch.resize(chunks);
   s.vpos.resize(n);
@@ -327,8 +589,6 @@ void Tesselator::triangulate(Mesh& mesh) {
   s.cacheValue.resize(n);
   s.cacheGrad.resize(n);
   s.cacheOwner.resize(n);
-
-  // A. Vertices, normals, colours.
   const float colorExp = 1.0f / o.colorWidth;
   parallelFor(chunks, o.numThreads, [&](size_t c) {
     const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
@@ -339,195 +599,46 @@ void Tesselator::triangulate(Mesh& mesh) {
     box.hi += glm::vec3(1.6f * h);
     field.prepare(box, scratch);
     for (size_t i = begin; i < end; ++i) {
-      const glm::vec3 p = s.pos[i];
-      glm::vec3 v = p;
       FieldSample fs;
-      bool converged = false;
-      uint32_t winner = 0;  // the blend set winning at the particle
-      for (int it = 0; it < 3; ++it) {
-        fs = field.sample(v, scratch);
-        if (it == 0) {  // at the particle itself: the next compute phase reuses it if nothing moves before it
-          winner = scratch.lastWinner;
-          s.cacheValue[i] = fs.value;
-          s.cacheGrad[i] = fs.gradient;
-          s.cacheOwner[i] = fs.owner;
-        }
-        const float g2 = glm::dot(fs.gradient, fs.gradient);
-        // A particle this far off (carried into a limb it does not blend with, about to die as a stray) would
-        // make a spike: it is left out of this render's triangulation and the gap is filled around it.
-        if (!(g2 > 1e-20f) || (it == 0 && std::fabs(fs.value - iso) > kVertexOff * h * std::sqrt(g2))) break;
-        s.nrm[i] = -fs.gradient / std::sqrt(g2);
-        if (std::fabs(fs.value - iso) < 1e-5f * h * std::sqrt(g2)) {
-          converged = true;
-          break;
-        }
-        glm::vec3 d = (iso - fs.value) / g2 * fs.gradient;
-        const float len = glm::length(d);
-        if (len > 0.5f * h) d *= 0.5f * h / len;
-        v += d;
-        // A step this short leaves an error of order len^2 / curvature radius (< 1e-4 desiredRadius on any
-        // surface the particles can resolve): no need to sample again. The particles are usually this close, as
-        // the integration ended with a Newton step.
-        if (len < 1e-2f * h) {
-          converged = true;
-          break;
-        }
-      }
-      s.vok[i] = converged ? 1 : 0;  // else no vertex this render (see kVertexOff)
-      s.vpos[i] = finite3(v) ? v : p;
-      // Colour: primitive colours weighted by term^(1/colorWidth) over the blend set winning at the particle
-      // (wider = smoother): only primitives that blend there mix their colours.
-      glm::vec3 col(0.0f);
-      float wsum = 0.0f;
-      auto addColor = [&](uint32_t k) {
-        const float t = field.blend().term(field.primitive(k).distance(p), field.param(k));
-        const float base = field.blend().additive() ? t : t + 1.0f;
-        if (base <= 0.0f) return;
-        const float w = std::pow(base, colorExp);
-        col += w * field.color(k);
-        wsum += w;
-      };
-      const int32_t ow = s.owner[i];
-      if (ow >= 0 && scratch.setCount() > 0) {
-        for (uint32_t m = scratch.setOffsets[winner]; m < scratch.setOffsets[winner + 1]; ++m)
-          addColor(scratch.candidates[scratch.setMembers[m]]);
-      } else {
-        for (uint32_t k : scratch.candidates) addColor(k);
-      }
-      s.vcol[i] = wsum > 0.0f ? col / wsum : fs.color;
+      uint32_t winner = 0;
+      projectVertex(s, field, h, i, scratch, fs, winner);
+      s.vcol[i] = vertexColor(s, field, colorExp, i, scratch, fs, winner);
     }
   });
-
   s.cacheValid = true;
   s.cacheStamp = s.fieldStamp;
+}
 
-  // B. Fans: Voronoi cells in each tangent plane. Candidates come from the neighbour list (built at the particles,
-  // at least kFanRadius desiredRadius wide); distances are re-measured between the projected vertices.
+void buildFans(Tesselator::State& s, const TesselatorOptions& o) {
+  const size_t n = s.size();
   s.fan.resize(n * kMaxFan);
   s.fanCount.resize(n);
-  const float rT = kFanRadius * h, rT2 = rT * rT;
-  parallelFor(chunks, o.numThreads, [&](size_t c) {
-    const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
+  parallelFor((n + kChunk - 1) / kChunk, o.numThreads, [&](size_t c) {
     Cell cell;
-    uint64_t keys[kMaxNeighbours], farKeys[kMaxNeighbours];
-    const float nearT2 = kNearFan * kNearFan * h * h;
-    for (size_t i = begin; i < end; ++i) {
-      const glm::vec3 p = s.vpos[i], nn = s.nrm[i];
-      if (!s.vok[i]) {
-        s.fanCount[i] = 0;
-        continue;
-      }
-      // Candidates: agreeing neighbours within rT, by (distance, index) (one 64-bit key: d2 > 0 orders like its
-      // bits), the nearest kFanCandidates. Only the near ones (within kNearFan) are sorted up front; the far ones
-      // are sorted only if the cell is still large enough for them to cut it (rarely: the cell shrinks to about
-      // 0.6 desiredRadius once the first ring is clipped). The processing order is the full sort's.
-      size_t nearCnt = 0, farCnt = 0;
-      const uint32_t* nl = &s.nbr[i * kMaxNeighbours];
-      for (size_t k = 0; k < s.nbrCount[i]; ++k) {  // branch-free: which are kept, and where, is unpredictable
-        const uint32_t j = nl[k];
-        const glm::vec3 d = s.vpos[j] - p;
-        const float d2 = d.x * d.x + d.y * d.y + d.z * d.z;
-        const size_t ok = size_t(s.vok[j] != 0) & size_t(d2 <= rT2) & size_t(d2 > 0.0f) &
-                          size_t(glm::dot(s.nrm[j], nn) >= 0.3f);
-        const size_t near = size_t(d2 <= nearT2);
-        const uint64_t key = sortKey(d2, j);
-        keys[nearCnt] = key;
-        farKeys[farCnt] = key;
-        nearCnt += ok & near;
-        farCnt += ok & (near ^ 1);
-      }
-      std::sort(keys, keys + nearCnt);
-      bool farSorted = false;
-      glm::vec3 b0, b1;
-      tangentBasis(nn, b0, b1);
-      cell.init(0.5f * rT);
-      float r2 = cell.rad2;
-      const size_t total = std::min(nearCnt + farCnt, kFanCandidates);
-      for (size_t k = 0; k < total; ++k) {
-        if (k == nearCnt && !farSorted) {
-          // The near ones are used up: the far ones are needed only if they can still cut the cell.
-          if (nearT2 > 4.0f * r2) break;
-          std::sort(farKeys, farKeys + farCnt);
-          std::copy(farKeys, farKeys + std::min(farCnt, kFanCandidates - nearCnt), keys + nearCnt);
-          farSorted = true;
-        }
-        const uint32_t j = uint32_t(keys[k]);
-        const uint32_t bits = uint32_t(keys[k] >> 32);
-        float d2;
-        std::memcpy(&d2, &bits, sizeof d2);
-        if (d2 > 4.0f * r2) break;  // sorted by distance: no farther point can cut the cell
-        const glm::vec3 d = s.vpos[j] - p;
-        float x = glm::dot(d, b0), y = glm::dot(d, b1);
-        const float l2 = x * x + y * y;
-        if (l2 < 1e-12f * h * h) continue;
-        const float lift = std::sqrt(d2 / l2);  // keep the 3D distance: a local geodesic-like unfolding
-        x *= lift, y *= lift;
-        if (cell.clip(x, y, int32_t(j))) r2 = cell.rad2;
-      }
-      int32_t* f = &s.fan[i * kMaxFan];
-      size_t m = 0;
-      for (int k = 0; k < cell.n && m < kMaxFan; ++k)
-        if (m == 0 || f[m - 1] != cell.lab[k]) f[m++] = cell.lab[k];
-      if (m > 1 && f[m - 1] == f[0]) --m;
-      s.fanCount[i] = uint8_t(m);
+    for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
+      if (s.vok[i]) buildFan(s, i, o.desiredRadius, cell);
+      else s.fanCount[i] = 0;
     }
   });
+}
 
-  // C. Votes. Each fan slot also records whether its triangle is unanimous (in all three corners' fans).
+void voteTriangles(Tesselator::State& s, const TesselatorOptions& o) {
+  const size_t n = s.size(), chunks = (n + kChunk - 1) / kChunk;
   s.cand.resize(n * kMaxFan * 3);
   s.candCount.resize(n);
   s.fanUnanimous.resize(n * kMaxFan);
   s.fanRepeat.resize(n);
   s.candVotes.resize(n);
-  std::vector<size_t> chunkUnanimous(chunks + 1, 0);  // per chunk its emitted unanimous triangles, then offsets
+  s.chunkUnanimous.assign(chunks + 1, 0);
   parallelFor(chunks, o.numThreads, [&](size_t c) {
-    const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
     size_t unanimousOut = 0;
-    for (size_t i = begin; i < end; ++i) {
-      const int32_t* f = &s.fan[i * kMaxFan];
-      uint8_t* unanimous = &s.fanUnanimous[i * kMaxFan];
-      const size_t m = s.fanCount[i];
-      size_t out = 0;
-      uint8_t votes = 0;  // bit v: a candidate with v votes
-      bool repeat = false;
-      uint64_t seen = 0;  // labels of the unanimous slots so far, hashed to 64 bits
-      for (size_t k = 0; k < m; ++k) {
-        unanimous[k] = 0;
-        if (m < 2) continue;
-        const int32_t a = f[k], b = f[k + 1 == m ? 0 : k + 1];
-        if (a < 0 || b < 0 || a == b) continue;
-        const uint32_t ua = uint32_t(a), ub = uint32_t(b), ui = uint32_t(i);
-        const bool byA = fanHas(s, ua, ub, ui), byB = fanHas(s, ub, ui, ua);
-        if (byA && byB) {
-          unanimous[k] = 1;
-          const uint64_t bit = uint64_t(1) << (ua & 63u);
-          if (seen & bit)  // maybe a repeat: check exactly
-            for (size_t q = 0; q < k; ++q) repeat = repeat || (unanimous[q] && f[q] == a);
-          seen |= bit;
-        }
-        uint32_t minProposer = ui;
-        if (byA) minProposer = std::min(minProposer, ua);
-        if (byB) minProposer = std::min(minProposer, ub);
-        if (minProposer != ui) continue;
-        uint32_t* slot = &s.cand[(i * kMaxFan + out++) * 3];
-        slot[0] = ua;
-        slot[1] = ub;
-        slot[2] = 1u + uint32_t(byA) + uint32_t(byB);
-        votes |= uint8_t(1u << slot[2]);
-        unanimousOut += slot[2] == 3 ? 1 : 0;
-      }
-      s.candCount[i] = uint8_t(out);
-      s.candVotes[i] = votes;
-      s.fanRepeat[i] = repeat ? 1 : 0;
-    }
-    chunkUnanimous[c + 1] = unanimousOut;
+    for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) unanimousOut += voteFan(s, i);
+    s.chunkUnanimous[c + 1] = unanimousOut;
   });
+}
 
-  // D. Assembly: unanimous triangles first, then the rest, never reusing a directed edge.
-  // A unanimous triangle (i, a, b) is the slot (a, b) of i's fan, (b, i) of a's and (i, a) of b's, so a vertex's
-  // outgoing half-edges among unanimous triangles are the first labels of its unanimous slots. Unless a label repeats
-  // among them (a degenerate fan), no two unanimous triangles share a directed edge and the sequential assembly would
-  // accept every one of them: their half-edges are then filled in parallel, each vertex from its own fan.
+size_t assembleTriangles(Tesselator::State& s, const TesselatorOptions& o) {
+  const size_t n = s.size(), chunks = (n + kChunk - 1) / kChunk;
   s.heTo.resize(n * kMaxHalfEdges);
   s.heCount.resize(n);
   s.tris.clear();
@@ -541,44 +652,16 @@ void Tesselator::triangulate(Mesh& mesh) {
     // Each chunk writes its triangles at its offset: the same particle order as the sequential assembly. The
     // unanimous triangles at i are exactly i's unanimous slots (i, f[q], f[q + 1]), so i's outgoing edge i -> f[k]
     // has its twin f[k] -> i iff some unanimous slot q has f[q + 1] == f[k]: i's own fan tells.
-    for (size_t c = 0; c < chunks; ++c) chunkUnanimous[c + 1] += chunkUnanimous[c];
-    s.tris.resize(3 * chunkUnanimous[chunks]);
-    std::vector<size_t> chunkOpen(chunks, 0);
+    for (size_t c = 0; c < chunks; ++c) s.chunkUnanimous[c + 1] += s.chunkUnanimous[c];
+    s.tris.resize(3 * s.chunkUnanimous[chunks]);
+    s.chunkOpen.assign(chunks, 0);
     parallelFor(chunks, o.numThreads, [&](size_t c) {
-      const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
-      uint32_t* tri = s.tris.data() + 3 * chunkUnanimous[c];
+      uint32_t* tri = s.tris.data() + 3 * s.chunkUnanimous[c];
       size_t chunkBoundary = 0;
-      for (size_t i = begin; i < end; ++i) {
-        const int32_t* f = &s.fan[i * kMaxFan];
-        const uint8_t* unanimous = &s.fanUnanimous[i * kMaxFan];
-        const size_t m = s.fanCount[i];
-        uint32_t* to = &s.heTo[i * kMaxHalfEdges];
-        uint32_t from[kMaxHalfEdges];  // the twins' start vertices: f[q + 1] of each unanimous slot q
-        size_t cnt = 0;
-        for (size_t k = 0; k < m; ++k)
-          if (unanimous[k]) {
-            from[cnt] = uint32_t(f[k + 1 == m ? 0 : k + 1]);
-            to[cnt++] = uint32_t(f[k]);
-          }
-        s.heCount[i] = uint8_t(cnt);
-        size_t open = 0;
-        for (size_t k = 0; k < cnt; ++k) {
-          bool twin = false;
-          for (size_t q = 0; q < cnt; ++q) twin |= from[q] == to[k];
-          open += twin ? 0 : 1;
-        }
-        s.openOut[i] = open > 0 ? 1 : 0;
-        chunkBoundary += open;
-        for (size_t k = 0; k < s.candCount[i]; ++k) {
-          const uint32_t* slot = &s.cand[(i * kMaxFan + k) * 3];
-          if (slot[2] != 3) continue;
-          tri[0] = uint32_t(i), tri[1] = slot[0], tri[2] = slot[1];
-          tri += 3;
-        }
-      }
-      chunkOpen[c] = chunkBoundary;
+      for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) chunkBoundary += placeUnanimous(s, i, tri);
+      s.chunkOpen[c] = chunkBoundary;
     });
-    for (size_t open : chunkOpen) boundary += open;
+    for (size_t open : s.chunkOpen) boundary += open;
   } else {
     s.heCount.assign(n, 0);
     s.openOut.assign(n, 0);
@@ -598,9 +681,11 @@ void Tesselator::triangulate(Mesh& mesh) {
         const uint32_t* slot = &s.cand[(size_t(i) * kMaxFan + k) * 3];
         if (slot[2] == votes) addTriangle(s, i, slot[0], slot[1], &boundary);
       }
+  return boundary;
+}
 
-  // E. Hole repair.
-  const size_t assembled = s.tris.size() / 3;
+size_t repairHoles(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary) {
+  const size_t n = s.size();
   s.holeTo.resize(n * 4);
   size_t unfilled = 0;
   for (int round = 0; round < 4 && boundary > 0; ++round) {
@@ -611,62 +696,11 @@ void Tesselator::triangulate(Mesh& mesh) {
     for (uint32_t start = 0; start < n; ++start)
       for (size_t e = 0; e < s.holeCount[start]; ++e) {
         if (s.holeUsed[size_t(start) * 4 + e]) continue;
-        // Walk the loop start -> ... -> start along unused hole edges.
-        s.loop.clear();
-        s.loop.push_back(start);
-        s.holeUsed[size_t(start) * 4 + e] = 1;
-        uint32_t cur = s.holeTo[size_t(start) * 4 + e];
-        bool closed = false;
-        while (s.loop.size() <= size_t(4 * o.maxHoleLoop)) {
-          if (cur == start) {
-            closed = true;
-            break;
-          }
-          s.loop.push_back(cur);
-          size_t pick = 4;
-          for (size_t q = 0; q < s.holeCount[cur]; ++q)
-            if (!s.holeUsed[size_t(cur) * 4 + q]) {
-              pick = q;
-              break;
-            }
-          if (pick == 4) break;
-          s.holeUsed[size_t(cur) * 4 + pick] = 1;
-          cur = s.holeTo[size_t(cur) * 4 + pick];
-        }
-        if (!closed || s.loop.size() > size_t(o.maxHoleLoop) || s.loop.size() < 3 || !fillable(s, s.loop)) {
+        const bool closed = walkHoleLoop(s, start, e, o.maxHoleLoop);
+        const bool fill = closed && s.loop.size() <= size_t(o.maxHoleLoop) && s.loop.size() >= 3 && fillable(s, s.loop);
+        if (!fill || !clipEars(s, o.desiredRadius, boundary)) {
           ++unfilled;
           for (uint32_t v : s.loop) s.openUp[v] = 1;  // open up around it next round
-          continue;
-        }
-        // Ear clipping: ear (a, b, c) uses the hole edges a->b, b->c and adds c->a.
-        auto& L = s.loop;
-        while (L.size() > 3) {
-          size_t best = L.size();
-          float bestScore = 1e30f;
-          for (size_t k = 0; k < L.size(); ++k) {
-            const uint32_t a = L[k], b = L[(k + 1) % L.size()], c = L[(k + 2) % L.size()];
-            if (a == c || a == b || b == c || hasHalfEdge(s, c, a) || hasHalfEdge(s, a, b) || hasHalfEdge(s, b, c))
-              continue;
-            const glm::vec3 pa = s.vpos[a], pb = s.vpos[b], pc = s.vpos[c];
-            const glm::vec3 cr = glm::cross(pb - pa, pc - pa);
-            const float cl = glm::length(cr);
-            const glm::vec3 nv = s.nrm[a] + s.nrm[b] + s.nrm[c];
-            const float agree = cl > 0.0f ? glm::dot(cr, nv) / (cl * std::max(glm::length(nv), 1e-6f)) : -1.0f;
-            const glm::vec3 diag = pc - pa;
-            const float score = glm::dot(diag, diag) / (h * h) + 4.0f * (1.0f - agree) + (agree < 0.0f ? 100.0f : 0.0f);
-            if (score < bestScore) {
-              bestScore = score;
-              best = k;
-            }
-          }
-          if (best == L.size()) break;
-          const size_t k1 = (best + 1) % L.size();
-          addTriangle(s, L[best], L[k1], L[(best + 2) % L.size()], &boundary);
-          L.erase(L.begin() + std::ptrdiff_t(k1));
-        }
-        if (L.size() != 3 || !addTriangle(s, L[0], L[1], L[2], &boundary)) {
-          ++unfilled;
-          for (uint32_t v : L) s.openUp[v] = 1;
         }
       }
     // Loops that could not be closed (pinched or folded): remove every triangle touching them, so that the next
@@ -675,12 +709,15 @@ void Tesselator::triangulate(Mesh& mesh) {
     if (boundary == 0) unfilled = 0;
     if (unfilled > 0 && round < 3) removeAround(s, boundary);
   }
+  return unfilled;
+}
 
-  // Output: one vertex per particle.
+void writeMesh(const Tesselator::State& s, const TesselatorOptions& o, Mesh& mesh) {
+  const size_t n = s.size();
   mesh.positions.resize(3 * n);
   mesh.normals.resize(3 * n);
   mesh.colors.resize(3 * n);
-  parallelFor(chunks, o.numThreads, [&](size_t c) {
+  parallelFor((n + kChunk - 1) / kChunk, o.numThreads, [&](size_t c) {
     for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i)
       for (int a = 0; a < 3; ++a) {
         mesh.positions[3 * i + size_t(a)] = s.vpos[i][a];
@@ -689,6 +726,27 @@ void Tesselator::triangulate(Mesh& mesh) {
       }
   });
   mesh.indices = s.tris;
+}
+
+void Tesselator::triangulate(Mesh& mesh) {
+  State& s = *s_;
+  const TesselatorOptions& o = options_;
+  const auto t0 = std::chrono::steady_clock::now();
+  mesh.clear();
+  if (s.size() == 0 || s.field == nullptr) {
+    stats_.triangles = stats_.boundaryEdges = stats_.filledTriangles = stats_.unfilledLoops = 0;
+    stats_.meshMs = 0.0;
+    return;
+  }
+  // Spatial sort and neighbour list at the current positions (kept for the next update if nothing moves before it).
+  if (!s.nbrValid) findNeighbours(s, o);
+  projectVertices(s, o);  // A
+  buildFans(s, o);        // B
+  voteTriangles(s, o);    // C
+  size_t boundary = assembleTriangles(s, o);  // D
+  const size_t assembled = s.tris.size() / 3;
+  const size_t unfilled = repairHoles(s, o, boundary);  // E
+  writeMesh(s, o, mesh);
   stats_.triangles = s.tris.size() / 3;
   stats_.filledTriangles = stats_.triangles > assembled ? stats_.triangles - assembled : 0;
   stats_.boundaryEdges = boundary;

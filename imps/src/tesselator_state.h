@@ -107,6 +107,11 @@ struct Tesselator::State {
   std::vector<uint32_t> holeTo;
   std::vector<uint8_t> holeCount, holeUsed, openUp, openOut;
   std::vector<uint32_t> loop, tris;
+  std::vector<size_t> chunkUnanimous;  // voteTriangles: per chunk its emitted unanimous triangles, then offsets
+  std::vector<size_t> chunkOpen;       // assembleTriangles: per chunk its open directed edges
+  // Per-update scratch (step's phases).
+  std::vector<uint64_t> chunkTransfers, chunkBlocked;  // ownership changes made and refused, per chunk
+  std::vector<Rigid> differentials;                    // per primitive: its motion since the last update
 
   explicit State(const TesselatorOptions& o) : hash(o.cubeSize, o.bitsPerDim) {}
   size_t size() const { return pos.size(); }
@@ -122,5 +127,47 @@ void findNeighbours(Tesselator::State& s, const TesselatorOptions& o);
 
 // Places particles on the field's surface from every primitive (tesselator_seed.cpp).
 void seedParticles(Tesselator::State& s, const Field& field, const TesselatorOptions& o);
+
+// ---- The triangulation's passes (tesselator_mesh.cpp), in the order Tesselator::triangulate runs them. Each needs
+// the neighbour list (findNeighbours) and s.field; each reads the previous passes' outputs and writes only its own.
+// Parallel ones write per-particle outputs only (deterministic for any thread count).
+
+// A. vertices (parallel): s.vpos (the particle moved onto the surface by up to three Newton steps), s.nrm (unit,
+// outward), s.vcol (colours blended over colorWidth) and s.vok (1: close enough to the surface to be a vertex this
+// render); the field samples at the particles into s.cacheValue/Grad/Owner for the next compute phase.
+void projectVertices(Tesselator::State& s, const TesselatorOptions& o);
+// B. fans (parallel): s.fan / s.fanCount, per particle with s.vok the labels of its Voronoi cell's edges among its
+// projected neighbours in its tangent plane, counter-clockwise seen from outside (-1: the bounding octagon), so
+// consecutive labels (a, b) make the Delaunay triangle (i, a, b). Particles without s.vok get an empty fan.
+void buildFans(Tesselator::State& s, const TesselatorOptions& o);
+// C. votes (parallel): each fan triangle (i, a, b) is proposed by each corner whose fan holds it; its smallest
+// proposer emits it into s.cand (a, b, votes in 1..3). s.fanUnanimous marks the slots held by all three corners,
+// s.fanRepeat the particles where a label repeats among those; s.chunkUnanimous[c + 1] counts chunk c's 3-vote ones.
+void voteTriangles(Tesselator::State& s, const TesselatorOptions& o);
+// D. assembly: s.tris from the candidates, 3 votes first, then 2, then 1, each in particle order, keeping a triangle
+// only if none of its directed edges is taken (no edge ever has more than two triangles; orientations agree).
+// Fills the half-edge table (s.heTo / s.heCount) and s.openOut. Returns the directed edges without a twin.
+size_t assembleTriangles(Tesselator::State& s, const TesselatorOptions& o);
+// E. hole repair: up to four rounds of closing boundary loops of at most maxHoleLoop edges by ear clipping; loops it
+// cannot close are opened up (the triangles around them removed) for the next round. Keeps `boundary` (directed
+// edges without a twin) up to date; returns the loops left unfilled.
+size_t repairHoles(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary);
+// The output: one vertex per particle (s.vpos, s.nrm, s.vcol clamped to [0, 1]) and s.tris.
+void writeMesh(const Tesselator::State& s, const TesselatorOptions& o, Mesh& mesh);
+
+// ---- The update's phases (tesselator.cpp), in the order Tesselator::step runs them after findNeighbours.
+
+// Compute (parallel, fixed partition): per particle its field sample (the cache of the last triangulation when
+// `cached`), stray test (s.dead), ownership transfer to a blend neighbour (counted in s.chunkTransfers /
+// chunkBlocked), its kMaxFuse nearest (s.fuse), repulsion velocity constrained to the surface (s.vel), energy and
+// radius rate. Sizes every per-particle output and clears s.dead first. Reads others' positions and radii; writes
+// only particle i's outputs.
+void computeForces(Tesselator::State& s, const Field& field, const TesselatorOptions& o, bool cached);
+// Integration (parallel): the clamped step along s.vel and the radius rate, then one Newton step back onto the
+// surface along the compute phase's gradient; particles carried off the surface are marked dead.
+void integrateParticles(Tesselator::State& s, const Field& field, const TesselatorOptions& o);
+// Additions and deletions (sequential, particle order): strays, fusion, death, fission (children appended), then
+// compaction in particle order. Counts into stats.
+void addAndDeleteParticles(Tesselator::State& s, const TesselatorOptions& o, TesselatorStats& stats);
 
 }  // namespace imps

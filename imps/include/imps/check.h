@@ -29,3 +29,31 @@
 #define IMPS_CHECK_LT(a, b) IMPS_CHECK_OP(a, <, b)
 #define IMPS_CHECK_LE(a, b) IMPS_CHECK_OP(a, <=, b)
 #define IMPS_CHECK_GE(a, b) IMPS_CHECK_OP(a, >=, b)
+
+// The debug tier, for the innermost loops (per cell, per particle, per half-edge) where an always-on check would
+// cost: IMPS_DCHECK and IMPS_DCHECK_EQ/LT/LE/GE check like the macros above when IMPS_DEBUG_CHECKS is 1, which it is
+// by default in builds without NDEBUG (Debug); otherwise they compile to nothing and do not evaluate their operands.
+#ifndef IMPS_DEBUG_CHECKS
+#ifdef NDEBUG
+#define IMPS_DEBUG_CHECKS 0
+#else
+#define IMPS_DEBUG_CHECKS 1
+#endif
+#endif
+#if IMPS_DEBUG_CHECKS
+#define IMPS_DCHECK(cond) IMPS_CHECK(cond)
+#define IMPS_DCHECK_OP(a, op, b) IMPS_CHECK_OP(a, op, b)
+#else
+#define IMPS_DCHECK(cond)        \
+  do {                           \
+    if (false) (void)(cond);     \
+  } while (0)
+#define IMPS_DCHECK_OP(a, op, b) \
+  do {                           \
+    if (false) (void)((a)op(b)); \
+  } while (0)
+#endif
+#define IMPS_DCHECK_EQ(a, b) IMPS_DCHECK_OP(a, ==, b)
+#define IMPS_DCHECK_LT(a, b) IMPS_DCHECK_OP(a, <, b)
+#define IMPS_DCHECK_LE(a, b) IMPS_DCHECK_OP(a, <=, b)
+#define IMPS_DCHECK_GE(a, b) IMPS_DCHECK_OP(a, >=, b)

@@ -22,8 +22,10 @@
 //    are entirely below or above the iso-value (with a 1e-3 relative margin) are never sampled.
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <expected>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -54,6 +56,12 @@ struct MarchingCubesOptions {
   // The most cells a grid may have (2^28: 645^3, about 3 GB of work at the densest). A finer grid is refused:
   // polygonize() gives an empty mesh and planGrid() says why. Raise it for a deliberately huge mesh.
   size_t maxCells = size_t{1} << 28;
+  // Long bakes (libfive's BRepSettings is the model). When *cancel becomes true (from any thread) the call returns
+  // promptly: every pass stops at its next block, `out` is left empty and stats->cancelled is set. Null: never.
+  std::atomic<bool>* cancel = nullptr;
+  // Called on the thread that called polygonize(), between passes and between slices of the sampling pass, with the
+  // fraction done in [0, 1], non-decreasing; the last call of a completed polygonize() reports 1. It may set *cancel.
+  std::function<void(float fraction)> progress;
 };
 
 struct MarchingCubesStats {
@@ -68,6 +76,7 @@ struct MarchingCubesStats {
   double sampleMs = 0.0;           // block bounds, samples, edge vertices (parallel)
   double triangulateMs = 0.0;      // cell cases and triangles (parallel)
   double gatherMs = 0.0;           // concatenation into the output mesh
+  bool cancelled = false;          // options.cancel stopped the call: the mesh is empty
 };
 
 // The grid polygonize() uses for `field` with `options`: cells along x, y and z (zero for an empty field), or the
@@ -88,12 +97,14 @@ class MarchingCubes {
   MarchingCubes(const MarchingCubes&) = delete;
   MarchingCubes& operator=(const MarchingCubes&) = delete;
 
-  // Polygonizes into `out` (cleared first).
-  void polygonize(const Field& field, const MarchingCubesOptions& options, Mesh& out,
+  // Polygonizes into `out` (cleared first). Returns false (and leaves `out` empty) when options.cancel stopped it.
+  // Scratch memory (per-block results, one set of buffers per worker thread) is kept in this object and reused.
+  bool polygonize(const Field& field, const MarchingCubesOptions& options, Mesh& out,
                   MarchingCubesStats* stats = nullptr);
 
+  struct State;  // opaque: defined in marching_cubes_passes.h (the passes' unit tests use it)
+
  private:
-  struct State;
   std::unique_ptr<State> state_;
 };
 

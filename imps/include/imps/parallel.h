@@ -22,4 +22,9 @@ int resolveThreads(int requested);
 // `grain` is the smallest number of consecutive indices given to one task.
 void parallelFor(size_t n, int threads, const std::function<void(size_t)>& body, size_t grain = 1);
 
+// parallelFor that also tells the body which worker runs it: body(i, worker) with worker in
+// [0, resolveThreads(threads)), and no two calls running at the same time share a worker number. For scratch memory
+// owned by the caller, one slot per worker (instead of thread_local storage that lives as long as the process).
+void parallelForWorkers(size_t n, int threads, const std::function<void(size_t, int)>& body, size_t grain = 1);
+
 }  // namespace imps

@@ -25,7 +25,9 @@
 // Thread safety: one owner calls everything; the worker threads are internal.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 #include <vector>
@@ -63,6 +65,12 @@ struct TesselatorOptions {
   // desiredRadius too small for the character reaches it; the surface is then sampled more coarsely than asked.
   size_t maxParticles = size_t{1} << 18;
   int maxHoleLoop = 40;          // boundary loops up to this many edges are filled by the hole repair
+  // Long bakes (settle()), as libfive's BRepSettings: when *cancel becomes true (from any thread) settle() returns
+  // after the update under way, with `mesh` empty and stats().cancelled set. Null: never.
+  std::atomic<bool>* cancel = nullptr;
+  // Called by settle() on the calling thread after every update with the fraction of maxUpdates done (non-decreasing;
+  // 1 when it returns settled or at maxUpdates). It may set *cancel.
+  std::function<void(float fraction)> progress;
 
   // From a scene's Tesselator3MP node (every figure A-1 field plus seed).
   static TesselatorOptions fromNode(const Tesselator3MPNode& node);
@@ -79,6 +87,7 @@ struct TesselatorStats {
   size_t filledTriangles = 0;  // last triangulate(): triangles added by the hole repair
   size_t unfilledLoops = 0;    // last triangulate(): boundary loops the repair could not close
   uint64_t updates = 0;        // total update() calls since reset
+  bool cancelled = false;      // the last settle() was stopped by options.cancel
   // Totals since reset.
   uint64_t fissions = 0, deaths = 0, fusions = 0, strays = 0, reseeds = 0;
   uint64_t transfers = 0;         // ownership changes (always to the owner or one of its blend neighbours)
@@ -123,7 +132,9 @@ class Tesselator {
   void frame(const SkeletonCache& skeleton, Mesh& mesh);
 
   // Runs updates until settled (particle count stable to 1% over 10 updates, and the mesh closed) or maxUpdates;
-  // returns the number of updates run. Leaves the last triangulation in `mesh`.
+  // returns the number of updates run. Leaves the last triangulation in `mesh`. Reports progress and stops on
+  // cancel as the options say (then `mesh` is empty, stats().cancelled is set, and the particles are those of the
+  // last complete update, so a later call goes on from there).
   int settle(const SkeletonCache& skeleton, Mesh& mesh, int maxUpdates = 400);
 
   ParticleView particles() const;

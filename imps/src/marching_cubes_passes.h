@@ -1,0 +1,205 @@
+// The passes of MarchingCubes::polygonize, in the order they run, with the buffers they share. Internal (not
+// installed): marching_cubes.cpp and the passes' unit tests (tests/imps/marching_cubes_passes_test.cpp) include it.
+//
+// A polygonize() call, in the spirit of OpenVDB's VolumeToMesh:
+//   1. makeGrid         the grid: the surface bounds plus a cell of margin, whole blocks of kBlock^3 cells;
+//   2. binPrimitives    every primitive into the blocks its support box overlaps (CSR lists, ascending);
+//   3. findThinFeatures grid vertices moved onto skeleton points, and the blocks that must be sampled for them;
+//   4. per block, in parallel (sampleBlocks):
+//      a. cullBlock          conservative field bounds: blocks entirely inside or outside are never sampled;
+//      b. sampleBlock        the 9^3 field samples (moved vertices overwritten);
+//      c. classifyBlock      surface cells (case codes) and the crossing edges the block owns, numbered locally;
+//      d. findEdgeRoots      each crossing edge's vertex by Anderson-Bjorck regula falsi on the true field;
+//      e. shadeEdgeVertices  positions, normals and colours of those vertices;
+//   5. numberVertices   global vertex numbers: each surface block's first vertex, in block order;
+//   6. triangulateBlock per surface block, in parallel: each cell's triangles from the face-consistent case table,
+//                       ambiguous faces decided by the asymptotic decider, loop-centre vertices where needed;
+//   7. gatherMesh       concatenation in block order (edge vertices, then loop-centre vertices).
+// Every pass writes only its own block's results (or runs serially), so 1 and N threads give the identical mesh.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "imps/field.h"
+#include "imps/marching_cubes.h"
+#include "imps/mesh.h"
+
+namespace imps::mc {
+
+inline constexpr int kBlock = 8;                          // cells per block side
+inline constexpr int kBlockVerts = kBlock + 1;            // samples per block side
+inline constexpr int kBlockSamples = kBlockVerts * kBlockVerts * kBlockVerts;
+inline constexpr int kBlockEdges = 3 * kBlock * kBlock * kBlock;  // edges owned by a block (start vertex in [0, B)^3)
+static_assert(kBlockEdges <= INT16_MAX, "a block's local vertex indices fit BlockResult::edgeVertex");
+inline constexpr uint32_t kCellBits = (1u << kBlock) - 1;  // the cells (or owned edges) of one row, as bits
+inline constexpr int kCentre = 12;                        // table code of a cell's first loop-centre vertex
+inline constexpr uint32_t kProvisional = 0x80000000u;     // triangle index of a centre vertex before gatherMesh
+
+inline int sampleIndex(int i, int j, int k) { return i + kBlockVerts * (j + kBlockVerts * k); }
+inline int ownedEdgeIndex(int axis, int i, int j, int k) {
+  return axis * kBlock * kBlock * kBlock + i + kBlock * (j + kBlock * k);
+}
+
+struct Grid {
+  glm::vec3 origin{0.0f}, cell{1.0f};
+  glm::ivec3 cells{0};   // multiple of kBlock
+  glm::ivec3 blocks{0};
+  glm::vec3 vertex(int i, int j, int k) const {
+    return {origin.x + float(i) * cell.x, origin.y + float(j) * cell.y, origin.z + float(k) * cell.z};
+  }
+  glm::ivec3 verts() const { return cells + 1; }
+  size_t blockCount() const { return size_t(blocks.x) * size_t(blocks.y) * size_t(blocks.z); }
+  size_t blockIndex(int bx, int by, int bz) const {
+    return size_t(bx) + size_t(blocks.x) * (size_t(by) + size_t(blocks.y) * size_t(bz));
+  }
+  glm::ivec3 blockCoords(size_t b) const {
+    return {int(b % size_t(blocks.x)), int((b / size_t(blocks.x)) % size_t(blocks.y)),
+            int(b / (size_t(blocks.x) * size_t(blocks.y)))};
+  }
+  Box blockBox(int bx, int by, int bz) const {
+    Box b;
+    b.lo = vertex(bx * kBlock, by * kBlock, bz * kBlock);
+    b.hi = vertex((bx + 1) * kBlock, (by + 1) * kBlock, (bz + 1) * kBlock);
+    return b;
+  }
+  int64_t vertexKey(int i, int j, int k) const {
+    return int64_t(i) + int64_t(verts().x) * (int64_t(j) + int64_t(verts().y) * int64_t(k));
+  }
+};
+
+// A grid vertex moved onto a skeleton point.
+struct Snap {
+  int64_t key;  // Grid::vertexKey
+  glm::vec3 position;
+  float value;  // F at position
+};
+
+// One block's results, kept between calls (their buffers are reused).
+struct BlockResult {
+  bool sampled = false, hasSurface = false;
+  std::vector<float> samples;                   // kBlockSamples
+  std::vector<int16_t> edgeVertex;              // kBlockEdges: local vertex index or -1 (16 bits: half the cache
+                                                // lines for the triangles' lookups, often from the other core)
+  std::vector<uint32_t> cells;                  // surface cells: index i + B (j + B k), case code << 16
+  std::vector<float> positions, normals, colors;
+  std::vector<uint32_t> triangles;              // global indices (centre vertices kProvisional until gatherMesh)
+  std::vector<float> centrePositions, centreNormals, centreColors;  // loop-centre vertices of this block
+  std::vector<std::pair<int, glm::vec3>> moved;  // sample index -> moved position
+  uint32_t base = 0;                            // global number of the first edge vertex (numberVertices)
+};
+
+// Root finding state of one crossing edge: the bracket [ta, tb] along pa -> pb with transformed values ga, gb.
+struct EdgeRoot {
+  glm::vec3 pa, pb;
+  float ta = 0.0f, tb = 1.0f, ga = 0.0f, gb = 0.0f, t = 0.0f, tolerance = 0.0f;
+  int side = 0, iterations = 0;
+};
+
+// The value root finding runs on: F - iso, or for the exponential blend a distance-like transform of ln F that is
+// near linear along an edge (marching_cubes.cpp says why). Same sign as F - iso.
+struct RootTransform {
+  bool logSpace = false;
+  float iso = 1.0f, logIso = 0.0f, invB = 0.0f, rootIso = 0.0f;
+  explicit RootTransform(const Field& field);
+  float operator()(float v) const;
+};
+
+// The samples' coordinates along each axis of one block (Grid::vertex's).
+struct BlockAxes {
+  std::array<float, kBlockVerts> xs, ys, zs;
+  BlockAxes(const Grid& g, glm::ivec3 block);
+};
+
+// Scratch memory of one worker thread, owned by the polygonizer (one per worker, reused by every call).
+struct WorkerScratch {
+  FieldScratch field;
+  std::vector<uint32_t> reaching;        // cullBlock: the candidates whose support reaches the block
+  std::vector<float> reachingDistances;  // and their minDistance() to it
+  std::vector<EdgeRoot> edges;           // classifyBlock -> findEdgeRoots -> shadeEdgeVertices
+  std::vector<float> ends;               // F at each edge's two ends, then their transformed values
+  std::vector<uint32_t> active, stillActive;
+  std::vector<glm::vec3> at;
+  std::vector<float> values;
+  std::vector<FieldSample> samples;
+};
+
+// Primitives binned to blocks (CSR): block b's candidates are members[offsets[b] .. offsets[b + 1]), ascending.
+struct Bins {
+  std::vector<uint32_t> offsets, members, cursor;
+  std::span<const uint32_t> of(size_t b) const { return {members.data() + offsets[b], offsets[b + 1] - offsets[b]}; }
+};
+
+}  // namespace imps::mc
+
+namespace imps {
+
+struct MarchingCubes::State {
+  std::vector<mc::BlockResult> blocks;
+  mc::Bins bins;
+  std::vector<mc::Snap> snaps;
+  std::vector<uint8_t> forced;        // per block: holds a moved vertex, so it is sampled whatever its bounds
+  std::vector<uint32_t> work;         // the blocks a parallel pass visits
+  std::vector<uint32_t> centreBases;  // per block: global number of its first loop-centre vertex
+  std::vector<glm::vec3> skeleton;    // findThinFeatures: one primitive's skeleton points
+  std::vector<mc::WorkerScratch> workers;
+};
+
+}  // namespace imps
+
+namespace imps::mc {
+
+// 1. The grid for field's surface bounds and the options' resolution. An empty surface gives no blocks.
+Grid makeGrid(const Field& field, const MarchingCubesOptions& options);
+
+// 2. Bins every primitive into the blocks its support box (grown by a cell, for moved vertices) overlaps.
+// Output: bins.offsets has blockCount + 1 entries; each block's members ascend. Reuses bins' buffers.
+void binPrimitives(const Field& field, const Grid& g, Bins& bins);
+
+// 3. Thin features: the grid vertices moved onto skeleton points (one per vertex, the deepest point wins; sorted by
+// key), and `forced` (one byte per block): 1 for every block whose closed vertex range holds one of them.
+// Uses st.skeleton and worker 0's field scratch.
+void findThinFeatures(const Field& field, const Grid& g, MarchingCubes::State& st);
+
+// 4a. Whether block b may hold surface: false when no candidate's support reaches it or its conservative field
+// bounds lie entirely below or above iso (1e-3 relative margin). On true, ws.field is prepared for sampling it.
+bool cullBlock(const Field& field, const Grid& g, size_t b, std::span<const uint32_t> candidates, bool forced,
+               WorkerScratch& ws);
+
+// 4b. The block's 9^3 samples into r.samples (sampleIndex order), moved vertices' values and positions from snaps
+// (sorted by key) into r.samples and r.moved. ws.field must be prepared for the block.
+void sampleBlock(const Field& field, const Grid& g, glm::ivec3 block, const BlockAxes& axes,
+                 std::span<const Snap> snaps, BlockResult& r, WorkerScratch& ws);
+
+// 4c. From r.samples: r.cells (surface cells in index order with their case codes), r.edgeVertex (every owned edge's
+// local vertex number or -1) and, in the same order, ws.edges (ends' positions, iterations) and ws.ends (F at both
+// ends). Local numbers follow cells (i, j, k) ascending with i fastest, axes x, y, z within a cell. Returns whether
+// the block has a surface cell.
+bool classifyBlock(float iso, int rootIterations, const BlockAxes& axes, BlockResult& r, WorkerScratch& ws);
+
+// 4d. Root finding on ws.edges: their parameters t in (0, 1) along pa -> pb, at most each edge's iterations batched
+// evaluations of the true field after the first interpolation. ws.field must be prepared for the block.
+void findEdgeRoots(const Field& field, RootTransform transform, WorkerScratch& ws);
+
+// 4e. r.positions (and, as the options ask, r.normals and r.colors) of ws.edges' vertices, 3 floats per vertex.
+void shadeEdgeVertices(const Field& field, const MarchingCubesOptions& options, BlockResult& r, WorkerScratch& ws);
+
+// 5. Global vertex numbers: every surface block's r.base (blocks without surface get the running total too) and
+// surfaceBlocks the blocks with surface, ascending. Returns the number of edge vertices.
+uint32_t numberVertices(std::span<BlockResult> blocks, std::vector<uint32_t>& surfaceBlocks);
+
+// 6. Block b's triangles (global vertex numbers; loop-centre vertices kProvisional | local number) and loop-centre
+// vertices, from its cells and the edge vertices of it and its +x, +y, +z neighbours (numbered by pass 5).
+void triangulateBlock(const Field& field, const Grid& g, size_t b, const MarchingCubesOptions& options,
+                      MarchingCubes::State& st, FieldScratch& scratch);
+
+// 7. out = every surface block's edge vertices in block order, then every block's loop-centre vertices (numbered
+// from `edgeVertices` on, st.centreBases), and the triangles in block order with provisional indices resolved.
+void gatherMesh(uint32_t edgeVertices, MarchingCubes::State& st, Mesh& out);
+
+}  // namespace imps::mc
