@@ -2,9 +2,11 @@
 #include "imps/parallel.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -31,7 +33,19 @@ void parallelFor(size_t n, int threads, const std::function<void(size_t)>& body,
   {
     std::lock_guard<std::mutex> lock(mutex);
     auto& slot = arenas[t];
-    if (!slot) slot = std::make_unique<tbb::task_arena>(t);
+    if (!slot) {
+      // An arena of t threads asks oneTBB for t - 1 workers. Its default limit is one fewer than the cores, and a
+      // request above it is cut with a warning on stderr ("The number of workers is currently limited to …") that
+      // no caller can act on. Raise the limit to the largest arena asked for (replacing the control: with several,
+      // the lowest wins), so a requested thread count is honoured, silently.
+      static std::unique_ptr<tbb::global_control> limit;
+      const size_t wanted = std::max<size_t>(size_t(t), std::thread::hardware_concurrency());
+      if (!limit || tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) < wanted) {
+        limit.reset();
+        limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, wanted);
+      }
+      slot = std::make_unique<tbb::task_arena>(t);
+    }
     arena = slot.get();
   }
   arena->execute([&] {

@@ -135,6 +135,7 @@ int runCalibrate(const CalibrateArgs& a) {
     std::fprintf(stderr, "puppeteer calibrate: error: --window-ms must be positive\n");
     return kExitUsage;
   }
+  if (int rc = checkOutputPath("calibrate", "-o", a.output); rc != kExitOk) return rc;
   // ---- Inputs: the character, the device description and samples source, the rig map, the check pose.
   auto loaded = loadScene(a.scene);
   if (!loaded) return kExitInvalidInput;
@@ -254,13 +255,17 @@ int runCalibrate(const CalibrateArgs& a) {
 void addCalibrationCommands(CLI::App& app, Commands& commands) {
   auto args = std::make_shared<CalibrateArgs>();
   CLI::App* cmd = app.add_subcommand("calibrate", "Calibrate an armature's offsets in the character's calibration pose");
-  cmd->add_option("--rig", args->rig, "rig map (docs/calibration.md)")->required();
-  cmd->add_option("--scene", args->scene, "the character's scene file (its pose is the calibration pose)")->required();
-  cmd->add_option("--session", args->session, "use the first --window-ms of a recorded session (non-interactive)");
+  cmd->add_option("--rig", args->rig, "rig map (docs/calibration.md)")->required()->check(inputFile());
+  cmd->add_option("--scene", args->scene, "the character's scene file (its pose is the calibration pose)")
+      ->required()
+      ->check(inputFile());
+  cmd->add_option("--session", args->session, "use the first --window-ms of a recorded session (non-interactive)")
+      ->check(inputFile());
   cmd->add_option("--device", args->device, "calibrate a live device, e.g. serial:/dev/ttyACM0 (interactive)");
   cmd->add_option("-o,--output", args->output, "calibration file to write (replaced atomically)")->required();
   cmd->add_option("--window-ms", args->windowMs, "how long to average each pose")->capture_default_str();
-  cmd->add_option("--check-pose", args->checkPose, "a second known pose to check signs and gains (JSON)");
+  cmd->add_option("--check-pose", args->checkPose, "a second known pose to check signs and gains (JSON)")
+      ->check(inputFile());
   cmd->add_option("--max-noise-deg", args->maxNoiseDeg, "reject the window above this per-channel std deviation")
       ->capture_default_str();
   cmd->add_flag("--no-wait", args->noWait, "with --device: do not wait for Enter before each pose (scripts, tests)");

@@ -1,6 +1,7 @@
 // The `puppeteer` program: every command of the product's command line.
 #include <unistd.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <string>
 
@@ -30,5 +31,8 @@ void useHugePages(char** argv) {
 
 int main(int argc, char** argv) {
   useHugePages(argv);
+  // Line-buffered stdout even into a pipe: a report line and a following stderr message (`cmd 2>&1 | less`) then
+  // arrive in the order they were printed, not stdout's block at exit after every message.
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
   return imps::app::runCli(argc, argv);
 }

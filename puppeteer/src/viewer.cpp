@@ -485,6 +485,7 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
         info.selectedJoint =
             s.selectedJoint >= 0 ? pipeline.character().joints()[size_t(s.selectedJoint)].name : std::string();
         info.message = s.message;
+        info.deviceKeys = source && source->handlesDeviceKeys();
         hud->draw(info);
       }
       lap(kHud);
