@@ -257,6 +257,7 @@ struct RecordArgs {
   std::string output;
   std::string calibration;
   double seconds = 0;
+  bool json = false;
 };
 
 int runRecord(const RecordArgs& a) {
@@ -352,6 +353,13 @@ int runRecord(const RecordArgs& a) {
   }
   const drivers::DeviceSessionStats st = session.stats();
   const uint64_t skipped = recorder->skipped();  // a different device came back on reconnect: its samples do not fit
+  if (a.json) {
+    printJson(Json{{"output", a.output}, {"device", a.device}, {"samples", recorder->samples()},
+                   {"droppedByLink", st.samplesDropped}, {"crcErrors", st.crcErrors}, {"timeouts", st.timeouts},
+                   {"reconnects", st.reconnects}, {"queueOverflows", mailbox.stats().queueOverflows},
+                   {"skipped", skipped}, {"calibration", a.calibration}});
+    return exitCode;
+  }
   std::printf("Recorded %llu samples to %s (dropped by the device link: %llu, queue overflows: %llu%s)\n",
               static_cast<unsigned long long>(recorder->samples()), a.output.c_str(),
               static_cast<unsigned long long>(st.samplesDropped),
@@ -384,6 +392,7 @@ void addDeviceCommands(CLI::App& app, Commands& commands) {
       ->required();
   record->add_option("-o,--output", recordArgs->output, "session file to create (never overwritten)")->required();
   record->add_option("--seconds", recordArgs->seconds, "stop after this long (default: until Ctrl-C)");
+  record->add_flag("--json", recordArgs->json, "Print the summary as JSON (for scripts)");
   record->add_option("--calibration", recordArgs->calibration,
                      "calibration in force (puppeteer calibrate), stored with the take for replay")
       ->check(inputFile());

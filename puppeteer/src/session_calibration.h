@@ -24,9 +24,9 @@ std::expected<void, std::string> appendCalibration(sim::SessionWriter& writer, c
 bool isBvhChannelMapping(std::string_view json);
 
 // The calibration in force for sample `sampleIndex` of `session`: the last CALIBRATION record whose firstSample is
-// <= sampleIndex, BVH channel mappings skipped; nullopt when the session has none that early. The blob is parsed and checked against the
-// character (may be null) and the sample's device; errors are reported as "SESSION calibration #N:line:column:
-// error: …" with the given session name.
+// <= sampleIndex, BVH channel mappings skipped; nullopt when the session has none that early. The blob is parsed
+// and checked against the character (may be null) and the sample's device; errors are reported as "SESSION
+// calibration #N:line:column: error: …" with the given session name.
 std::expected<std::optional<calibration::Calibration>, Diagnostics> calibrationForSample(
     const sim::Session& session, size_t sampleIndex, const Character* character = nullptr,
     const std::string& sessionName = "session");

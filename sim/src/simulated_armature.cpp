@@ -155,7 +155,7 @@ constexpr WaveChannel kWave[32] = {
     {0, 6, 1, 0},       // 14 R_UpperArm y  (-60..120)
     {-55, 8, 1, 1.2},   // 15 R_UpperArm z  (-100..90): arm raised
     {-15, 8, 1, 0.5},   // 16 L_Forearm y   (-150..5): elbow slightly bent
-    {60, 35, 2, 0},     // 17 R_Forearm y   (-5..150): the wave, twice a cycle
+    {45, 30, 2, 0},     // 17 R_Forearm y   (-5..150): the wave, twice a cycle, clear of the head
     {0, 10, 1, 0},      // 18 L_Hand z      (-70..70)
     {0, 25, 2, 0.6},    // 19 R_Hand z      (-70..70): the hand follows the wave
     {0, 4, 1, 0},       // 20 L_Thigh x     (-120..40)

@@ -248,7 +248,7 @@ TEST_F(CliTest, ReplayOfABvhSessionSaysNothingAboutCalibrations) {
   for (const std::string& session : {kWave, kSource + "/tests/data/sessions/legacy_bvh_mapping.session", kBvh}) {
     const test::ProgramRun run = runProgram(puppeteer(), {"replay", session, kBiped, "--frames", "1"});
     EXPECT_NE(run.out.find("replaying"), std::string::npos) << session << "\n" << run.out << run.err;
-    EXPECT_NE(run.out.find("channels by name"), std::string::npos) << session << "\n" << run.out;
+    EXPECT_NE(run.out.find(": channel names"), std::string::npos) << session << "\n" << run.out;
     EXPECT_EQ(run.out.find("calibration does not apply"), std::string::npos) << session << "\n" << run.out;
     EXPECT_EQ(run.err.find("calibration"), std::string::npos) << session << "\n" << run.err;
   }
@@ -296,6 +296,9 @@ TEST_F(CliTest, ReportingCommandsPrintJson) {
       {{"devices", "--json"}, "serialPorts"},
       {{"info", "--json", kWave}, "devices"},
       {{"convert", "--json", kBvh, at("j.session")}, "samples"},
+      {{"record", "--json", "--device", "sim:?rate=200", "-o", at("j.take.session"), "--seconds", "0.3"}, "samples"},
+      {{"calibrate", "--json", "--rig", kRig, "--scene", kBiped, "--device", "sim:?motion=still", "--no-wait", "-o",
+        at("j.calibration.json")}, "channels"},
   };
   for (const Case& c : cases) {
     const test::ProgramRun run = runProgram(puppeteer(), c.args);

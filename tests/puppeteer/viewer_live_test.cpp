@@ -296,7 +296,9 @@ TEST(LiveDefaultMotion, EveryGeneratedAngleIsWithinTheRigMapsLimits) {
   // Every channel moves (a performance, not a statue), the waving forearm by more than 45 degrees.
   for (size_t i = 0; i < map.channels.size(); ++i) {
     EXPECT_GT(highest[i] - lowest[i], 0.5 * std::numbers::pi / 180) << map.channels[i].joint;
-    if (map.channels[i].joint == "R_Forearm") EXPECT_GT(highest[i] - lowest[i], std::numbers::pi / 4);
+    if (map.channels[i].joint == "R_Forearm") {
+      EXPECT_GT(highest[i] - lowest[i], std::numbers::pi / 4);
+    }
   }
 }
 
