@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <array>
+#include <charconv>
 #include <chrono>
 #include <memory>
 
@@ -30,6 +31,14 @@ DeviceSessionOptions sessionOptionsFor(const DeviceSpec& spec) {
   o.mode = spec.mode;
   o.rateHz = spec.rateHz;
   o.lineOptions.expectedChannelCount = spec.channels;
+  if (spec.bits != 0) o.lineBitsPerChannel = spec.bits;
+  for (const auto& [key, value] : spec.simParams)
+    if (key == "bits") {
+      int bits = 0;
+      const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), bits);
+      if (ec == std::errc() && end == value.data() + value.size() && bits >= 1 && bits <= 32)
+        o.lineBitsPerChannel = bits;
+    }
   if (spec.kind == DeviceKind::Hid) o.protocol = WireProtocol::HidReports;
   // A USB armature booted when it enumerated: no boot banner to wait for, and failed opens are cheap (usbOpener
   // waits for the hotplug arrival), so retry often.
@@ -345,7 +354,7 @@ struct DeviceSession::Io {
           DeviceInfo info;
           info.name = lines.banner().empty() ? "line-protocol armature" : lines.banner().front();
           info.channelCount = sample->channelCount;
-          info.bitsPerChannel = 32;
+          info.bitsPerChannel = o.lineBitsPerChannel;
           for (int i = 0; i < info.channelCount; ++i) info.channelNames.push_back("ch" + std::to_string(i));
           info.hasDeviceTimestamp = sample->deviceTimeNs != 0;
           layoutChannels = info.channelCount;

@@ -66,17 +66,20 @@ std::expected<DeviceSpec, std::string> parseOscSpec(std::string_view text) {
 std::expected<DeviceSpec, std::string> parseDeviceSpec(std::string_view text) {
   DeviceSpec spec;
   if (text.starts_with("osc.")) return parseOscSpec(text);
-  const size_t colon = text.find(':');
+  // A bare device node ("/dev/ttyACM0?baud=9600") is a serial port: as if written "serial:/dev/ttyACM0…".
+  const bool barePath = text.starts_with('/');
+  const size_t colon = barePath ? size_t(0) : text.find(':');
   if (colon == std::string_view::npos)
-    return fail(0, "expected SCHEME:… where SCHEME is serial, hid, usb, sim or osc.udp");
-  const std::string_view scheme = text.substr(0, colon);
+    return fail(0,
+                "expected SCHEME:… where SCHEME is serial, hid, usb, sim or osc.udp, or a device path such as /dev/ttyACM0");
+  const std::string_view scheme = barePath ? "serial" : text.substr(0, colon);
   if (scheme == "serial") spec.kind = DeviceKind::Serial;
   else if (scheme == "hid") spec.kind = DeviceKind::Hid;
   else if (scheme == "usb") spec.kind = DeviceKind::Usb;
   else if (scheme == "sim") spec.kind = DeviceKind::Sim;
   else return fail(0, cat("unknown scheme '", scheme, "': expected serial, hid, usb, sim or osc.udp"));
 
-  const size_t bodyBegin = colon + 1;
+  const size_t bodyBegin = barePath ? 0 : colon + 1;
   const size_t question = text.find('?', bodyBegin);
   const std::string_view body =
       text.substr(bodyBegin, question == std::string_view::npos ? std::string_view::npos : question - bodyBegin);
@@ -140,19 +143,24 @@ std::expected<DeviceSpec, std::string> parseDeviceSpec(std::string_view text) {
     } else if (key == "channels" && spec.kind == DeviceKind::Serial) {
       if (!parseNumber(value, spec.channels) || spec.channels < 0 || spec.channels > 64)
         return fail(valueAt, "expected a channel count in 0..64");
+    } else if (key == "bits" && spec.kind == DeviceKind::Serial) {
+      if (!parseNumber(value, spec.bits) || spec.bits < 1 || spec.bits > 32)
+        return fail(valueAt, "expected bits per channel in 1..32");
     } else if (key == "serial" && (spec.kind == DeviceKind::Hid || spec.kind == DeviceKind::Usb)) {
       if (value.empty()) return fail(valueAt, "expected a serial number");
       spec.serialNumber = value;
     } else if (spec.kind == DeviceKind::Sim) {
       spec.simParams.emplace_back(key, value);
     } else {
-      const char* known = spec.kind == DeviceKind::Serial ? "baud, protocol, mode, rate, channels"
+      const char* known = spec.kind == DeviceKind::Serial ? "baud, protocol, mode, rate, channels, bits"
                           : spec.kind == DeviceKind::Usb  ? "serial, mode, rate"
                                                           : "serial";
       return fail(pos, cat("unknown key '", key, "' for ", toString(spec.kind), " (known: ", known, ")"));
     }
     pos = amp + 1;
   }
+  if (spec.bits != 0 && spec.protocol != WireProtocol::Lines)
+    return fail(question + 1, "bits applies to protocol=lines only: a binary device reports its own in INFO");
   return spec;
 }
 
@@ -173,6 +181,7 @@ std::string formatDeviceSpec(const DeviceSpec& spec) {
     if (spec.mode != AcquisitionMode::Stream) query.push_back("mode=poll");
     if (spec.rateHz != 0) query.push_back(cat("rate=", spec.rateHz));
     if (spec.channels != 0) query.push_back(cat("channels=", spec.channels));
+    if (spec.bits != 0) query.push_back(cat("bits=", spec.bits));
     for (const auto& [k, v] : spec.simParams) query.push_back(k + "=" + v);
   }
   for (size_t i = 0; i < query.size(); ++i) out += (i == 0 ? "?" : "&") + query[i];

@@ -4,6 +4,7 @@
 #include "imps/check.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -29,7 +30,19 @@ tbb::task_arena& arenaFor(int threads) {
   static std::map<int, std::unique_ptr<tbb::task_arena>> arenas;
   std::lock_guard<std::mutex> lock(mutex);
   auto& slot = arenas[threads];
-  if (!slot) slot = std::make_unique<tbb::task_arena>(threads);
+  if (!slot) {
+    // An arena of t threads asks oneTBB for t - 1 workers. Its default limit is one fewer than the cores, and a
+    // request above it is cut with a warning on stderr ("The number of workers is currently limited to …") that
+    // no caller can act on. Raise the limit to the largest arena asked for (replacing the control: with several,
+    // the lowest wins), so a requested thread count is honoured, silently.
+    static std::unique_ptr<tbb::global_control> limit;
+    const size_t wanted = std::max<size_t>(size_t(threads), std::thread::hardware_concurrency());
+    if (!limit || tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) < wanted) {
+      limit.reset();
+      limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, wanted);
+    }
+    slot = std::make_unique<tbb::task_arena>(threads);
+  }
   return *slot;
 }
 

@@ -2,8 +2,10 @@
 #pragma once
 
 #include <functional>
+#include <initializer_list>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "imps/character.h"
@@ -11,6 +13,7 @@
 
 namespace CLI {
 class App;
+class Validator;
 }
 
 namespace imps::app {
@@ -22,6 +25,26 @@ enum ExitCode : int {
   kExitUsage = 2,         // bad command line
   kExitIoError = 3,       // an output could not be written (nothing was overwritten), or a device failed
 };
+
+// ---- Checks every command shares, so that the same mistake gets the same message and exit code everywhere.
+
+// An input file named on the command line (`->check(inputFile())`). A missing or unreadable input is an input
+// error (kExitInvalidInput) for every command, not a usage error: the validator only records the path, and runCli
+// reports every missing one after parsing ("puppeteer CMD: error: PATH: no such file"), before the command runs.
+const CLI::Validator& inputFile();
+// Number checks with readable messages ("--cell: expected a number > 0, got '0'"; CLI11's own print the double
+// range's 309-digit bounds).
+const CLI::Validator& positiveNumber();
+const CLI::Validator& nonNegativeNumber();
+// The lower-case extension of `path` with its dot (".png"), "" when it has none.
+std::string extensionOf(const std::string& path);
+// An output file named on the command line, checked before any work is done. Its extension must be one of
+// `extensions` (lower case, with the dot; empty list: any), else a usage error (kExitUsage); its directory must
+// exist, else kExitIoError. Prints "puppeteer COMMAND: error: OPTION PATH: …" and returns the exit code, or kExitOk.
+int checkOutputPath(std::string_view command, std::string_view option, const std::string& path,
+                    std::initializer_list<std::string_view> extensions = {});
+// The closest known name to a misspelt subcommand or option in argv, as "did you mean '…'?" advice; "" if none.
+std::string suggestionFor(const CLI::App& app, int argc, char** argv);
 
 // A scene file read and compiled into its character.
 struct LoadedScene {

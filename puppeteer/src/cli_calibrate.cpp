@@ -3,6 +3,7 @@
 #include "calibration_flow.h"
 #include "cli.h"
 #include "device_opener.h"
+#include "json_output.h"
 
 #include <CLI/CLI.hpp>
 #include <unistd.h>
@@ -36,11 +37,15 @@ namespace {
 
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
 
+// Where the walkthrough talks to the technician: stdout, or stderr with --json (stdout then holds only the report).
+FILE* talk = stdout;
+
 struct CalibrateArgs {
   std::string rig, scene, session, device, output, checkPose;
   double windowMs = 500;
   double maxNoiseDeg = 0.5;
   bool noWait = false;
+  bool json = false;
 };
 
 int64_t timeOf(const drivers::Sample& s, bool deviceTime) { return deviceTime ? s.deviceTimeNs : s.arrivalTimeNs; }
@@ -100,33 +105,35 @@ int openDevice(const std::string& specText, LiveDevice& live, drivers::DeviceInf
   live.mailbox = std::make_unique<drivers::PoseMailbox>(mo);
   live.session = std::make_unique<drivers::DeviceSession>(*opener, *live.mailbox, drivers::sessionOptionsFor(*spec));
   live.session->start();
-  std::printf("Connecting to %s ...\n", specText.c_str());
-  std::fflush(stdout);
+  std::fprintf(talk, "Connecting to %s ...\n", specText.c_str());
+  std::fflush(talk);
   if (!live.session->waitForState(drivers::ConnectionState::Streaming, 10'000) || !live.session->deviceInfo()) {
     std::fprintf(stderr, "puppeteer calibrate: error: %s did not start streaming: %s\n", specText.c_str(),
                  live.session->lastError().empty() ? "timed out" : live.session->lastError().c_str());
     return kExitIoError;
   }
   info = *live.session->deviceInfo();
-  std::printf("Connected: \"%s\", %d channels of %d bits\n", info.name.c_str(), info.channelCount, info.bitsPerChannel);
+  std::fprintf(talk, "Connected: \"%s\", %d channels of %d bits\n", info.name.c_str(), info.channelCount,
+               info.bitsPerChannel);
   return kExitOk;
 }
 
 void waitForEnter(const std::string& instruction, bool noWait) {
-  std::printf("\n%s\n", instruction.c_str());
+  std::fprintf(talk, "\n%s\n", instruction.c_str());
   if (noWait) {
-    std::printf("(--no-wait: averaging now)\n");
-    std::fflush(stdout);
+    std::fprintf(talk, "(--no-wait: averaging now)\n");
+    std::fflush(talk);
     return;
   }
-  std::printf("Press Enter when ready.");
-  std::fflush(stdout);
+  std::fprintf(talk, "Press Enter when ready.");
+  std::fflush(talk);
   std::string line;
   std::getline(std::cin, line);
-  if (!::isatty(STDIN_FILENO)) std::printf("\n");
+  if (!::isatty(STDIN_FILENO)) std::fprintf(talk, "\n");
 }
 
 int runCalibrate(const CalibrateArgs& a) {
+  talk = a.json ? stderr : stdout;
   if (a.session.empty() == a.device.empty()) {
     std::fprintf(stderr, "puppeteer calibrate: error: give exactly one of --session SESSION or --device SPEC\n");
     return kExitUsage;
@@ -135,6 +142,7 @@ int runCalibrate(const CalibrateArgs& a) {
     std::fprintf(stderr, "puppeteer calibrate: error: --window-ms must be positive\n");
     return kExitUsage;
   }
+  if (int rc = checkOutputPath("calibrate", "-o", a.output); rc != kExitOk) return rc;
   // ---- Inputs: the character, the device description and samples source, the rig map, the check pose.
   auto loaded = loadScene(a.scene);
   if (!loaded) return kExitInvalidInput;
@@ -168,6 +176,7 @@ int runCalibrate(const CalibrateArgs& a) {
     return kExitInvalidInput;
   }
   std::optional<std::vector<calibration::PoseTarget>> targets;
+  Json report{{"output", a.output}, {"rig", a.rig}, {"scene", a.scene}, {"source", session ? a.session : a.device}};
   if (!a.checkPose.empty()) {
     auto t = calibration::readCheckPoseFile(a.checkPose, &character);
     if (!t) {
@@ -176,7 +185,7 @@ int runCalibrate(const CalibrateArgs& a) {
     }
     targets = std::move(*t);
   }
-  std::printf("Rig map %s: %zu channels drive %zu joints of %s\n", a.rig.c_str(), rig->channels.size(),
+  std::fprintf(talk, "Rig map %s: %zu channels drive %zu joints of %s\n", a.rig.c_str(), rig->channels.size(),
               rig->joints.size(), a.scene.c_str());
 
   // ---- The calibration pose: average a window, reject it when noisy.
@@ -186,14 +195,14 @@ int runCalibrate(const CalibrateArgs& a) {
   std::vector<drivers::Sample> window;
   if (session) {
     window = sessionWindow(*session, a.windowMs, false);
-    std::printf("Calibration pose: the first %.0f ms of %s (%zu samples)\n", a.windowMs, a.session.c_str(),
+    std::fprintf(talk, "Calibration pose: the first %.0f ms of %s (%zu samples)\n", a.windowMs, a.session.c_str(),
                 window.size());
   } else {
     waitForEnter("Hold the armature in the calibration pose (the T-pose of " + a.scene +
                  ": arms straight out to the sides, legs straight, facing forward) and keep it still.",
                  a.noWait);
     window = live.collect(a.windowMs);
-    std::printf("Averaged %zu samples over %.0f ms.\n", window.size(), a.windowMs);
+    std::fprintf(talk, "Averaged %zu samples over %.0f ms.\n", window.size(), a.windowMs);
   }
   calibration::WindowAverage average;
   auto calibrated = calibration::calibrateOffsets(*rig, window, wo, &average);
@@ -205,8 +214,12 @@ int runCalibrate(const CalibrateArgs& a) {
   }
   const auto noisiest = std::max_element(average.channels.begin(), average.channels.end(),
                                          [](const auto& x, const auto& y) { return x.stdDevRadians < y.stdDevRadians; });
-  if (noisiest != average.channels.end())
-    std::printf("Noise: at most %.3f deg (%s)\n", noisiest->stdDevRadians / kDegree, noisiest->label.c_str());
+  if (noisiest != average.channels.end()) {
+    std::fprintf(talk, "Noise: at most %.3f deg (%s)\n", noisiest->stdDevRadians / kDegree, noisiest->label.c_str());
+    report["noiseMaxDeg"] = noisiest->stdDevRadians / kDegree;
+    report["noisiestChannel"] = noisiest->label;
+  }
+  report["windowSamples"] = window.size();
 
   calibrated->info =
       calibrationInfoJson(a.scene, a.rig, session ? a.session : a.device, a.windowMs, window.size(), info.serialNumber);
@@ -222,7 +235,7 @@ int runCalibrate(const CalibrateArgs& a) {
     std::vector<drivers::Sample> checkWindow;
     if (session) {
       checkWindow = sessionWindow(*session, a.windowMs, true);
-      std::printf("Check pose: the last %.0f ms of %s (%zu samples)\n", a.windowMs, a.session.c_str(),
+      std::fprintf(talk, "Check pose: the last %.0f ms of %s (%zu samples)\n", a.windowMs, a.session.c_str(),
                   checkWindow.size());
     } else {
       waitForEnter("Now hold the check pose described in " + a.checkPose + " and keep it still.", a.noWait);
@@ -232,7 +245,9 @@ int runCalibrate(const CalibrateArgs& a) {
     for (const std::string& p : checkAverage.problems) std::fprintf(stderr, "warning: check pose: %s\n", p.c_str());
     const calibration::PoseCheck check = calibration::checkPose(*cal, checkAverage, *targets);
     for (const std::string& w : check.warnings) std::fprintf(stderr, "warning: check pose: %s\n", w.c_str());
-    std::printf("Check pose: %zu channels checked, %zu look wrong\n", check.channels.size(), check.problems.size());
+    std::fprintf(talk, "Check pose: %zu channels checked, %zu look wrong\n", check.channels.size(),
+                 check.problems.size());
+    report["checkPose"] = {{"checked", check.channels.size()}, {"wrong", check.problems.size()}};
     if (!check.ok()) {
       for (const std::string& p : check.problems) std::fprintf(stderr, "%s: error: %s\n", a.rig.c_str(), p.c_str());
       std::fprintf(stderr, "Nothing was written. Fix the rig map and calibrate again.\n");
@@ -244,8 +259,11 @@ int runCalibrate(const CalibrateArgs& a) {
     std::fprintf(stderr, "%s\n", saved.error().c_str());
     return kExitIoError;
   }
-  std::printf("Wrote %s (%zu channels, %zu joints)\n", a.output.c_str(), cal->rigMap().channels.size(),
+  std::fprintf(talk, "Wrote %s (%zu channels, %zu joints)\n", a.output.c_str(), cal->rigMap().channels.size(),
               cal->rigMap().joints.size());
+  report["channels"] = cal->rigMap().channels.size();
+  report["joints"] = cal->rigMap().joints.size();
+  if (a.json) printJson(report);
   return kExitOk;
 }
 
@@ -254,15 +272,20 @@ int runCalibrate(const CalibrateArgs& a) {
 void addCalibrationCommands(CLI::App& app, Commands& commands) {
   auto args = std::make_shared<CalibrateArgs>();
   CLI::App* cmd = app.add_subcommand("calibrate", "Calibrate an armature's offsets in the character's calibration pose");
-  cmd->add_option("--rig", args->rig, "rig map (docs/calibration.md)")->required();
-  cmd->add_option("--scene", args->scene, "the character's scene file (its pose is the calibration pose)")->required();
-  cmd->add_option("--session", args->session, "use the first --window-ms of a recorded session (non-interactive)");
+  cmd->add_option("--rig", args->rig, "rig map (docs/calibration.md)")->required()->check(inputFile());
+  cmd->add_option("--scene", args->scene, "the character's scene file (its pose is the calibration pose)")
+      ->required()
+      ->check(inputFile());
+  cmd->add_option("--session", args->session, "use the first --window-ms of a recorded session (non-interactive)")
+      ->check(inputFile());
   cmd->add_option("--device", args->device, "calibrate a live device, e.g. serial:/dev/ttyACM0 (interactive)");
   cmd->add_option("-o,--output", args->output, "calibration file to write (replaced atomically)")->required();
   cmd->add_option("--window-ms", args->windowMs, "how long to average each pose")->capture_default_str();
-  cmd->add_option("--check-pose", args->checkPose, "a second known pose to check signs and gains (JSON)");
+  cmd->add_option("--check-pose", args->checkPose, "a second known pose to check signs and gains (JSON)")
+      ->check(inputFile());
   cmd->add_option("--max-noise-deg", args->maxNoiseDeg, "reject the window above this per-channel std deviation")
       ->capture_default_str();
+  cmd->add_flag("--json", args->json, "Print the result as JSON on stdout (the walkthrough's text goes to stderr)");
   cmd->add_flag("--no-wait", args->noWait, "with --device: do not wait for Enter before each pose (scripts, tests)");
   commands.push_back({cmd, [args] { return runCalibrate(*args); }});
 }

@@ -2,6 +2,8 @@
 // pseudo-terminal, and recording a live device to a session file. docs/devices.md.
 #include "cli.h"
 #include "device_opener.h"
+#include "device_ranking.h"
+#include "json_output.h"
 #include "session_recorder.h"
 
 #include <CLI/CLI.hpp>
@@ -14,6 +16,7 @@
 #include <string>
 #include <thread>
 
+#include "calibration/calibration.h"
 #include "drivers/device_session.h"
 #include "drivers/device_spec.h"
 #include "drivers/hid_transport.h"
@@ -43,10 +46,30 @@ bool timeUp(std::chrono::steady_clock::time_point start, double seconds) {
 
 // ---- puppeteer devices
 
+// "VID:PID[?serial=…]" for a spec.
+std::string hexId(uint16_t vendorId, uint16_t productId, const std::string& serial) {
+  char ids[16];
+  std::snprintf(ids, sizeof ids, "%04x:%04x", vendorId, productId);
+  return ids + (serial.empty() ? "" : "?serial=" + serial);
+}
+
 // HID devices (hidapi): VID:PID, serial, product, usage page, hidraw node, and whether the report descriptor
 // looks like an IMPS armature (docs/protocol.md, "HID armatures").
-void printHidDevices() {
+void printHidDevices(Json* json) {
   auto hid = drivers::listHidDevices();
+  if (json) {
+    Json list = Json::array();
+    if (hid)
+      for (const drivers::HidDeviceEntry& d : *hid)
+        list.push_back({{"path", d.path}, {"vendorId", d.vendorId}, {"productId", d.productId},
+                        {"usagePage", d.usagePage}, {"usage", d.usage}, {"serialNumber", d.serialNumber},
+                        {"product", d.product}, {"armature", d.looksLikeArmature()},
+                        {"channels", d.layout ? Json(d.layout->channels.size()) : Json(nullptr)},
+                        {"problem", d.layout ? "" : d.layoutError},
+                        {"spec", "hid:" + hexId(d.vendorId, d.productId, d.serialNumber)}});
+    (*json)["hid"] = {{"error", hid ? "" : hid.error()}, {"devices", std::move(list)}};
+    return;
+  }
   if (!hid) {
     std::printf("HID devices: cannot list: %s\n", hid.error().c_str());
     return;
@@ -70,8 +93,23 @@ void printHidDevices() {
 }
 
 // Vendor-USB armatures (libusb) with the known VID:PIDs: bus/address, strings, and what their INFO request says.
-void printUsbArmatures() {
+void printUsbArmatures(Json* json) {
   auto usb = drivers::listUsbDevices();
+  if (json) {
+    Json list = Json::array();
+    if (usb)
+      for (const drivers::UsbDeviceInfo& d : *usb)
+        list.push_back({{"bus", d.bus}, {"address", d.address}, {"vendorId", d.vendorId},
+                        {"productId", d.productId}, {"serialNumber", d.serialNumber}, {"product", d.product},
+                        {"name", d.info ? Json(d.info->name) : Json(nullptr)},
+                        {"channels", d.info ? Json(d.info->channelCount) : Json(nullptr)},
+                        {"bits", d.info ? Json(d.info->bitsPerChannel) : Json(nullptr)},
+                        {"firmware", d.info ? Json(d.info->firmwareVersion) : Json(nullptr)},
+                        {"problem", d.problem},
+                        {"spec", "usb:" + hexId(d.vendorId, d.productId, d.serialNumber)}});
+    (*json)["usb"] = {{"error", usb ? "" : usb.error()}, {"devices", std::move(list)}};
+    return;
+  }
   if (!usb) {
     std::printf("USB armatures: cannot list: %s\n", usb.error().c_str());
     return;
@@ -91,13 +129,37 @@ void printUsbArmatures() {
   }
 }
 
-int runDevices() {
+Json serialPortsJson(const std::vector<drivers::SerialPortInfo>& ports) {
+  Json list = Json::array();
+  for (const drivers::SerialPortInfo& p : ports)
+    list.push_back({{"path", p.path},
+                    {"usb", p.isUsb},
+                    {"vendorId", p.vendorId},
+                    {"productId", p.productId},
+                    {"serialNumber", p.serialNumber},
+                    {"driver", p.driver},
+                    {"description", p.description},
+                    {"ftdiLatencyMs", p.latencyTimerMs ? Json(*p.latencyTimerMs) : Json(nullptr)},
+                    {"likelihood", describe(portLikelihood(p))},
+                    {"spec", "serial:" + p.path}});
+  return list;
+}
+
+int runDevices(bool json) {
   auto ports = drivers::listSerialPorts();
   if (!ports) {
     std::fprintf(stderr, "puppeteer devices: error: %s\n", ports.error().c_str());
     return kExitIoError;
   }
-  std::printf("Serial ports (%zu):\n", ports->size());
+  rankPorts(*ports);  // likely armatures first, motherboard UARTs last
+  if (json) {
+    Json report{{"serialPorts", serialPortsJson(*ports)}};
+    printHidDevices(&report);
+    printUsbArmatures(&report);
+    printJson(report);
+    return kExitOk;
+  }
+  std::printf("Serial ports (%zu, likely armatures first):\n", ports->size());
   if (ports->empty()) std::printf("  none\n");
   for (const drivers::SerialPortInfo& p : *ports) {
     std::printf("  %-16s", p.path.c_str());
@@ -112,10 +174,10 @@ int runDevices() {
                                                                   : " (slow: see docs/devices.md, udev rule)")
                                         : "");
     }
-    std::printf("\n    spec: serial:%s\n", p.path.c_str());
+    std::printf("\n    %s; spec: serial:%s\n", describe(portLikelihood(p)), p.path.c_str());
   }
-  printHidDevices();
-  printUsbArmatures();
+  printHidDevices(nullptr);
+  printUsbArmatures(nullptr);
   return kExitOk;
 }
 
@@ -148,6 +210,8 @@ int runSim(const SimArgs& a) {
     std::fprintf(stderr, "puppeteer sim: error: choose where to serve the armature: --pty\n");
     return kExitUsage;
   }
+  if (!a.link.empty())
+    if (int rc = checkOutputPath("sim", "--link", a.link); rc != kExitOk) return rc;
   // ---- A pseudo-terminal pair: the simulator drives the master, the drivers open the slave path.
   auto pty = sim::PseudoTerminal::open();
   if (!pty) {
@@ -191,7 +255,9 @@ int runSim(const SimArgs& a) {
 struct RecordArgs {
   std::string device;
   std::string output;
+  std::string calibration;
   double seconds = 0;
+  bool json = false;
 };
 
 int runRecord(const RecordArgs& a) {
@@ -200,13 +266,24 @@ int runRecord(const RecordArgs& a) {
     std::fprintf(stderr, "%s\n", spec.error().c_str());
     return kExitUsage;
   }
-  sim::SteadyClock clock;
-  auto opener = openerForSpec(*spec, clock, "record");
-  if (!opener) return opener.error();
+  if (int rc = checkOutputPath("record", "-o", a.output); rc != kExitOk) return rc;
   if (std::filesystem::exists(a.output)) {
     std::fprintf(stderr, "puppeteer record: error: %s exists; recordings never overwrite a file\n", a.output.c_str());
     return kExitIoError;
   }
+  // The calibration in force is stored with the take (replay uses it; info lists it).
+  std::optional<calibration::Calibration> cal;
+  if (!a.calibration.empty()) {
+    auto read = calibration::Calibration::readFile(a.calibration);
+    if (!read) {
+      std::fputs(read.error().str().c_str(), stderr);
+      return kExitInvalidInput;
+    }
+    cal = std::move(*read);
+  }
+  sim::SteadyClock clock;
+  auto opener = openerForSpec(*spec, clock, "record");
+  if (!opener) return opener.error();
 
   catchInterrupts();
   drivers::PoseMailboxOptions mo;
@@ -228,7 +305,7 @@ int runRecord(const RecordArgs& a) {
     if (!recorder) {
       auto info = session.deviceInfo();
       if (!info) return true;  // cannot happen: samples come after the handshake
-      auto created = app::SessionRecorder::create(a.output, *info, /*calibration=*/nullptr);
+      auto created = app::SessionRecorder::create(a.output, *info, cal ? &*cal : nullptr);
       if (!created) {
         std::fprintf(stderr, "%s\n", created.error().c_str());
         exitCode = kExitIoError;
@@ -265,6 +342,7 @@ int runRecord(const RecordArgs& a) {
   if (exitCode == kExitOk) drainInto();
   std::fprintf(stderr, "\n");
   if (!recorder) {
+    if (exitCode != kExitOk) return exitCode;  // the file could not be created: that cause is already printed
     std::fprintf(stderr, "puppeteer record: error: no samples from %s: %s\n", a.device.c_str(),
                  session.lastError().empty() ? "the device never started streaming" : session.lastError().c_str());
     return exitCode == kExitOk ? kExitIoError : exitCode;
@@ -275,6 +353,13 @@ int runRecord(const RecordArgs& a) {
   }
   const drivers::DeviceSessionStats st = session.stats();
   const uint64_t skipped = recorder->skipped();  // a different device came back on reconnect: its samples do not fit
+  if (a.json) {
+    printJson(Json{{"output", a.output}, {"device", a.device}, {"samples", recorder->samples()},
+                   {"droppedByLink", st.samplesDropped}, {"crcErrors", st.crcErrors}, {"timeouts", st.timeouts},
+                   {"reconnects", st.reconnects}, {"queueOverflows", mailbox.stats().queueOverflows},
+                   {"skipped", skipped}, {"calibration", a.calibration}});
+    return exitCode;
+  }
   std::printf("Recorded %llu samples to %s (dropped by the device link: %llu, queue overflows: %llu%s)\n",
               static_cast<unsigned long long>(recorder->samples()), a.output.c_str(),
               static_cast<unsigned long long>(st.samplesDropped),
@@ -288,7 +373,9 @@ int runRecord(const RecordArgs& a) {
 void addDeviceCommands(CLI::App& app, Commands& commands) {
   CLI::App* devices = app.add_subcommand(
       "devices", "List attached armatures (serial ports with USB VID:PID, HID devices, USB armatures)");
-  commands.push_back({devices, [] { return runDevices(); }});
+  auto devicesJson = std::make_shared<bool>(false);
+  devices->add_flag("--json", *devicesJson, "Print the listing as JSON (for scripts)");
+  commands.push_back({devices, [devicesJson] { return runDevices(*devicesJson); }});
 
   auto simArgs = std::make_shared<SimArgs>();
   CLI::App* simCmd = app.add_subcommand("sim", "Run a simulated armature on a path the drivers can open");
@@ -305,6 +392,10 @@ void addDeviceCommands(CLI::App& app, Commands& commands) {
       ->required();
   record->add_option("-o,--output", recordArgs->output, "session file to create (never overwritten)")->required();
   record->add_option("--seconds", recordArgs->seconds, "stop after this long (default: until Ctrl-C)");
+  record->add_flag("--json", recordArgs->json, "Print the summary as JSON (for scripts)");
+  record->add_option("--calibration", recordArgs->calibration,
+                     "calibration in force (puppeteer calibrate), stored with the take for replay")
+      ->check(inputFile());
   commands.push_back({record, [recordArgs] { return runRecord(*recordArgs); }});
 }
 

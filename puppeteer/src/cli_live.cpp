@@ -8,10 +8,13 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <optional>
 #include <sstream>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include <glm/gtc/quaternion.hpp>
@@ -33,6 +36,7 @@
 #include "calibration_flow.h"
 #include "osc_stream.h"
 #include "scripted_input.h"
+#include "session_calibration.h"
 
 namespace imps::app {
 namespace {
@@ -72,7 +76,7 @@ struct LiveArgs {
 
 void addCommonOptions(CLI::App* cmd, LiveArgs& a) {
   cmd->add_option("--frames", a.frames, "Render this many frames, then exit (headless use; 0 = until closed)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(nonNegativeNumber());
   cmd->add_option("--screenshot", a.screenshot, "With --frames: save the last frame to this PNG file");
   cmd->add_option("--polygonizer", a.polygonizer,
                   "particles (the tesselator) or mc (Marching Cubes); default: the scene file's polygonizer node")
@@ -87,7 +91,7 @@ void addCommonOptions(CLI::App* cmd, LiveArgs& a) {
   cmd->add_option("--width", a.width, "Window width in pixels")->check(CLI::Range(64, 8192));
   cmd->add_option("--height", a.height, "Window height in pixels")->check(CLI::Range(64, 8192));
   cmd->add_option("--threads", a.threads, "Tesselator threads (default: the scene's numThreads; 0 = all cores)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(nonNegativeNumber());
   cmd->add_option("--msaa", a.msaa, "Multisampling samples (0 = off; default: 4, or off under software GL)")
       ->check(CLI::Range(0, 16));
   cmd->add_option("--pose", a.poses,
@@ -182,12 +186,27 @@ ViewerOptions viewerOptions(const LiveArgs& a, const std::string& title) {
   return v;
 }
 
-bool checkScreenshotArgs(const LiveArgs& a) {
+// The command line's output files, before any frame is drawn: --screenshot (a PNG, needs --frames), and for replay
+// and live the files they create. Prints the error; returns the exit code (kExitOk when fine).
+int checkOutputArgs(const LiveArgs& a, std::string_view command) {
   if (!a.screenshot.empty() && a.frames <= 0) {
-    std::fprintf(stderr, "puppeteer: error: --screenshot needs --frames N\n");
-    return false;
+    std::fprintf(stderr, "puppeteer %.*s: error: --screenshot needs --frames N\n", int(command.size()),
+                 command.data());
+    return kExitUsage;
   }
-  return true;
+  const std::pair<const char*, const std::string*> outputs[] = {
+      {"--export-session", &a.exportSession}, {"--record", &a.record}, {"--calibration-out", &a.calibrationOut}};
+  if (!a.screenshot.empty())
+    if (int rc = checkOutputPath(command, "--screenshot", a.screenshot, {".png"}); rc != kExitOk) return rc;
+  for (const auto& [option, path] : outputs)
+    if (!path->empty())
+      if (int rc = checkOutputPath(command, option, *path); rc != kExitOk) return rc;
+  std::error_code ec;
+  if (command == "live" && !std::filesystem::is_directory(a.recordDir, ec)) {
+    std::fprintf(stderr, "puppeteer live: error: --record-dir %s: no such directory\n", a.recordDir.c_str());
+    return kExitIoError;
+  }
+  return kExitOk;
 }
 
 // --keys and --drag as scripted events; nullopt after printing the error.
@@ -213,7 +232,7 @@ std::optional<std::vector<ScriptedEvent>> parseScript(const LiveArgs& a) {
 }
 
 int runView(const LiveArgs& a) {
-  if (!checkScreenshotArgs(a)) return kExitUsage;
+  if (int rc = checkOutputArgs(a, "view"); rc != kExitOk) return rc;
   auto script = parseScript(a);
   if (!script) return kExitUsage;
   int code = kExitOk;
@@ -263,12 +282,20 @@ bool checkRigArgs(const LiveArgs& a) {
   return true;
 }
 
-// --calibration FILE, checked against the character (and the device when known); nullopt after printing errors.
+// --calibration FILE, checked against the character (and the device when known, or the bits a line-protocol
+// spec gives: `calibrate` checks the same); nullopt after printing errors.
 std::optional<SampleMapper> readCalibration(const std::string& path, const Character& character,
-                                            const drivers::DeviceInfo* device) {
+                                            const drivers::DeviceInfo* device, int lineBits = 0) {
   auto c = calibration::Calibration::readFile(path, &character, device);
   if (!c) {
     std::fputs(c.error().str().c_str(), stderr);
+    return std::nullopt;
+  }
+  if (lineBits > 0 && c->rigMap().bits != lineBits) {
+    std::fprintf(stderr,
+                 "%s: error: the calibration is for %d-bit encoders but the line-protocol device reports %d bits "
+                 "(lines carry no bit depth: add bits=%d to the device spec, docs/devices.md)\n",
+                 path.c_str(), c->rigMap().bits, lineBits, c->rigMap().bits);
     return std::nullopt;
   }
   return SampleMapper(std::move(*c), std::filesystem::path(path).filename().string());
@@ -294,8 +321,20 @@ int runWithOscOut(const LiveArgs& a, ViewerPipeline& pipeline, PoseSource& sourc
   return runViewer(pipeline, &streaming, v);
 }
 
-int runReplay(const LiveArgs& a) {
-  if (!checkScreenshotArgs(a) || !checkRigArgs(a) || !checkOscOutArgs(a)) return kExitUsage;
+// Whether `path` is a scene file: by its #VRML header, or by a .wrl name when it cannot be read.
+bool looksLikeScene(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char head[5] = {};
+  if (in.read(head, sizeof head)) return std::string_view(head, sizeof head) == "#VRML";
+  return extensionOf(path) == ".wrl";
+}
+
+int runReplay(const LiveArgs& given) {
+  // SESSION SCENE, or SCENE SESSION as view and live take the scene first: told apart by content.
+  LiveArgs a = given;
+  if (looksLikeScene(a.session) && !looksLikeScene(a.scene)) std::swap(a.session, a.scene);
+  if (int rc = checkOutputArgs(a, "replay"); rc != kExitOk) return rc;
+  if (!checkRigArgs(a) || !checkOscOutArgs(a)) return kExitUsage;
   auto script = parseScript(a);
   if (!script) return kExitUsage;
   std::optional<sim::Session> session = loadSession(a.session);
@@ -318,12 +357,12 @@ int runReplay(const LiveArgs& a) {
   if (!a.calibration.empty()) {
     mapper = readCalibration(a.calibration, pipeline->character(), device);
     if (!mapper) return kExitInvalidInput;
-  } else if (!session->calibrations.empty()) {
-    auto c = calibration::Calibration::parse(session->calibrations.front().json, name + " (recorded calibration)",
-                                             &pipeline->character(), device);
-    if (c) {
-      mapper.emplace(std::move(*c), "recorded in " + name);
-    } else {
+  } else {
+    // The calibration recorded with the first sample, if any (a BVH clip's channel mapping is none: by name).
+    auto c = calibrationForSample(*session, 0, &pipeline->character(), name);
+    if (c && *c) {
+      mapper.emplace(std::move(**c), "recorded in " + name);
+    } else if (!c) {
       std::printf("puppeteer: note: the session's recorded calibration does not apply to this scene (%s); "
                   "mapping channels by name\n",
                   c.error().all().empty() ? "unknown format" : c.error().all().front().message.c_str());
@@ -354,7 +393,8 @@ int runReplay(const LiveArgs& a) {
 }
 
 int runLive(const LiveArgs& a) {
-  if (!checkScreenshotArgs(a) || !checkOscOutArgs(a)) return kExitUsage;
+  if (int rc = checkOutputArgs(a, "live"); rc != kExitOk) return rc;
+  if (!checkOscOutArgs(a)) return kExitUsage;
   // --rig alone is allowed here: key k calibrates it (and saves to --calibration-out); until then channels map by
   // name.
   if (!a.rig.empty() && a.calibration.empty() && a.calibrationOut.empty()) {
@@ -389,7 +429,9 @@ int runLive(const LiveArgs& a) {
   if (!pipeline) return code;
   std::optional<SampleMapper> mapper;
   if (!a.calibration.empty()) {
-    mapper = readCalibration(a.calibration, pipeline->character(), nullptr);
+    const drivers::DeviceSessionOptions session = drivers::sessionOptionsFor(*spec);
+    const bool lines = session.protocol == drivers::WireProtocol::Lines;
+    mapper = readCalibration(a.calibration, pipeline->character(), nullptr, lines ? session.lineBitsPerChannel : 0);
     if (!mapper) return kExitInvalidInput;
   }
   ViewerOptions v = viewerOptions(a, "IMPS Puppeteer: live " + a.device);
@@ -427,20 +469,23 @@ int runLive(const LiveArgs& a) {
 void addLiveCommands(CLI::App& app, Commands& commands) {
   auto view = std::make_shared<LiveArgs>();
   CLI::App* viewCmd = app.add_subcommand("view", "Open the live app on a scene and pose it by hand with the mouse");
-  viewCmd->add_option("scene", view->scene, "Scene file (.wrl)")->required()->check(CLI::ExistingFile);
+  viewCmd->add_option("scene", view->scene, "Scene file (.wrl)")->required()->check(inputFile());
   addCommonOptions(viewCmd, *view);
   commands.push_back({viewCmd, [view] { return runView(*view); }});
 
   auto replay = std::make_shared<LiveArgs>();
   CLI::App* replayCmd =
       app.add_subcommand("replay", "Play a recorded session (or a .bvh clip) on a scene in the live app");
-  replayCmd->add_option("session", replay->session, "Session file, or a .bvh clip converted on the fly")
+  replayCmd->add_option("session", replay->session,
+                        "Session file, or a .bvh clip converted on the fly (SCENE SESSION works too)")
       ->required()
-      ->check(CLI::ExistingFile);
-  replayCmd->add_option("scene", replay->scene, "Scene file (.wrl)")->required()->check(CLI::ExistingFile);
+      ->check(inputFile());
+  replayCmd->add_option("scene", replay->scene, "Scene file (.wrl)")->required()->check(inputFile());
   replayCmd->add_option("--calibration", replay->calibration,
-                        "Calibration file (default: the one recorded in the session, else channels by name)");
-  replayCmd->add_option("--rig", replay->rig, "Rig map (only together with --calibration, which contains it)");
+                        "Calibration file (default: the one recorded in the session, else channels by name)")
+      ->check(inputFile());
+  replayCmd->add_option("--rig", replay->rig, "Rig map (only together with --calibration, which contains it)")
+      ->check(inputFile());
   replayCmd->add_option("--speed", replay->speed, "Playback speed (1 = real time; 0 = as fast as possible)");
   replayCmd->add_flag("--stepped", replay->stepped,
                       "One recorded sample per rendered frame, no clock: deterministic (tests)");
@@ -452,15 +497,16 @@ void addLiveCommands(CLI::App& app, Commands& commands) {
 
   auto live = std::make_shared<LiveArgs>();
   CLI::App* liveCmd = app.add_subcommand("live", "Drive a scene's character from an armature in the live app");
-  liveCmd->add_option("scene", live->scene, "Scene file (.wrl)")->required()->check(CLI::ExistingFile);
-  liveCmd->add_option("--device", live->device,
-                      "Device spec (docs/devices.md): serial:/dev/ttyACM0, sim:SESSION, osc.udp://:PORT …")
+  liveCmd->add_option("scene", live->scene, "Scene file (.wrl)")->required()->check(inputFile());
+  liveCmd->add_option("--device", live->device, "Device spec (docs/devices.md): serial:/dev/ttyACM0, sim:SESSION, osc.udp://:PORT …")
       ->required();
   liveCmd->add_option("--calibration", live->calibration,
-                      "Calibration file (puppeteer calibrate); without one, channels map to joints by name");
+                      "Calibration file (puppeteer calibrate); without one, channels map to joints by name")
+      ->check(inputFile());
   liveCmd->add_option("--rig", live->rig,
                       "Rig map for key k when no --calibration is given (with --calibration-out); ignored with "
-                      "--calibration, which contains its rig map");
+                      "--calibration, which contains its rig map")
+      ->check(inputFile());
   liveCmd->add_option("--record", live->record, "Start recording every raw sample into this new session file at once");
   liveCmd->add_option("--record-dir", live->recordDir, "Where key o creates take-YYYYMMDD-HHMMSS.session")
       ->capture_default_str();

@@ -14,6 +14,8 @@
 #include "imps/parallel.h"
 #include "imps/skeleton_cache.h"
 #include "imps/tesselator.h"
+#include "json_output.h"
+#include "progress.h"
 #include "snapshot.h"
 
 namespace imps::app {
@@ -30,11 +32,25 @@ struct MeshArgs {
   size_t maxCells = MarchingCubesOptions{}.maxCells;
   size_t maxParticles = TesselatorOptions{}.maxParticles;
   bool check = false;
+  bool json = false;
 };
 
-// With --check: the mesh's topology, one line, and whether it is a closed 2-manifold.
-bool reportTopology(const Mesh& mesh) {
+Json topologyJson(const MeshTopology& t) {
+  return Json{{"closedManifold", t.closedManifold()}, {"boundaryEdges", t.boundaryEdges},
+              {"nonManifoldEdges", t.nonManifoldEdges}, {"nonManifoldVertices", t.nonManifoldVertices},
+              {"orientationConflicts", t.orientationConflicts}, {"components", t.components},
+              {"eulerCharacteristic", t.eulerCharacteristic}};
+}
+
+// With --check: the mesh's topology, one line (or into the --json report), and whether it is a closed 2-manifold.
+bool reportTopology(const Mesh& mesh, Progress& progress, Json* json) {
+  progress.phase("checking the topology of " + std::to_string(mesh.triangleCount()) + " triangles");
   const MeshTopology t = analyzeTopology(mesh);
+  progress.done();
+  if (json) {
+    (*json)["topology"] = topologyJson(t);
+    return t.closedManifold();
+  }
   std::printf("topology: %s: %zu boundary edges, %zu non-manifold edges, %zu non-manifold vertices, %zu orientation "
               "conflicts, %zu components, Euler characteristic %ld\n",
               t.closedManifold() ? "closed 2-manifold" : "NOT a closed 2-manifold", t.boundaryEdges,
@@ -66,7 +82,7 @@ std::string resolutionSource(float cell, int res, const MarchingCubesNode* node)
 }
 
 // --polygonizer particles: the tesselator run until settled (or --updates N), its triangulation written.
-int runParticleMesh(const MeshArgs& a, const Scene& scene, const SkeletonCache& skeleton) {
+int runParticleMesh(const MeshArgs& a, const Scene& scene, const SkeletonCache& skeleton, Progress& progress) {
   TesselatorOptions options;
   if (const auto* node = std::get_if<Tesselator3MPNode>(&scene.polygonizer)) options = TesselatorOptions::fromNode(*node);
   if (a.threads > 0) options.numThreads = a.threads;
@@ -75,18 +91,28 @@ int runParticleMesh(const MeshArgs& a, const Scene& scene, const SkeletonCache& 
   Mesh mesh;
   int updates = a.updates;
   if (updates > 0) {
-    for (int u = 0; u < updates; ++u) tess.update(skeleton);
+    for (int u = 0; u < updates; ++u) {
+      progress.phase("particle update " + std::to_string(u + 1) + "/" + std::to_string(updates));
+      tess.update(skeleton);
+    }
     tess.triangulate(mesh);
   } else {
+    progress.phase("settling the particles");
     updates = tess.settle(skeleton, mesh);
   }
+  progress.phase("writing " + a.output);
   std::string error;
   if (!writeMesh(mesh, a.output, &error)) {
+    progress.done();
     std::fprintf(stderr, "puppeteer mesh: error: %s\n", error.c_str());
     return kExitIoError;
   }
-  std::printf("%s: %zu particles, %zu triangles after %d updates, written to %s\n", a.scene.c_str(),
-              mesh.vertexCount(), mesh.triangleCount(), updates, a.output.c_str());
+  progress.done();
+  Json json{{"scene", a.scene}, {"output", a.output}, {"polygonizer", "particles"},
+            {"particles", mesh.vertexCount()}, {"triangles", mesh.triangleCount()}, {"updates", updates}};
+  if (!a.json)
+    std::printf("%s: %zu particles, %zu triangles after %d updates, written to %s\n", a.scene.c_str(),
+                mesh.vertexCount(), mesh.triangleCount(), updates, a.output.c_str());
   if (tess.particles().size() >= options.maxParticles) {
     const auto* node = std::get_if<Tesselator3MPNode>(&scene.polygonizer);
     const SourceLoc at = node ? node->desiredRadiusLoc : SourceLoc{};
@@ -98,11 +124,13 @@ int runParticleMesh(const MeshArgs& a, const Scene& scene, const SkeletonCache& 
                              : a.scene.c_str(),
                  options.maxParticles, double(options.desiredRadius));
   }
-  if (a.check) reportTopology(mesh);
+  if (a.check) reportTopology(mesh, progress, a.json ? &json : nullptr);
+  if (a.json) printJson(json);
   return kExitOk;
 }
 
 int runMesh(const MeshArgs& a) {
+  if (int rc = checkOutputPath("mesh", "-o", a.output, {".obj", ".ply", ".glb"}); rc != kExitOk) return rc;
   auto loaded = loadScene(a.scene);
   if (!loaded) return kExitInvalidInput;
   const Scene& scene = loaded->scene;
@@ -125,20 +153,41 @@ int runMesh(const MeshArgs& a) {
 
   options.maxCells = a.maxCells;
   SkeletonCache skeleton(character);
-  if (a.polygonizer == "particles") return runParticleMesh(a, scene, skeleton);
+  Progress progress("mesh");
+  if (a.polygonizer == "particles") return runParticleMesh(a, scene, skeleton, progress);
   if (gridRefused("mesh", skeleton.field(), options,
                   resolutionSource(a.cell, a.res, std::get_if<MarchingCubesNode>(&scene.polygonizer))))
     return a.cell > 0.0f || a.res > 0 ? kExitUsage : kExitInvalidInput;  // the command line's value, or the file's
   MarchingCubesStats stats;
+  progress.phase("polygonizing");
   const Mesh mesh = polygonize(skeleton.field(), options, &stats);
 
+  progress.phase("writing " + std::to_string(mesh.triangleCount()) + " triangles to " + a.output);
   std::string error;
   const auto writeStart = std::chrono::steady_clock::now();
   if (!writeMesh(mesh, a.output, &error)) {
+    progress.done();
     std::fprintf(stderr, "puppeteer mesh: error: %s\n", error.c_str());
     return kExitIoError;
   }
   const double writeMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - writeStart).count();
+  progress.done();
+  if (a.json) {
+    Json json{{"scene", a.scene},
+              {"output", a.output},
+              {"polygonizer", "mc"},
+              {"vertices", mesh.vertexCount()},
+              {"triangles", mesh.triangleCount()},
+              {"polygonizeMs", stats.milliseconds},
+              {"writeMs", writeMs},
+              {"grid", {stats.cells.x, stats.cells.y, stats.cells.z}},
+              {"cellSize", stats.cellSize.x},
+              {"threads", resolveThreads(options.threads)},
+              {"thinFeatureVertices", stats.thinFeatureVertices}};
+    if (a.check) reportTopology(mesh, progress, &json);
+    printJson(json);
+    return kExitOk;
+  }
   std::printf("%s: %zu vertices, %zu triangles, polygonized in %.2f ms (grid %dx%dx%d, cell %.4g m, %d threads), "
               "written in %.1f ms to %s\n",
               a.scene.c_str(), mesh.vertexCount(), mesh.triangleCount(), stats.milliseconds, stats.cells.x,
@@ -147,7 +196,7 @@ int runMesh(const MeshArgs& a) {
   if (stats.thinFeatureVertices > 0)
     std::printf("note: %zu grid vertices moved onto thin limbs to keep them (cell larger than the limb)\n",
                 stats.thinFeatureVertices);
-  if (a.check) reportTopology(mesh);
+  if (a.check) reportTopology(mesh, progress, nullptr);
   return kExitOk;
 }
 
@@ -169,11 +218,37 @@ const char* blendName(BlendKind k) {
   return "?";
 }
 
-int runCheck(const std::string& path) {
+// check --json: the same listing as one document.
+Json checkJson(const std::string& path, const Character& c) {
+  Json joints = Json::array(), primitives = Json::array(), sets = Json::array();
+  for (const Joint& joint : c.joints())
+    joints.push_back({{"name", joint.name},
+                      {"parent", joint.parent >= 0 ? Json(c.joints()[size_t(joint.parent)].name) : Json(nullptr)}});
+  for (const CharacterPrimitive& p : c.primitives())
+    primitives.push_back({{"name", p.name},
+                          {"kind", kindName(p.local.kind)},
+                          {"joint", p.joint >= 0 ? Json(c.joints()[size_t(p.joint)].name) : Json(nullptr)},
+                          {"blendParam", p.blendParam},
+                          {"color", {p.color.r, p.color.g, p.color.b}}});
+  for (size_t s = 0; s < c.blendSets().count(); ++s) {
+    Json members = Json::array();
+    for (uint32_t m : c.blendSets().set(s)) members.push_back(c.primitives()[m].name);
+    sets.push_back(std::move(members));
+  }
+  return Json{{"file", path},        {"valid", true},           {"hierarchical", c.hierarchical()},
+              {"blend", blendName(c.blend().kind)}, {"isoValue", c.isoValue()}, {"joints", std::move(joints)},
+              {"primitives", std::move(primitives)}, {"blendSets", std::move(sets)}};
+}
+
+int runCheck(const std::string& path, bool json) {
   auto loaded = loadScene(path);
   if (!loaded) return kExitInvalidInput;
   const Character& character = loaded->character;
   const Character& c = character;
+  if (json) {
+    printJson(checkJson(path, c));
+    return kExitOk;
+  }
   std::printf("%s: valid, %s scene, %s, iso-value %g\n", path.c_str(), c.hierarchical() ? "hierarchical" : "flat",
               blendName(c.blend().kind), double(c.isoValue()));
 
@@ -190,8 +265,8 @@ int runCheck(const std::string& path) {
                 kindName(p.local.kind), p.joint >= 0 ? c.joints()[size_t(p.joint)].name.c_str() : "-",
                 double(p.blendParam), double(p.color.r), double(p.color.g), double(p.color.b));
   }
-  std::printf("blend groups (%zu sets: each primitive blends only within a set; the field is the maximum):\n",
-              c.blendSets().count());
+  std::printf("blend groups (%zu set%s: each primitive blends only within a set; the field is the maximum):\n",
+              c.blendSets().count(), c.blendSets().count() == 1 ? "" : "s");
   for (size_t s = 0; s < c.blendSets().count(); ++s) {
     std::string line;
     for (uint32_t m : c.blendSets().set(s)) line += (line.empty() ? "" : " ") + c.primitives()[m].name;
@@ -207,10 +282,12 @@ struct RenderArgs {
   int width = 800, height = 800;
   std::string view = "three-quarter";
   size_t maxCells = MarchingCubesOptions{}.maxCells;
+  bool json = false;
 };
 
 // Renders the scene's Marching Cubes mesh in software to a PNG: a quick look without a GPU or a display.
 int runRender(const RenderArgs& a) {
+  if (int rc = checkOutputPath("render", "-o", a.output, {".png"}); rc != kExitOk) return rc;
   auto loaded = loadScene(a.scene);
   if (!loaded) return kExitInvalidInput;
   const Character& character = loaded->character;
@@ -221,7 +298,10 @@ int runRender(const RenderArgs& a) {
   options.maxCells = a.maxCells;
   if (gridRefused("render", skeleton.field(), options, resolutionSource(a.cell, a.cell > 0 ? 0 : a.res, nullptr)))
     return kExitUsage;
+  Progress progress("render");
+  progress.phase("polygonizing");
   const Mesh mesh = polygonize(skeleton.field(), options);
+  progress.phase("rendering " + std::to_string(mesh.triangleCount()) + " triangles");
   SnapshotOptions snap;
   snap.width = a.width;
   snap.height = a.height;
@@ -229,9 +309,16 @@ int runRender(const RenderArgs& a) {
                               : a.view == "top" ? glm::vec3(0, 1, 0) : kFrontThreeQuarter;
   snap.camera = frameMesh(mesh, direction, float(a.width) / float(a.height));
   std::string error;
-  if (!renderMeshToPng(mesh, snap, a.output, &error)) {
+  const bool rendered = renderMeshToPng(mesh, snap, a.output, &error);
+  progress.done();
+  if (!rendered) {
     std::fprintf(stderr, "puppeteer render: error: %s\n", error.c_str());
     return kExitIoError;
+  }
+  if (a.json) {
+    printJson(Json{{"scene", a.scene}, {"output", a.output}, {"triangles", mesh.triangleCount()},
+                   {"width", a.width}, {"height", a.height}, {"view", a.view}});
+    return kExitOk;
   }
   std::printf("%s: %zu triangles rendered to %s (%dx%d, %s view)\n", a.scene.c_str(), mesh.triangleCount(),
               a.output.c_str(), a.width, a.height, a.view.c_str());
@@ -243,9 +330,9 @@ int runRender(const RenderArgs& a) {
 void addSceneCommands(CLI::App& app, Commands& commands) {
   auto mesh = std::make_shared<MeshArgs>();
   CLI::App* meshCmd = app.add_subcommand("mesh", "Polygonize a scene with Marching Cubes and write OBJ, PLY or GLB");
-  meshCmd->add_option("scene", mesh->scene, "Scene file (.wrl)")->required()->check(CLI::ExistingFile);
+  meshCmd->add_option("scene", mesh->scene, "Scene file (.wrl)")->required()->check(inputFile());
   meshCmd->add_option("-o,--output", mesh->output, "Output mesh: .obj, .ply or .glb")->required();
-  auto* cellOpt = meshCmd->add_option("--cell", mesh->cell, "Cell size in metres")->check(CLI::PositiveNumber);
+  auto* cellOpt = meshCmd->add_option("--cell", mesh->cell, "Cell size in metres")->check(positiveNumber());
   meshCmd->add_option("--res", mesh->res, "Cells along the longest side of the surface's bounds")
       ->check(CLI::Range(1, 4096))
       ->excludes(cellOpt);
@@ -260,24 +347,28 @@ void addSceneCommands(CLI::App& app, Commands& commands) {
       ->check(CLI::PositiveNumber);
   meshCmd->add_option("--max-particles", mesh->maxParticles, "particles: the most particles (default 2^18)")
       ->check(CLI::PositiveNumber);
+  meshCmd->add_flag("--json", mesh->json, "Print the report as JSON (for scripts)");
   commands.push_back({meshCmd, [mesh] { return runMesh(*mesh); }});
 
   auto checkPath = std::make_shared<std::string>();
+  auto checkJsonFlag = std::make_shared<bool>(false);
   CLI::App* checkCmd = app.add_subcommand("check", "Validate a scene; list joints, primitives and blend groups");
-  checkCmd->add_option("scene", *checkPath, "Scene file (.wrl)")->required();
-  commands.push_back({checkCmd, [checkPath] { return runCheck(*checkPath); }});
+  checkCmd->add_option("scene", *checkPath, "Scene file (.wrl)")->required()->check(inputFile());
+  checkCmd->add_flag("--json", *checkJsonFlag, "Print the listing as JSON (for scripts)");
+  commands.push_back({checkCmd, [checkPath, checkJsonFlag] { return runCheck(*checkPath, *checkJsonFlag); }});
 
   auto render = std::make_shared<RenderArgs>();
   CLI::App* renderCmd = app.add_subcommand("render", "Render a scene's surface to a PNG in software (no GPU needed)");
-  renderCmd->add_option("scene", render->scene, "Scene file (.wrl)")->required()->check(CLI::ExistingFile);
+  renderCmd->add_option("scene", render->scene, "Scene file (.wrl)")->required()->check(inputFile());
   renderCmd->add_option("-o,--output", render->output, "Output image (.png)")->required();
-  auto* renderCell = renderCmd->add_option("--cell", render->cell, "Marching Cubes cell size in metres")->check(CLI::PositiveNumber);
+  auto* renderCell = renderCmd->add_option("--cell", render->cell, "Marching Cubes cell size in metres")->check(positiveNumber());
   renderCmd->add_option("--res", render->res, "Cells along the longest side (default 96)")->check(CLI::Range(1, 4096))->excludes(renderCell);
   renderCmd->add_option("--width", render->width, "Image width in pixels")->check(CLI::Range(16, 8192));
   renderCmd->add_option("--height", render->height, "Image height in pixels")->check(CLI::Range(16, 8192));
   renderCmd->add_option("--max-cells", render->maxCells, "The most grid cells (default 2^28; more is refused)")
       ->check(CLI::PositiveNumber);
   renderCmd->add_option("--view", render->view, "Camera direction")->check(CLI::IsMember({"three-quarter", "front", "side", "top"}));
+  renderCmd->add_flag("--json", render->json, "Print the report as JSON (for scripts)");
   commands.push_back({renderCmd, [render] { return runRender(*render); }});
 }
 

@@ -8,6 +8,8 @@
 #include <string>
 
 #include "cli.h"
+#include "json_output.h"
+#include "progress.h"
 #include "sim/bvh.h"
 #include "sim/bvh_session.h"
 #include "sim/session_file.h"
@@ -15,42 +17,85 @@
 namespace imps::app {
 namespace {
 
-std::string extensionOf(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return ext;
+// One device's samples in a session: how many, over how long, and the sequence gaps.
+struct DeviceSummary {
+  size_t count = 0;
+  double seconds = 0;
+  uint64_t gaps = 0;
+  double rate() const { return seconds > 0.0 ? double(count - 1) / seconds : 0.0; }
+};
+
+DeviceSummary summarize(const sim::Session& s, size_t device) {
+  DeviceSummary d;
+  int64_t first = 0, last = 0;
+  uint32_t previous = 0;
+  for (size_t i = 0; i < s.samples.size(); ++i) {
+    if (s.sampleDevice[i] != device) continue;
+    const drivers::Sample& sample = s.samples[i];
+    if (d.count == 0) first = sample.arrivalTimeNs;
+    else if (sample.sequence != previous + 1) ++d.gaps;
+    last = sample.arrivalTimeNs;
+    previous = sample.sequence;
+    ++d.count;
+  }
+  d.seconds = (double(last) - double(first)) * 1e-9;  // any two int64 timestamps, no overflow
+  return d;
 }
 
-int runInfo(const std::string& path) {
+Json infoJson(const std::string& path, const sim::Session& s) {
+  Json devices = Json::array(), calibrations = Json::array(), markers = Json::array();
+  for (size_t d = 0; d < s.devices.size(); ++d) {
+    const drivers::DeviceInfo& info = s.devices[d];
+    const DeviceSummary sum = summarize(s, d);
+    devices.push_back({{"name", info.name},
+                       {"serialNumber", info.serialNumber},
+                       {"firmware", info.firmwareVersion},
+                       {"channels", info.channelCount},
+                       {"bits", info.bitsPerChannel},
+                       {"deviceTimestamps", info.hasDeviceTimestamp},
+                       {"samples", sum.count},
+                       {"seconds", sum.seconds},
+                       {"rateHz", sum.rate()},
+                       {"sequenceGaps", sum.gaps}});
+  }
+  for (const auto& c : s.calibrations) calibrations.push_back({{"firstSample", c.firstSample}});
+  for (const auto& m : s.markers) markers.push_back({{"firstSample", m.firstSample}, {"label", m.label}});
+  return Json{{"file", path},
+              {"formatVersion", s.formatVersion},
+              {"samples", s.samples.size()},
+              {"devices", std::move(devices)},
+              {"calibrations", std::move(calibrations)},
+              {"markers", std::move(markers)},
+              {"notes", s.notes.size()},
+              {"skeleton", s.skeleton.has_value()},
+              {"closedCleanly", s.recovery.closedCleanly},
+              {"recovery", s.recovery.message}};
+}
+
+int runInfo(const std::string& path, bool json) {
+  Progress progress("info");
+  progress.phase("reading " + path);
   auto session = sim::readSession(path);
+  progress.done();
   if (!session) {
     std::fprintf(stderr, "%s\n", session.error().c_str());
     return kExitInvalidInput;
   }
   const sim::Session& s = *session;
+  if (json) {
+    printJson(infoJson(path, s));
+    return kExitOk;
+  }
   std::printf("%s: session format %u, %zu samples from %zu device%s\n", path.c_str(), unsigned(s.formatVersion),
               s.samples.size(), s.devices.size(), s.devices.size() == 1 ? "" : "s");
   for (size_t d = 0; d < s.devices.size(); ++d) {
     const drivers::DeviceInfo& info = s.devices[d];
-    size_t count = 0;
-    int64_t first = 0, last = 0;
-    uint64_t gaps = 0;
-    uint32_t previous = 0;
-    for (size_t i = 0; i < s.samples.size(); ++i) {
-      if (s.sampleDevice[i] != d) continue;
-      const drivers::Sample& sample = s.samples[i];
-      if (count == 0) first = sample.arrivalTimeNs;
-      else if (sample.sequence != previous + 1) ++gaps;
-      last = sample.arrivalTimeNs;
-      previous = sample.sequence;
-      ++count;
-    }
-    const double seconds = (double(last) - double(first)) * 1e-9;  // any two int64 timestamps, no overflow
+    const DeviceSummary sum = summarize(s, d);
     std::printf("  device %zu: \"%s\" serial \"%s\" firmware \"%s\": %d channels of %d bits%s\n", d, info.name.c_str(),
                 info.serialNumber.c_str(), info.firmwareVersion.c_str(), info.channelCount, info.bitsPerChannel,
                 info.hasDeviceTimestamp ? ", device timestamps" : "");
-    std::printf("    %zu samples over %.3f s (%.1f per second), %llu sequence gaps\n", count, seconds,
-                seconds > 0.0 ? double(count - 1) / seconds : 0.0, static_cast<unsigned long long>(gaps));
+    std::printf("    %zu samples over %.3f s (%.1f per second), %llu sequence gaps\n", sum.count, sum.seconds,
+                sum.rate(), static_cast<unsigned long long>(sum.gaps));
   }
   std::printf("  calibrations: %zu", s.calibrations.size());
   for (const auto& c : s.calibrations) std::printf(" (from sample %llu)", static_cast<unsigned long long>(c.firstSample));
@@ -71,18 +116,23 @@ int runInfo(const std::string& path) {
 struct ConvertArgs {
   std::string input, output;
   int bits = 16;
+  bool json = false;
 };
 
 // BVH -> session and session -> BVH, chosen by the file extensions.
 int runConvert(const ConvertArgs& a) {
   const std::string in = extensionOf(a.input), out = extensionOf(a.output);
+  if (int rc = checkOutputPath("convert", "OUT", a.output, {".session", ".bvh"}); rc != kExitOk) return rc;
   if (std::filesystem::exists(a.output)) {
     std::fprintf(stderr, "puppeteer convert: error: %s exists; convert never overwrites a file\n", a.output.c_str());
     return kExitIoError;
   }
+  Progress progress("convert");
   if (in == ".bvh" && out == ".session") {
     std::vector<std::string> warnings;
+    progress.phase("reading " + a.input);
     auto clip = sim::readBvh(a.input, &warnings);
+    progress.done();
     for (const std::string& w : warnings) std::fprintf(stderr, "%s\n", w.c_str());
     if (!clip) {
       std::fprintf(stderr, "%s\n", clip.error().c_str());
@@ -90,14 +140,24 @@ int runConvert(const ConvertArgs& a) {
     }
     sim::BvhToSessionOptions options;
     options.bitsPerChannel = a.bits;
+    progress.phase("converting " + std::to_string(clip->frames.size()) + " frames");
     auto session = sim::bvhToSession(*clip, std::filesystem::path(a.input).filename().string(), options);
+    progress.phase("writing " + a.output);
+    auto saved = session ? sim::saveSession(a.output, *session) : std::expected<void, std::string>();
+    progress.done();
     if (!session) {
       std::fprintf(stderr, "%s\n", session.error().c_str());
       return kExitInvalidInput;
     }
-    if (auto saved = sim::saveSession(a.output, *session); !saved) {
+    if (!saved) {
       std::fprintf(stderr, "puppeteer convert: error: %s\n", saved.error().c_str());
       return kExitIoError;
+    }
+    if (a.json) {
+      printJson(Json{{"input", a.input}, {"output", a.output}, {"joints", clip->joints.size()},
+                     {"frames", clip->frames.size()}, {"samples", session->samples.size()},
+                     {"devices", session->devices.size()}, {"bits", a.bits}});
+      return kExitOk;
     }
     std::printf("%s: %zu joints, %zu frames -> %s: %zu samples on %zu device%s (%d-bit counts)\n", a.input.c_str(),
                 clip->joints.size(), clip->frames.size(), a.output.c_str(), session->samples.size(),
@@ -105,20 +165,32 @@ int runConvert(const ConvertArgs& a) {
     return kExitOk;
   }
   if (in == ".session" && out == ".bvh") {
+    progress.phase("reading " + a.input);
     auto session = sim::readSession(a.input);
+    progress.done();
     if (!session) {
       std::fprintf(stderr, "%s\n", session.error().c_str());
       return kExitInvalidInput;
     }
     if (!session->recovery.message.empty()) std::fprintf(stderr, "%s\n", session->recovery.message.c_str());
+    progress.phase("converting " + std::to_string(session->samples.size()) + " samples");
     auto clip = sim::sessionToBvh(*session);
+    progress.phase("writing " + a.output);
+    auto saved = clip ? sim::saveBvh(a.output, *clip) : std::expected<void, std::string>();
+    progress.done();
     if (!clip) {
       std::fprintf(stderr, "%s\n", clip.error().c_str());
       return kExitInvalidInput;
     }
-    if (auto saved = sim::saveBvh(a.output, *clip); !saved) {
+    if (!saved) {
       std::fprintf(stderr, "puppeteer convert: error: %s\n", saved.error().c_str());
       return kExitIoError;
+    }
+    if (a.json) {
+      printJson(Json{{"input", a.input}, {"output", a.output}, {"samples", session->samples.size()},
+                     {"joints", clip->joints.size()}, {"frames", clip->frames.size()},
+                     {"frameTime", clip->frameTime}});
+      return kExitOk;
     }
     std::printf("%s: %zu samples -> %s: %zu joints, %zu frames at %.4g s\n", a.input.c_str(), session->samples.size(),
                 a.output.c_str(), clip->joints.size(), clip->frames.size(), clip->frameTime);
@@ -134,16 +206,19 @@ int runConvert(const ConvertArgs& a) {
 
 void addSessionCommands(CLI::App& app, Commands& commands) {
   auto infoPath = std::make_shared<std::string>();
+  auto infoJsonFlag = std::make_shared<bool>(false);
   CLI::App* info = app.add_subcommand("info", "Describe a recorded session: devices, samples, rate, calibrations");
-  info->add_option("session", *infoPath, "Session file (.session)")->required()->check(CLI::ExistingFile);
-  commands.push_back({info, [infoPath] { return runInfo(*infoPath); }});
+  info->add_option("session", *infoPath, "Session file (.session)")->required()->check(inputFile());
+  info->add_flag("--json", *infoJsonFlag, "Print the description as JSON (for scripts)");
+  commands.push_back({info, [infoPath, infoJsonFlag] { return runInfo(*infoPath, *infoJsonFlag); }});
 
   auto convert = std::make_shared<ConvertArgs>();
   CLI::App* conv = app.add_subcommand("convert", "Convert between BVH clips and sessions (by file extension)");
-  conv->add_option("input", convert->input, "A .bvh clip or a .session")->required()->check(CLI::ExistingFile);
+  conv->add_option("input", convert->input, "A .bvh clip or a .session")->required()->check(inputFile());
   conv->add_option("output", convert->output, "The .session or .bvh to create (never overwritten)")->required();
   conv->add_option("--bits", convert->bits, "Encoder resolution for BVH -> session (counts per turn = 2^bits)")
       ->check(CLI::Range(8, 20));
+  conv->add_flag("--json", convert->json, "Print the report as JSON (for scripts)");
   commands.push_back({conv, [convert] { return runConvert(*convert); }});
 }
 

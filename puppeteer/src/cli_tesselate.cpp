@@ -19,6 +19,8 @@
 #include "imps/parallel.h"
 #include "imps/skeleton_cache.h"
 #include "imps/tesselator.h"
+#include "json_output.h"
+#include "progress.h"
 
 namespace imps::app {
 namespace {
@@ -28,6 +30,7 @@ struct BenchArgs {
   std::string motion = "static";
   int updates = 300;
   int threads = -1;  // -1: the scene's numThreads
+  bool json = false;
 };
 
 // The joints a "swing" moves: the biped's limbs if it has them, else every joint below a root.
@@ -49,7 +52,8 @@ struct Report {
   int settleUpdates = 0;
 };
 
-std::optional<Report> benchScene(const std::string& path, double degPerSecond, int frames, int threads) {
+std::optional<Report> benchScene(const std::string& path, double degPerSecond, int frames, int threads,
+                                 Progress& progress) {
   const auto loaded = loadScene(path);
   if (!loaded) return std::nullopt;
   const Character& ch = loaded->character;
@@ -61,6 +65,7 @@ std::optional<Report> benchScene(const std::string& path, double degPerSecond, i
   Mesh mesh;
   Report r;
   r.name = path.substr(path.find_last_of('/') + 1);
+  progress.phase(r.name + ": settling");
   r.settleUpdates = tess.settle(skel, mesh, 400);
 
   const std::vector<int> joints = swingJoints(ch);
@@ -70,6 +75,7 @@ std::optional<Report> benchScene(const std::string& path, double degPerSecond, i
   const double amplitude = 45.0;           // degrees: a triangle wave between -45 and +45
   double angle = 0.0, direction = 1.0;
   for (int f = 0; f < frames; ++f) {
+    if (f % 10 == 0) progress.phase(r.name + ": render " + std::to_string(f + 1) + "/" + std::to_string(frames));
     if (degPerSecond > 0.0) {
       angle += direction * degPerSecond * frameSeconds;
       if (angle > amplitude) angle = 2 * amplitude - angle, direction = -1.0;
@@ -98,6 +104,7 @@ std::optional<Report> benchScene(const std::string& path, double degPerSecond, i
   r.particles = tess.stats().particles;
   r.tris = tess.stats().triangles;
   // Accuracy: dense surface samples (Marching Cubes vertices at a third of desiredRadius) to the particle mesh.
+  progress.phase(r.name + ": accuracy against dense samples");
   MarchingCubesOptions mc;
   mc.cellSize = o.desiredRadius / 3.0f;
   const Mesh dense = polygonize(skel.field(), mc);
@@ -127,10 +134,31 @@ int runBench(const BenchArgs& a) {
     }
   }
   std::vector<Report> reports;
-  for (const std::string& s : a.scenes) {
-    auto r = benchScene(s, rate, a.updates, a.threads);
-    if (!r) return kExitInvalidInput;
-    reports.push_back(*r);
+  {
+    Progress progress("bench");
+    for (const std::string& s : a.scenes) {
+      auto r = benchScene(s, rate, a.updates, a.threads, progress);
+      progress.done();
+      if (!r) return kExitInvalidInput;
+      reports.push_back(*r);
+    }
+  }
+  if (a.json) {
+    Json scenes = Json::array();
+    for (const Report& r : reports)
+      scenes.push_back({{"scene", r.name},
+                        {"simulateMsPerUpdate", r.sim},
+                        {"addDeleteMsPerUpdate", r.addDel},
+                        {"meshMsPerRender", r.mesh},
+                        {"particles", r.particles},
+                        {"triangles", r.tris},
+                        {"maxBoundaryEdges", r.maxBoundary},
+                        {"rendersWithHoles", r.framesWithHoles},
+                        {"renders", r.frames},
+                        {"worstSampleDistanceMm", r.worstMm},
+                        {"updatesToSettle", r.settleUpdates}});
+    printJson(Json{{"motion", a.motion}, {"renders", a.updates}, {"scenes", std::move(scenes)}});
+    return kExitOk;
   }
   std::printf("Tesselator (particles), motion %s, %d renders each after settling; wall-clock ms (machine may be "
               "shared)\n", a.motion.c_str(), a.updates);
@@ -166,11 +194,12 @@ int runBench(const BenchArgs& a) {
 void addTesselatorCommands(CLI::App& app, Commands& commands) {
   auto a = std::make_shared<BenchArgs>();
   CLI::App* cmd = app.add_subcommand("bench", "Time the particle tesselator on scenes (thesis Table 3.1 report)");
-  cmd->add_option("scenes", a->scenes, "Scene files (.wrl)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("scenes", a->scenes, "Scene files (.wrl)")->required()->check(inputFile());
   cmd->add_option("--motion", a->motion, "static, or swing:DEG_PER_S (limbs swing +-45 degrees, 30 Hz renders)");
   cmd->add_option("--updates", a->updates, "Renders to time after settling")->check(CLI::Range(1, 1000000));
   cmd->add_option("--threads", a->threads, "Worker threads (0: all cores; default: the scene's numThreads)")
       ->check(CLI::Range(0, 1024));
+  cmd->add_flag("--json", a->json, "Print the report as JSON (for scripts)");
   commands.push_back({cmd, [a] { return runBench(*a); }});
 }
 

@@ -22,6 +22,12 @@ Hud::~Hud() {
   ImGui::DestroyContext();
 }
 
+std::string keyHelp(bool deviceKeys) {
+  return std::string("drag: handle/limb/orbit  w e x move/turn/scale  ctrl+z undo  ctrl+shift+z redo  r reset  "
+                     "s save  p particles  m MC  ") +
+         (deviceKeys ? "o record  k calibrate  " : "") + "F12 shot  Esc quit";
+}
+
 bool Hud::wantsMouse() const { return ImGui::GetIO().WantCaptureMouse; }
 
 void Hud::draw(const HudInfo& info, const std::function<void()>& extra) {
@@ -80,8 +86,7 @@ void Hud::draw(const HudInfo& info, const std::function<void()>& extra) {
   ImGui::SetNextWindowPos(ImVec2(6, display.y - 6), ImGuiCond_Always, ImVec2(0, 1));
   ImGui::SetNextWindowBgAlpha(0.6f);
   if (ImGui::Begin("IMPS Puppeteer keys", nullptr, flags)) {
-    ImGui::TextColored(kDim, "drag: handle/limb/orbit  w e x move/turn/scale  ctrl+z undo  ctrl+shift+z redo  r reset  "
-                        "s save  p particles  m MC  o record  k calibrate  F12 shot  Esc quit");
+    ImGui::TextColored(kDim, "%s", keyHelp(info.deviceKeys).c_str());
   }
   ImGui::End();
   ImGui::PopStyleVar(2);

@@ -37,7 +37,11 @@ struct HudInfo {
   double poseMs = 0, polygonizeMs = 0, uploadMs = 0, drawMs = 0, hudMs = 0, swapMs = 0;
   std::string selectedJoint;  // "" when none
   std::string message;        // the last key's result ("saved …", "not available yet")
+  bool deviceKeys = false;    // keys o (record) and k (calibrate) work: a live device (puppeteer live)
 };
+
+// The key help line at the bottom of the HUD: only keys that work here (o and k only with deviceKeys).
+std::string keyHelp(bool deviceKeys);
 
 // Owns the ImGui context and its GLFW / OpenGL 3 backends for one window. Construct after the window's GL context
 // is current and after installing the app's own GLFW callbacks (ImGui chains to them). Not thread-safe.

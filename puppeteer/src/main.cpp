@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <csignal>
+#include <cstdio>
 #include <cstdlib>
 #include <string>
 
@@ -34,5 +35,8 @@ int main(int argc, char** argv) {
   // A file-size limit (ulimit -f) must fail a write like a full disk does (EFBIG: a message, the I/O exit code, the
   // temporary file removed), not kill the process mid-save with SIGXFSZ.
   std::signal(SIGXFSZ, SIG_IGN);
+  // Line-buffered stdout even into a pipe: a report line and a following stderr message (`cmd 2>&1 | less`) then
+  // arrive in the order they were printed, not stdout's block at exit after every message.
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
   return imps::app::runCli(argc, argv);
 }

@@ -7,12 +7,18 @@ std::expected<void, std::string> appendCalibration(sim::SessionWriter& writer, c
   return writer.appendCalibration(c.toJson());
 }
 
+bool isBvhChannelMapping(std::string_view json) {
+  return json.find("\"source\":\"bvh\"") != std::string_view::npos &&
+         json.find("\"version\"") == std::string_view::npos;
+}
+
 std::expected<std::optional<calibration::Calibration>, Diagnostics> calibrationForSample(
     const sim::Session& session, size_t sampleIndex, const Character* character, const std::string& sessionName) {
   const sim::SessionCalibration* found = nullptr;
   size_t number = 0;
   for (size_t i = 0; i < session.calibrations.size(); ++i) {
-    if (session.calibrations[i].firstSample > sampleIndex) continue;
+    if (session.calibrations[i].firstSample > sampleIndex || isBvhChannelMapping(session.calibrations[i].json))
+      continue;
     if (!found || session.calibrations[i].firstSample >= found->firstSample) {
       found = &session.calibrations[i];
       number = i;

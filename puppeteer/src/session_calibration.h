@@ -6,6 +6,7 @@
 #include <expected>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "calibration/calibration.h"
 #include "sim/session_file.h"
@@ -16,10 +17,16 @@ namespace imps::app {
 // with the calibration file's text). Errors are the writer's.
 std::expected<void, std::string> appendCalibration(sim::SessionWriter& writer, const calibration::Calibration& c);
 
+// Whether a CALIBRATION blob is the BVH channel mapping `puppeteer convert` wrote into sessions made from BVH clips
+// before rig-map calibrations existed (`{"source":"bvh",…}`, no version; examples/simple_biped_wave.session had
+// one). It says no more than the channel names (`Joint:Zrotation`) and the SKELETON record, so it is read as "no
+// calibration": replay maps those channels by name, silently. docs/session-format.md.
+bool isBvhChannelMapping(std::string_view json);
+
 // The calibration in force for sample `sampleIndex` of `session`: the last CALIBRATION record whose firstSample is
-// <= sampleIndex; nullopt when the session has none that early. The blob is parsed and checked against the
-// character (may be null) and the sample's device; errors are reported as "SESSION calibration #N:line:column:
-// error: …" with the given session name.
+// <= sampleIndex, BVH channel mappings skipped; nullopt when the session has none that early. The blob is parsed
+// and checked against the character (may be null) and the sample's device; errors are reported as "SESSION
+// calibration #N:line:column: error: …" with the given session name.
 std::expected<std::optional<calibration::Calibration>, Diagnostics> calibrationForSample(
     const sim::Session& session, size_t sampleIndex, const Character* character = nullptr,
     const std::string& sessionName = "session");

@@ -451,6 +451,7 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
                                  : std::string();
         info.message = s.message;
         menu.showParticles = s.showParticles;
+        info.deviceKeys = source && source->handlesDeviceKeys();
         hud->draw(info, [&] { drawModellerMenu(pipeline, modeller, menu, menuActions); });
         s.showParticles = menu.showParticles;
         renderer->setPointSize(menu.pointSize);

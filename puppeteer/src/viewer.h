@@ -30,6 +30,8 @@ class PoseSource {
   // Key `k`: starts re-calibration (countdown, averaging window, offsets, save); progress and result reach the HUD
   // through describe() and takeMessage().
   virtual std::string recalibrate() { return "re-calibration needs a live device (puppeteer live)"; }
+  // Whether toggleRecording() and recalibrate() do something here (the HUD offers keys o and k only then).
+  virtual bool handlesDeviceKeys() const { return false; }
   // A message produced on the source's own schedule (a calibration finished, a recording failed), once; "" if none.
   // The source prints it itself; the viewer shows it in the HUD.
   virtual std::string takeMessage() { return {}; }

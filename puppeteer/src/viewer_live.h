@@ -50,6 +50,7 @@ class LivePoseSource final : public PoseSource {
   void describe(HudInfo& info) override;
   std::string toggleRecording() override;
   std::string recalibrate() override;
+  bool handlesDeviceKeys() const override { return true; }
   std::string takeMessage() override;
   std::string finish() override;
 

@@ -15,23 +15,6 @@ namespace {
 constexpr int kMinBits = 8;
 constexpr int kMaxBits = 20;
 
-std::string jsonEscape(std::string_view s) {
-  std::string out;
-  for (unsigned char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += static_cast<char>(c);
-    } else if (c < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", c);
-      out += buf;
-    } else {
-      out += static_cast<char>(c);
-    }
-  }
-  return out;
-}
-
 // Shortest text that reads back as the same double.
 std::string jsonNumber(double v) {
   char buf[64];
@@ -162,23 +145,9 @@ std::expected<Session, std::string> bvhToSession(const BvhClip& clip, std::strin
     s.devices.push_back(std::move(info));
   }
 
-  // The mapping, in a form the calibration stage can take over.
-  std::string json = "{\"source\":\"bvh\",\"file\":\"" + jsonEscape(name) + "\",\"bitsPerChannel\":" +
-                     std::to_string(bits) + ",\"rotation\":{\"unit\":\"degree\",\"zeroCount\":" +
-                     std::to_string(halfScale(bits)) + ",\"countsPerTurn\":" + std::to_string(int64_t{1} << bits) +
-                     "},\"position\":{\"zeroCount\":" + std::to_string(halfScale(bits)) +
-                     ",\"unitsPerCount\":" + jsonNumber(unitsPerCount) + "},\"channels\":[";
-  for (size_t i = 0; i < channelCount; ++i) {
-    const auto split = splitChannelName(channelNames[i]);
-    if (i) json += ',';
-    json += "{\"device\":" + std::to_string(i / drivers::kMaxChannels) +
-            ",\"channel\":" + std::to_string(i % drivers::kMaxChannels) + ",\"joint\":\"" + jsonEscape(split->first) +
-            "\",\"kind\":\"" + (rotation[i] ? "rotation" : "position") + "\",\"axis\":\"" +
-            std::string(bvhChannelName(split->second).substr(0, 1)) + "\"}";
-  }
-  json += "]}";
-  if (json.size() > kMaxRecordPayloadBytes) return fail(recordTooLarge("channel description", json.size()));
-  s.calibrations.push_back({0, std::move(json)});
+  // No CALIBRATION record: the channel names (`Joint:Zrotation`) and the SKELETON record (hierarchy, position
+  // units) say how counts become the clip's channels, and replay maps such channels by name. (Sessions converted
+  // before version 0.2 carry a `{"source":"bvh",…}` blob saying the same; readers skip it.)
 
   BvhClip hierarchy = clip;
   hierarchy.frames.clear();

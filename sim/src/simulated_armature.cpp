@@ -31,9 +31,31 @@ drivers::DeviceInfo ArmatureOptions::defaultInfo(int channels, int bits) {
   return info;
 }
 
+const char* toString(ArmatureMotion motion) {
+  switch (motion) {
+    case ArmatureMotion::Wave: return "wave";
+    case ArmatureMotion::Still: return "still";
+    case ArmatureMotion::Sweep: return "sweep";
+  }
+  return "?";
+}
+
+const char* const kSimKeys =
+    "protocol, mode, rate, channels, bits, motion, period_s, noise, dropout, garbage, corrupt, banner, boot_ms, "
+    "unplug_ms, replug_ms, stream_at_boot, timestamps, seed";
+
 // ---- Spec
 
 namespace {
+
+bool parseMotion(std::string_view s, ArmatureMotion& out) {
+  for (ArmatureMotion m : {ArmatureMotion::Wave, ArmatureMotion::Still, ArmatureMotion::Sweep})
+    if (s == toString(m)) {
+      out = m;
+      return true;
+    }
+  return false;
+}
 
 template <class T>
 bool parseValue(std::string_view s, T& out) {
@@ -68,6 +90,7 @@ std::expected<ArmatureOptions, std::string> armatureOptionsFromSpec(const driver
     else if (key == "dropout") ok = parseValue(value, o.dropoutProbability) && o.dropoutProbability >= 0 && o.dropoutProbability <= 1;
     else if (key == "garbage") ok = parseValue(value, o.garbageProbability) && o.garbageProbability >= 0 && o.garbageProbability <= 1;
     else if (key == "corrupt") ok = parseValue(value, o.corruptProbability) && o.corruptProbability >= 0 && o.corruptProbability <= 1;
+    else if (key == "motion") ok = parseMotion(value, o.motion);
     else if (key == "period_s") ok = parseValue(value, o.motionPeriodS) && o.motionPeriodS > 0;
     else if (key == "seed") ok = parseValue(value, o.seed);
     else if (key == "banner") {
@@ -90,10 +113,10 @@ std::expected<ArmatureOptions, std::string> armatureOptionsFromSpec(const driver
       ok = parseValue(value, flag) && (flag == 0 || flag == 1);
       (key == "timestamps" ? o.deviceTimestamps : o.streamAtBoot) = flag == 1;
     } else {
-      return bad(key, "unknown (known: channels, bits, noise, dropout, garbage, corrupt, banner, boot_ms, unplug_ms, "
-                      "replug_ms, stream_at_boot, timestamps, seed, period_s)");
+      return bad(key, std::string("unknown (known: ") + kSimKeys + ")");
     }
-    if (!ok) return bad(key, "bad value '" + value + "'");
+    if (!ok)
+      return bad(key, "bad value '" + value + "'" + (key == "motion" ? " (expected wave, still or sweep)" : ""));
   }
   o.info = ArmatureOptions::defaultInfo(channels, bits);
   o.info.hasDeviceTimestamp = o.deviceTimestamps;
@@ -108,6 +131,58 @@ std::expected<ArmatureOptions, std::string> armatureOptionsFromSpec(const driver
   }
   return o;
 }
+
+// ---- Generated motion
+
+namespace {
+
+// One channel of the waving performance: centre + amplitude * sin(harmonic * cycle + phase), in degrees from the
+// calibration pose. Channel order and limits are examples/simple_biped.rig.json's.
+struct WaveChannel {
+  double centre, amplitude, harmonic, phase;
+};
+constexpr WaveChannel kWave[32] = {
+    {0, 2, 1, 0},       // 0  Pelvis x      (limits -45..45)
+    {0, 8, 1, 0.5},     // 1  Pelvis y      (-90..90): turn a little towards the wave
+    {0, 2, 1, 1.6},     // 2  Pelvis z      (-45..45): weight shift
+    {4, 3, 1, 0},       // 3  Spine x       (-30..60)
+    {0, 3, 1, 1.6},     // 4  Spine z       (-40..40)
+    {0, 4, 1, 0.3},     // 5  Neck x        (-40..50)
+    {0, 6, 2, 0},       // 6  Head x        (-40..40): a nod
+    {0, 15, 1, 0.8},    // 7  Head y        (-70..70): looks around
+    {-8, 3, 1, 0},      // 8  L_Clavicle z  (-15..30): shoulder relaxed
+    {-10, 4, 1, 0},     // 9  R_Clavicle z  (-30..15): shoulder up with the raised arm
+    {0, 5, 1, 0.4},     // 10 L_UpperArm x  (-90..90)
+    {0, 8, 1, 0.9},     // 11 L_UpperArm y  (-120..60)
+    {-70, 5, 1, 0},     // 12 L_UpperArm z  (-90..100): arm down at the side
+    {0, 5, 1, 0},       // 13 R_UpperArm x  (-90..90)
+    {0, 6, 1, 0},       // 14 R_UpperArm y  (-60..120)
+    {-55, 8, 1, 1.2},   // 15 R_UpperArm z  (-100..90): arm raised
+    {-15, 8, 1, 0.5},   // 16 L_Forearm y   (-150..5): elbow slightly bent
+    {45, 30, 2, 0},     // 17 R_Forearm y   (-5..150): the wave, twice a cycle, clear of the head
+    {0, 10, 1, 0},      // 18 L_Hand z      (-70..70)
+    {0, 25, 2, 0.6},    // 19 R_Hand z      (-70..70): the hand follows the wave
+    {0, 4, 1, 0},       // 20 L_Thigh x     (-120..40)
+    {0, 2, 1, 0},       // 21 L_Thigh y     (-45..45)
+    {3, 2, 1, 1.6},     // 22 L_Thigh z     (-30..60)
+    {0, 4, 1, 3.1},     // 23 R_Thigh x     (-120..40)
+    {0, 2, 1, 0},       // 24 R_Thigh y     (-45..45)
+    {-3, 2, 1, 1.6},    // 25 R_Thigh z     (-60..30)
+    {6, 5, 1, 0},       // 26 L_Calf x      (-5..150): knees soft
+    {6, 5, 1, 3.1},     // 27 R_Calf x      (-5..150)
+    {0, 3, 1, 0},       // 28 L_Foot x      (-45..45)
+    {0, 2, 1, 0},       // 29 L_Foot y      (-30..30)
+    {0, 3, 1, 3.1},     // 30 R_Foot x      (-45..45)
+    {0, 2, 1, 0},       // 31 R_Foot y      (-30..30)
+};
+
+double waveDegrees(int channel, double cycle) {
+  if (channel >= 32) return 10.0 * std::sin(cycle + 0.7 * channel);
+  const WaveChannel& w = kWave[channel];
+  return w.centre + w.amplitude * std::sin(w.harmonic * cycle + w.phase);
+}
+
+}  // namespace
 
 // ---- The device model
 
@@ -152,9 +227,15 @@ drivers::Sample SimulatedArmature::poseAt(uint64_t index, int64_t deviceTimeNs) 
     return s;
   }
   const double t = static_cast<double>(deviceTimeNs) * 1e-9;
+  const double cycle = 2 * std::numbers::pi * t / options_.motionPeriodS;
+  const double countsPerDegree = std::ldexp(1.0, bits) / 360.0;
   for (int i = 0; i < channels; ++i) {
-    const double phase = 2 * std::numbers::pi * t / options_.motionPeriodS + 0.7 * i;
-    s.counts[i] = static_cast<uint32_t>(std::lround(maxCount * (0.5 + 0.4 * std::sin(phase))));
+    double counts = std::ldexp(1.0, bits - 1);  // mid-scale: the calibration pose
+    if (options_.motion == ArmatureMotion::Sweep)
+      counts = maxCount * (0.5 + 0.4 * std::sin(cycle + 0.7 * i));
+    else if (options_.motion == ArmatureMotion::Wave)
+      counts += countsPerDegree * waveDegrees(i, cycle);
+    s.counts[i] = static_cast<uint32_t>(std::clamp(std::round(counts), 0.0, maxCount));
   }
   return s;
 }

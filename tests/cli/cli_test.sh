@@ -62,7 +62,7 @@ check "1 and 2 threads give identical files" cmp -s "$work/one.ply" "$work/two.p
 
 # mesh: a bad output is refused with exit 3 and the existing file is left alone.
 echo "precious" >"$work/keep.txt"
-expect "unknown output extension" 3 "$puppeteer" mesh "$src/examples/flubber.wrl" -o "$work/keep.txt"
+expect "unknown output extension" 2 "$puppeteer" mesh "$src/examples/flubber.wrl" -o "$work/keep.txt"
 check "existing file untouched" grep -q "precious" "$work/keep.txt"
 expect "unwritable output directory" 3 "$puppeteer" mesh "$src/examples/flubber.wrl" -o "$work/no/such/dir/x.ply"
 expect "mesh of a bad scene" 1 "$puppeteer" mesh "$work/bad.wrl" -o "$work/bad.ply"

@@ -63,6 +63,37 @@ TEST(DeviceSpec, SimKeepsSimulatorKeysInOrder) {
   EXPECT_TRUE(bare->path.empty());
 }
 
+// A bare device node is a serial port, with the same keys (and error columns into the text as given).
+TEST(DeviceSpec, BareDevicePathIsASerialPort) {
+  auto bare = parseDeviceSpec("/dev/ttyACM0");
+  ASSERT_TRUE(bare) << bare.error();
+  EXPECT_EQ(*bare, *parseDeviceSpec("serial:/dev/ttyACM0"));
+  auto withKeys = parseDeviceSpec("/dev/ttyUSB0?baud=9600&protocol=lines");
+  ASSERT_TRUE(withKeys) << withKeys.error();
+  EXPECT_EQ(withKeys->kind, DeviceKind::Serial);
+  EXPECT_EQ(withKeys->path, "/dev/ttyUSB0");
+  EXPECT_EQ(withKeys->baud, 9600);
+  auto bad = parseDeviceSpec("/dev/ttyACM0?bard=1");
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().find("spec:1:14: error: unknown key 'bard' for serial"), std::string::npos) << bad.error();
+}
+
+// A line device cannot say its encoders' bits: the spec can, and the session's DeviceInfo reports them, so that
+// calibrate (which checks a rig map against the device) and live agree on a 12-bit rig map.
+TEST(DeviceSpec, LineBitsReachTheSessionOptions) {
+  auto lines = parseDeviceSpec("serial:/dev/ttyACM0?protocol=lines&bits=12");
+  ASSERT_TRUE(lines) << lines.error();
+  EXPECT_EQ(lines->bits, 12);
+  EXPECT_EQ(sessionOptionsFor(*lines).lineBitsPerChannel, 12);
+  auto unsaid = parseDeviceSpec("serial:/dev/ttyACM0?protocol=lines");
+  ASSERT_TRUE(unsaid) << unsaid.error();
+  EXPECT_EQ(sessionOptionsFor(*unsaid).lineBitsPerChannel, 32);
+  // The simulator's own bits key tells the host too when it prints lines.
+  auto sim = parseDeviceSpec("sim:?protocol=lines&bits=12");
+  ASSERT_TRUE(sim) << sim.error();
+  EXPECT_EQ(sessionOptionsFor(*sim).lineBitsPerChannel, 12);
+}
+
 TEST(DeviceSpec, ErrorsSayWhereAndWhat) {
   struct Case {
     const char* text;
@@ -86,6 +117,9 @@ TEST(DeviceSpec, ErrorsSayWhereAndWhat) {
       {"osc.udp://9000", "spec:1:11: error: expected :PORT"},
       {"osc.udp://:0", "spec:1:12: error: expected a UDP port in 1..65535"},
       {"osc.udp://:70000", "spec:1:12: error: expected a UDP port in 1..65535"},
+      {"serial:/dev/ttyACM0?protocol=lines&bits=0", "error: expected bits per channel in 1..32"},
+      {"serial:/dev/ttyACM0?protocol=lines&bits=33", "error: expected bits per channel in 1..32"},
+      {"serial:/dev/ttyACM0?bits=12", "error: bits applies to protocol=lines only"},
   };
   for (const Case& c : cases) {
     auto spec = parseDeviceSpec(c.text);
@@ -109,6 +143,7 @@ TEST(DeviceSpec, OscPoseStream) {
 
 TEST(DeviceSpec, FormatRoundTrips) {
   for (const char* text : {"serial:/dev/ttyACM0", "serial:/dev/ttyUSB1?baud=9600&protocol=lines&channels=4",
+                           "serial:/dev/ttyUSB1?protocol=lines&bits=12",
                            "serial:/dev/ttyACM0?mode=poll&rate=30", "hid:2341:8036?serial=X", "usb:1209:0001",
                            "usb:1209:0001?serial=U1&mode=poll&rate=250",
                            "sim:?rate=1000&channels=64&noise=1", "osc.udp://:9000", "osc.udp://10.0.0.2:57120"}) {

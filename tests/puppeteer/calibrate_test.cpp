@@ -246,6 +246,19 @@ TEST(SessionCalibration, ReplayFindsTheCalibrationItWasCapturedWith) {
   EXPECT_EQ(bad.error().str(), "take.session calibration #1:1:39: error: expected a value, found '}'\n");
 }
 
+// Sessions converted from BVH by earlier versions carry the clip's channel mapping as a CALIBRATION blob: it is
+// not a calibration (channels map by name), so none is in force — no error to report.
+TEST(SessionCalibration, OldBvhChannelMappingIsNoCalibration) {
+  auto old = sim::readSession(kSource + "/tests/data/sessions/legacy_bvh_mapping.session");
+  ASSERT_TRUE(old.has_value()) << old.error();
+  ASSERT_EQ(old->calibrations.size(), 1u);
+  EXPECT_TRUE(isBvhChannelMapping(old->calibrations[0].json));
+  auto found = calibrationForSample(*old, 0, &biped(), "legacy_bvh_mapping.session");
+  ASSERT_TRUE(found.has_value()) << found.error().str();
+  EXPECT_FALSE(found->has_value());
+  EXPECT_FALSE(isBvhChannelMapping("{\"version\": 1, \"bits\": 12, \"info\": {\"source\":\"bvh\"}, \"joints\": []}"));
+}
+
 }  // namespace
 }  // namespace imps::app
 

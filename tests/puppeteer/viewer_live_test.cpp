@@ -6,7 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
+#include <numbers>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -264,6 +266,63 @@ TEST(CalibrationFlow, CollectsTheWindowAfterTheCountdown) {
   flow.reset();
   EXPECT_EQ(flow.phase(), CalibrationFlow::Phase::Idle);
   EXPECT_TRUE(flow.window().empty());
+}
+
+// The simulator's default motion under the bundled calibration (docs/cli.md's `live --device 'sim:?rate=1000'
+// --calibration examples/simple_biped.calibration.json`) is a performance, not a tumble: over whole cycles every
+// channel's angle stays inside its joint's limits (no clamping needed), and the waving forearm really moves.
+TEST(LiveDefaultMotion, EveryGeneratedAngleIsWithinTheRigMapsLimits) {
+  auto spec = drivers::parseDeviceSpec("sim:?rate=1000");
+  ASSERT_TRUE(spec) << spec.error();
+  auto options = sim::armatureOptionsFromSpec(*spec);
+  ASSERT_TRUE(options) << options.error();
+  const sim::SimulatedArmature armature(*options);
+  auto cal = calibration::Calibration::readFile(kCalibration, &test::exampleCharacter("simple_biped"),
+                                                &options->info);
+  ASSERT_TRUE(cal) << cal.error().str();
+  const calibration::RigMap& map = cal->rigMap();
+  std::vector<double> lowest(map.channels.size(), 1e9), highest(map.channels.size(), -1e9);
+  const int64_t periodNs = int64_t(options->motionPeriodS * 1e9);
+  for (int64_t t = 0; t <= 3 * periodNs; t += 5'000'000) {
+    const drivers::Sample s = armature.poseAt(uint64_t(t / 1'000'000), t);
+    for (size_t i = 0; i < map.channels.size(); ++i) {
+      const double angle = cal->rawAngle(i, double(s.counts[size_t(map.channels[i].channel)]));
+      EXPECT_GE(angle, map.channels[i].minAngle) << map.channels[i].joint << " at " << t << " ns";
+      EXPECT_LE(angle, map.channels[i].maxAngle) << map.channels[i].joint << " at " << t << " ns";
+      lowest[i] = std::min(lowest[i], angle);
+      highest[i] = std::max(highest[i], angle);
+    }
+  }
+  // Every channel moves (a performance, not a statue), the waving forearm by more than 45 degrees.
+  for (size_t i = 0; i < map.channels.size(); ++i) {
+    EXPECT_GT(highest[i] - lowest[i], 0.5 * std::numbers::pi / 180) << map.channels[i].joint;
+    if (map.channels[i].joint == "R_Forearm") {
+      EXPECT_GT(highest[i] - lowest[i], std::numbers::pi / 4);
+    }
+  }
+}
+
+// motion=still holds the calibration pose: the bundled calibration maps it to zero angles on every channel.
+TEST(LiveDefaultMotion, StillMotionIsTheBundledCalibrationsPose) {
+  auto spec = drivers::parseDeviceSpec("sim:?motion=still");
+  ASSERT_TRUE(spec) << spec.error();
+  auto options = sim::armatureOptionsFromSpec(*spec);
+  ASSERT_TRUE(options) << options.error();
+  const sim::SimulatedArmature armature(*options);
+  auto cal = calibration::Calibration::readFile(kCalibration, &test::exampleCharacter("simple_biped"),
+                                                &options->info);
+  ASSERT_TRUE(cal) << cal.error().str();
+  for (int64_t t : {int64_t(0), int64_t(700'000'000), int64_t(5'000'000'000)}) {
+    const drivers::Sample s = armature.poseAt(0, t);
+    for (size_t i = 0; i < cal->rigMap().channels.size(); ++i)
+      EXPECT_EQ(cal->rawAngle(i, double(s.counts[size_t(cal->rigMap().channels[i].channel)])), 0.0);
+  }
+}
+
+// Only the live source offers keys o and k in the HUD.
+TEST(LiveRecording, TheLiveSourceHandlesTheDeviceKeys) {
+  Rig rig("sim:?rate=1000", exampleCalibration(), {});
+  EXPECT_TRUE(rig.source->handlesDeviceKeys());
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <thread>
 
@@ -209,6 +210,55 @@ TEST(SimulatedArmature, TimeKeysOutOfRangeAreRefusedNotWrapped) {
   auto year = armatureOptionsFromSpec(*parseDeviceSpec("sim:?boot_ms=31536000000"));
   ASSERT_TRUE(year) << year.error();
   EXPECT_EQ(year->bootDelayNs, int64_t{31536000000} * kMs);
+}
+
+// An unknown key lists every key a sim: spec takes — the spec's own (rate, protocol, mode) included — and each
+// listed key is accepted.
+TEST(SimulatedArmature, UnknownKeyListsEveryKnownKey) {
+  auto bad = armatureOptionsFromSpec(*parseDeviceSpec("sim:?rat=1000"));
+  ASSERT_FALSE(bad);
+  const std::string& message = bad.error();
+  const std::vector<std::pair<std::string, std::string>> keys = {
+      {"protocol", "lines"}, {"mode", "poll"},     {"rate", "100"},        {"channels", "8"},   {"bits", "12"},
+      {"motion", "still"},   {"period_s", "4"},    {"noise", "1"},         {"dropout", "0.1"},  {"garbage", "0.1"},
+      {"corrupt", "0.1"},    {"banner", "hi"},     {"boot_ms", "10"},      {"unplug_ms", "10"}, {"replug_ms", "10"},
+      {"stream_at_boot", "1"}, {"timestamps", "0"}, {"seed", "3"}};
+  for (const auto& [key, value] : keys) {
+    EXPECT_NE(message.find(" " + key), std::string::npos) << key << " is not listed: " << message;
+    auto spec = parseDeviceSpec("sim:?" + key + "=" + value);
+    ASSERT_TRUE(spec) << key << ": " << spec.error();
+    EXPECT_TRUE(armatureOptionsFromSpec(*spec)) << key;
+  }
+  size_t listed = 1;
+  for (char c : std::string(kSimKeys)) listed += c == ',' ? 1 : 0;
+  EXPECT_EQ(listed, keys.size()) << kSimKeys;
+  auto motion = armatureOptionsFromSpec(*parseDeviceSpec("sim:?motion=dance"));
+  ASSERT_FALSE(motion);
+  EXPECT_NE(motion.error().find("expected wave, still or sweep"), std::string::npos) << motion.error();
+}
+
+// motion=still holds one pose (mid-scale on every channel); the default wave moves; sweep covers 10..90 %.
+TEST(SimulatedArmature, GeneratedMotions) {
+  auto make = [](const std::string& spec) {
+    auto o = armatureOptionsFromSpec(*parseDeviceSpec(spec));
+    EXPECT_TRUE(o) << o.error();
+    return SimulatedArmature(*o);
+  };
+  const SimulatedArmature still = make("sim:?motion=still"), wave = make("sim:"), sweep = make("sim:?motion=sweep");
+  uint32_t sweepLow = 4096, sweepHigh = 0;
+  bool waveMoved = false;
+  for (int64_t t = 0; t < 2'000'000'000; t += 10'000'000) {
+    const Sample s = still.poseAt(0, t), w = wave.poseAt(0, t), w0 = wave.poseAt(0, 0), sw = sweep.poseAt(0, t);
+    for (int c = 0; c < 32; ++c) {
+      EXPECT_EQ(s.counts[c], 2048u);
+      waveMoved = waveMoved || w.counts[c] != w0.counts[c];
+      sweepLow = std::min(sweepLow, sw.counts[c]);
+      sweepHigh = std::max(sweepHigh, sw.counts[c]);
+    }
+  }
+  EXPECT_TRUE(waveMoved);
+  EXPECT_LT(sweepLow, 450u);
+  EXPECT_GT(sweepHigh, 3650u);
 }
 
 // ---- Through a DeviceSession

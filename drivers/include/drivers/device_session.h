@@ -51,11 +51,13 @@ struct DeviceSessionOptions {
   int reconnectIntervalMs = 500;  // wait between open attempts
   int ioWaitMs = 20;              // longest single read wait: bounds how long stop() takes
   LineDecoderOptions lineOptions;  // line protocol decoder settings
+  int lineBitsPerChannel = 32;     // line protocol: the bits DeviceInfo reports (lines carry none; spec key bits)
   // Host clock in ns for Sample::arrivalTimeNs (empty: steady_clock, as PoseMailbox). Timeouts use steady_clock.
   std::function<int64_t()> clock;
 };
 
-// Options from a parsed spec (protocol, mode, rate, channel count); other fields keep their defaults.
+// Options from a parsed spec (protocol, mode, rate, channel count, line bits: a sim: spec's `bits` too, so a
+// simulated line device is what it simulates); other fields keep their defaults.
 DeviceSessionOptions sessionOptionsFor(const DeviceSpec& spec);
 
 // Counters since construction (they survive reconnects). Each field is read atomically; the set is not one

@@ -40,15 +40,18 @@ struct DeviceSpec {
   AcquisitionMode mode = AcquisitionMode::Stream;
   uint16_t rateHz = 0;    // stream rate requested with START_STREAM (poll rate in poll mode); 0 = the default
   int channels = 0;       // lines: expected channel count (0 = inferred from the first sample line)
+  int bits = 0;           // serial lines: the encoders' bits per channel, which lines cannot say (0 = 32)
   // sim: every other `key=value` of the query, in order, for the simulator to interpret (it reports unknown keys).
   std::vector<std::pair<std::string, std::string>> simParams;
   bool operator==(const DeviceSpec&) const = default;
 };
 
-// Parses a device spec. Bad input gives "spec:1:COLUMN: error: what was expected" (COLUMN 1-based into `text`):
+// Parses a device spec; a bare path starting with '/' is a serial port ("/dev/ttyACM0" = "serial:/dev/ttyACM0").
+// Bad input gives "spec:1:COLUMN: error: what was expected" (COLUMN 1-based into `text`):
 // an unknown scheme, a missing path, VID/PID that are not 1..4 hex digits, an unknown or repeated key (catches
-// typos), or a value out of range (baud 1..4000000, rate 0..65535, channels 0..64, port 1..65535). An osc spec
-// is `osc.udp://[ADDRESS]:PORT` and takes no keys. Never throws.
+// typos), or a value out of range (baud 1..4000000, rate 0..65535, channels 0..64, bits 1..32; bits only with
+// protocol=lines: a binary device reports its own; port 1..65535). An osc spec is `osc.udp://[ADDRESS]:PORT` and
+// takes no keys. Never throws.
 std::expected<DeviceSpec, std::string> parseDeviceSpec(std::string_view text);
 
 // The canonical text of a spec; parseDeviceSpec(formatDeviceSpec(s)) == s. Keys at their defaults are omitted.

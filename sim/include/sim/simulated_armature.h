@@ -23,14 +23,29 @@
 
 namespace imps::sim {
 
+// Generated motion (docs/devices.md, "The simulator"). Angles are counts from mid-scale, 2^bits counts per turn,
+// so mid-scale is the calibration pose of the bundled calibration (examples/simple_biped.calibration.json).
+enum class ArmatureMotion : uint8_t {
+  // A waving performance of the 32-channel biped armature (channel layout of examples/simple_biped.rig.json): the
+  // right arm raised and waving, the left arm at the side, a gentle sway; every channel stays within that rig
+  // map's limits. Channels beyond 32 swing ±10°.
+  Wave,
+  Still,  // every channel at mid-scale: the calibration pose, held (calibrate against it)
+  Sweep,  // every channel swings over 10%..90% of its range, phase-shifted by channel (a stress test, not a pose)
+};
+
+// "wave", "still", "sweep".
+const char* toString(ArmatureMotion motion);
+
 // What the device is and how it misbehaves. Times are nanoseconds since the device powered on.
 struct ArmatureOptions {
   drivers::DeviceInfo info = defaultInfo(32, 12);
   drivers::WireProtocol protocol = drivers::WireProtocol::Binary;
-  // Poses: these samples' counts in order (looping when `loop`), or, when empty, generated motion: channel i
-  // swings sinusoidally over 10%..90% of its range with period motionPeriodS, phase-shifted by i.
+  // Poses: these samples' counts in order (looping when `loop`), or, when empty, generated `motion` repeating
+  // every motionPeriodS.
   std::vector<drivers::Sample> recorded;
   bool loop = true;
+  ArmatureMotion motion = ArmatureMotion::Wave;
   double motionPeriodS = 2.0;
   // Lines per second (line protocol), or the rate when streamAtBoot (binary).
   double rateHz = 100;
@@ -54,10 +69,13 @@ struct ArmatureOptions {
 };
 
 // Parses the `sim:` part of a device spec into options: spec.path (a session file to play; "" = generated motion),
-// spec.protocol, spec.rateHz and the simulator keys channels, bits, noise, dropout, garbage, corrupt, banner
-// (text; `|` separates lines), boot_ms, unplug_ms, replug_ms, stream_at_boot (0/1), timestamps (0/1), seed,
-// period_s. Errors name the key: "spec: error: sim key 'x': …".
+// spec.protocol, spec.rateHz and the simulator keys (kSimKeys): channels, bits, motion (wave, still, sweep),
+// period_s, noise, dropout, garbage, corrupt, banner (text; `|` separates lines), boot_ms, unplug_ms, replug_ms,
+// stream_at_boot (0/1), timestamps (0/1), seed. Errors name the key: "spec: error: sim key 'x': …"; an unknown key
+// lists every key a sim: spec takes, the spec's own (protocol, mode, rate) included.
 std::expected<ArmatureOptions, std::string> armatureOptionsFromSpec(const drivers::DeviceSpec& spec);
+// Every key a `sim:` spec takes, comma-separated, as the unknown-key error lists them.
+extern const char* const kSimKeys;
 
 struct ArmatureStats {
   uint64_t samplesTaken = 0;    // sequence numbers used (sent + dropped)
