@@ -31,6 +31,7 @@
 #include "viewer_replay.h"
 #include "calibration_flow.h"
 #include "scripted_input.h"
+#include "pose_argument.h"
 
 namespace imps::app {
 namespace {
@@ -81,8 +82,9 @@ void addCommonOptions(CLI::App* cmd, LiveArgs& a) {
   cmd->add_option("--msaa", a.msaa, "Multisampling samples (0 = off; default: 4, or off under software GL)")
       ->check(CLI::Range(0, 16));
   cmd->add_option("--pose", a.poses,
-                  "JOINT=AX,AY,AZ,ANGLE: turn a joint by ANGLE radians about axis (AX,AY,AZ) of its parent's frame, "
-                  "on top of its rest rotation (repeatable)");
+                  "JOINT=AX,AY,AZ,ANGLE: turn a joint by ANGLE degrees (or e.g. 1.2rad) about axis (AX,AY,AZ) of its "
+                  "parent's frame, on top of its rest rotation; JOINT=TX,TY,TZ: move it by TX,TY,TZ metres in its "
+                  "parent's frame (repeatable)");
   cmd->add_option("--save-as", a.save, "Where the s key saves the posed scene (default: SCENE with .posed.wrl)");
   cmd->add_option("--keys", a.keys,
                   "Scripted key presses KEY@FRAME,... (e.g. \"o@5,k@10,p@20\"; keys a-z 0-9 [ ] F12 Esc Backspace)");
@@ -92,25 +94,6 @@ void addCommonOptions(CLI::App* cmd, LiveArgs& a) {
                 "Polygonize the next frame on a worker thread while the GL draws this one");
   cmd->add_flag("--sync-phases", a.syncPhases,
                 "glFinish after every phase so the per-phase times include the GL's work (profiling)");
-}
-
-// Parses "NAME=ax,ay,az,angle".
-bool parsePose(const std::string& text, std::string* joint, glm::vec3* axis, float* angle) {
-  const size_t eq = text.find('=');
-  if (eq == std::string::npos || eq == 0) return false;
-  *joint = text.substr(0, eq);
-  std::string rest = text.substr(eq + 1);
-  for (char& c : rest)
-    if (c == ',') c = ' ';
-  std::istringstream in(rest);
-  float v[4];
-  for (float& x : v)
-    if (!(in >> x)) return false;
-  std::string extra;
-  if (in >> extra) return false;
-  *axis = glm::vec3(v[0], v[1], v[2]);
-  *angle = v[3];
-  return glm::length(*axis) > 0.0f && std::isfinite(*angle);
 }
 
 // Loads and compiles the scene, applies --pose; prints diagnostics and returns nullptr on bad input.
@@ -124,19 +107,16 @@ std::unique_ptr<ViewerPipeline> makePipeline(const LiveArgs& a, int* exitCode) {
   o.polygonizer = a.polygonizer == "mc" ? Polygonizer::MarchingCubes : Polygonizer::Particles;
   o.threads = a.threads;
   auto pipeline = std::make_unique<ViewerPipeline>(std::move(loaded->scene), std::move(loaded->character), o);
-  for (const std::string& p : a.poses) {
-    std::string joint;
-    glm::vec3 axis;
-    float angle = 0.0f;
-    const int j = parsePose(p, &joint, &axis, &angle) ? pipeline->character().findJoint(joint) : -2;
+  for (const std::string& text : a.poses) {
+    const auto p = parsePoseArgument(text);
+    const int j = p ? pipeline->character().findJoint(p->joint) : -2;
     if (j < 0) {
-      std::fprintf(stderr, "puppeteer: error: --pose %s: %s\n", p.c_str(),
-                   j == -2 ? "expected JOINT=AX,AY,AZ,ANGLE with a non-zero axis" : "no joint of that name");
+      std::fprintf(stderr, "puppeteer: error: --pose %s: %s\n", text.c_str(),
+                   j == -2 ? p.error().c_str() : "no joint of that name");
       *exitCode = kExitUsage;
       return nullptr;
     }
-    const glm::quat rest = pipeline->character().joints()[size_t(j)].rest.rotation;
-    pipeline->skeleton().setRotation(j, glm::angleAxis(angle, glm::normalize(axis)) * rest);
+    applyPoseArgument(*p, j, pipeline->skeleton());
   }
   pipeline->skeleton().update();
   return pipeline;

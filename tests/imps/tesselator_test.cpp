@@ -405,6 +405,42 @@ TEST(Tesselator, TurningNeckDoesNotBubble) {
   EXPECT_LT(double(r.maxRegion), 1.2 * double(r.settledRegion));
 }
 
+// Joint translations (issue 10): a jump of the biped's root, 30 cm up and 20 cm sideways in one frame, carries every
+// particle with it through the differential transforms (which include translation): after one update each particle
+// is where its owner's joint took it, within the few millimetres one integration step moves it, and still on the
+// surface; the mesh stays closed.
+TEST(Tesselator, ParticlesFollowAJointTranslation) {
+  Example e = load("simple_biped.wrl");
+  const float h = e.options.desiredRadius;
+  SkeletonCache skel(*e.character);
+  Tesselator tess(e.options);
+  Mesh mesh;
+  tess.settle(skel, mesh);
+  std::map<uint64_t, glm::vec3> before;
+  for (size_t i = 0; i < tess.particles().size(); ++i) before[tess.particles().ids[i]] = tess.particles().positions[i];
+  const glm::vec3 jump(0.2f, 0.3f, 0.0f);
+  const int pelvis = e.character->findJoint("Pelvis");
+  skel.setTranslation(pelvis, e.character->joints()[size_t(pelvis)].rest.translation + jump);
+  skel.update();
+  tess.update(skel);
+  size_t followed = 0, matched = 0;
+  float worstOff = 0.0f;
+  const ParticleView p = tess.particles();
+  for (size_t i = 0; i < p.size(); ++i) {
+    const auto it = before.find(p.ids[i]);
+    if (it == before.end()) continue;  // born in this update
+    ++matched;
+    if (glm::length(p.positions[i] - (it->second + jump)) < 0.25f * h) ++followed;
+    const FieldSample fs = skel.field().sample(p.positions[i]);
+    worstOff = std::max(worstOff, std::fabs(fs.value - skel.field().iso()) / glm::length(fs.gradient));
+  }
+  ASSERT_GT(matched, before.size() / 2);
+  EXPECT_EQ(followed, matched) << "every surviving particle moved with the jump";
+  EXPECT_LT(worstOff, 0.5f * h);
+  tess.triangulate(mesh);
+  EXPECT_EQ(analyzeTopology(mesh).boundaryEdges, 0u);
+}
+
 TEST(Tesselator, FlatFieldWithoutSkeletonAndReset) {
   Example e = load("textured_blobs.wrl");
   SkeletonCache skel(*e.character);
