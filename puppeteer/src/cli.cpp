@@ -37,6 +37,7 @@ int runCli(int argc, char** argv) {
   addCalibrationCommands(app, commands);
   addSessionCommands(app, commands);
   addLiveCommands(app, commands);
+  addExportCommands(app, commands);
 
   try {
     app.parse(argc, argv);

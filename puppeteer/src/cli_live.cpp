@@ -32,6 +32,7 @@
 #include "calibration_flow.h"
 #include "scripted_input.h"
 #include "pose_argument.h"
+#include "map_option.h"
 
 namespace imps::app {
 namespace {
@@ -56,6 +57,7 @@ struct LiveArgs {
   // replay
   std::string session;
   std::string rig, calibration;
+  std::string map = "auto";
   double speed = 1.0;
   bool stepped = false;
   std::string exportSession;
@@ -254,11 +256,27 @@ int runReplay(const LiveArgs& a) {
   const std::string name = std::filesystem::path(a.session).filename().string();
   const drivers::DeviceInfo* device = session->devices.empty() ? nullptr : &session->devices[0];
 
-  // Samples → joints: --calibration, else the calibration recorded with the session, else channel names.
+  // Samples → joints: --calibration, else a clip's skeleton retargeted (--map), else the calibration recorded with
+  // the session, else channel names.
   std::optional<SampleMapper> mapper;
   if (!a.calibration.empty()) {
     mapper = readCalibration(a.calibration, pipeline->character(), device);
     if (!mapper) return kExitInvalidInput;
+  } else if (session->skeleton) {
+    auto clip = sim::readBvhText(session->skeleton->bvh, name + " skeleton");
+    if (!clip) {
+      std::fprintf(stderr, "%s\n", clip.error().c_str());
+      return kExitInvalidInput;
+    }
+    const auto options = retargetOptionsFor(a.map, *clip, pipeline->character());
+    if (!options) return kExitInvalidInput;
+    auto clipMap = ClipPoseMap::create(*session, pipeline->character(), *options);
+    if (!clipMap) {
+      std::fprintf(stderr, "puppeteer: error: %s: %s\n", a.session.c_str(), clipMap.error().c_str());
+      return kExitInvalidInput;
+    }
+    printRetargetReport(name, a.map, clipMap->retargeter().report());
+    mapper.emplace(std::move(*clipMap), a.map);
   } else if (!session->calibrations.empty()) {
     auto c = calibration::Calibration::parse(session->calibrations.front().json, name + " (recorded calibration)",
                                              &pipeline->character(), device);
@@ -277,6 +295,11 @@ int runReplay(const LiveArgs& a) {
   if (byName && !byName->unmatched().empty())
     std::printf(", %zu channels ignored (no such joint or not a rotation)", byName->unmatched().size());
   std::printf("\n");
+  if (mapper->mappedJoints() == 0 && mapper->clip()) {
+    std::fprintf(stderr, "puppeteer: error: %s: no clip joint drives a joint of %s (see the report above; pass --map "
+                         "FILE.json, docs/calibration.md)\n", a.session.c_str(), a.scene.c_str());
+    return kExitInvalidInput;
+  }
   if (mapper->mappedJoints() == 0) {
     std::fprintf(stderr,
                  "puppeteer: error: %s: no channel named JOINT:Xrotation/Yrotation/Zrotation matches a joint of %s "
@@ -370,6 +393,10 @@ void addLiveCommands(CLI::App& app, Commands& commands) {
   replayCmd->add_option("--calibration", replay->calibration,
                         "Calibration file (default: the one recorded in the session, else channels by name)");
   replayCmd->add_option("--rig", replay->rig, "Rig map (only together with --calibration, which contains it)");
+  replayCmd->add_option("--map", replay->map,
+                        "BVH clips: auto (name rules for CMU, Mixamo, Rokoko, Biovision, Bandai-Namco, 3ds-Max Biped "
+                        "+ the hierarchy), names (same joint names) or a joint map FILE.json")
+      ->capture_default_str();
   replayCmd->add_option("--speed", replay->speed, "Playback speed (1 = real time; 0 = as fast as possible)");
   replayCmd->add_flag("--stepped", replay->stepped,
                       "One recorded sample per rendered frame, no clock: deterministic (tests)");

@@ -374,8 +374,10 @@ std::expected<Retargeter, std::string> Retargeter::create(const sim::BvhClip& cl
     for (size_t k = j + 1; k < n; ++k) {
       if (r.source_[k] < 0 || mappedAncestor(character, r.source_, static_cast<int>(k)) != static_cast<int>(j)) continue;
       if (!isAncestor(clip, s, r.source_[k]) || r.source_[k] == s) continue;
-      if (child < 0 || (roles[k].side == roles[j].side && roles[static_cast<size_t>(child)].side != roles[j].side))
-        child = static_cast<int>(k);
+      // The bone continues the body part: a centre joint's centre child (hips → spine, spine → neck), a side joint's
+      // child on that side; a hips with only legs and arms below it has no bone and keeps C = identity.
+      if (roles[j].role != BodyRole::None && roles[k].side != roles[j].side) continue;
+      if (child < 0) child = static_cast<int>(k);
     }
     Bone bone{s, glm::inverse(clipRest[static_cast<size_t>(s)]) * correction[j]};
     if (child >= 0) {

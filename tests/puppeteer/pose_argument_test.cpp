@@ -36,7 +36,9 @@ TEST(PoseArgument, BadArgumentsAreRefused) {
     const auto p = parsePoseArgument(bad);
     if (std::string(bad) == "Head=0,1,0") continue;  // three numbers: a translation, valid
     EXPECT_FALSE(p.has_value()) << bad;
-    if (!p) EXPECT_NE(p.error().find("JOINT=AX,AY,AZ,ANGLE"), std::string::npos);
+    if (!p) {
+      EXPECT_NE(p.error().find("JOINT=AX,AY,AZ,ANGLE"), std::string::npos);
+    }
   }
 }
 

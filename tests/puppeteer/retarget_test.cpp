@@ -245,7 +245,7 @@ TEST_P(EachNaming, LimbsHandsAndFeetPointWhereTheClipsDo) {
     const glm::dvec3 moved = glm::dvec3(skeleton.world(pelvis).translation - pelvisRest);
     EXPECT_LT(glm::length(moved - expected), 1e-4) << "frame " << f;
   }
-  std::printf("%s: worst direction error %.3f degrees\n", naming.label, worst);
+  std::printf("%s: worst direction error %.2g degrees\n", naming.label, worst);
 }
 
 INSTANTIATE_TEST_SUITE_P(Namings, EachNaming, ::testing::Range<size_t>(0, 7));
