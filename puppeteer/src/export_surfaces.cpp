@@ -1,6 +1,7 @@
 // Baked surface sequences: a mesh per frame of a take, numbered files.
 #include "export_surfaces.h"
 
+#include <filesystem>
 #include <optional>
 #include <variant>
 
@@ -28,6 +29,14 @@ bool writeSurfaceSequence(const Scene& scene, const Character& character, const 
     TesselatorOptions t;
     if (const auto* node = std::get_if<Tesselator3MPNode>(&scene.polygonizer)) t = TesselatorOptions::fromNode(*node);
     tesselator.emplace(t);
+  }
+  // The pattern's folder is made when missing ("skin/take_####.ply").
+  const std::filesystem::path folder = std::filesystem::path(pattern).parent_path();
+  std::error_code ec;
+  if (!folder.empty()) std::filesystem::create_directories(folder, ec);
+  if (ec) {
+    *error = folder.string() + ": cannot create the folder: " + ec.message();
+    return false;
   }
   MarchingCubesOptions mc;
   mc.cellSize = options.cellSize;

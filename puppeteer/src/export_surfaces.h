@@ -21,7 +21,8 @@ struct SurfaceSequenceOptions {
 // The file for frame `frame` of `pattern` ("take_####.ply": the run of '#' becomes the zero-padded frame number).
 std::string sequenceFileName(const std::string& pattern, size_t frame);
 
-// Writes one mesh per frame of `take` (files named by sequenceFileName, each written atomically). With particles the
+// Writes one mesh per frame of `take` (files named by sequenceFileName, each written atomically; the pattern's
+// folder is created when missing). With particles the
 // tesselator settles on the first frame, then runs the scene's updates per render between frames. Returns false
 // with *error set on an I/O failure (files already written stay).
 bool writeSurfaceSequence(const Scene& scene, const Character& character, const Take& take,
