@@ -242,8 +242,8 @@ std::vector<int> autoSources(const sim::BvhClip& clip, const Character& characte
                    ? "a helper joint: no body part, its rotation still reaches the joints below it"
                    : "no name rule for '" + cr[c].key + "'; its rotation still reaches the joints below it";
     else
-      why[c] = describeRole(cr[c].role, cr[c].side) + " by name, but the character has no " +
-               describeRole(cr[c].role, cr[c].side) + " joint left to drive";
+      why[c] = describeRole(cr[c].role, cr[c].side) + " by name, but the character has no further " +
+               describeRole(cr[c].role, cr[c].side) + " joint to drive";
   }
   (void)report;
   return source;
