@@ -31,12 +31,13 @@ std::expected<Calibration, Diagnostics> Calibration::create(RigMap map, const Ch
   Calibration cal;
   cal.map_ = std::move(map);
   for (const JointMap& jm : cal.map_.joints) {
-    glm::quat rest{1.0f, 0.0f, 0.0f, 0.0f};
+    Rigid rest;
     if (character) {
       const int j = character->findJoint(jm.joint);
-      if (j >= 0) rest = character->joints()[static_cast<size_t>(j)].rest.rotation;
+      if (j >= 0) rest = character->joints()[static_cast<size_t>(j)].rest;
     }
-    cal.rest_.push_back(rest);
+    cal.rest_.push_back(rest.rotation);
+    cal.restTranslation_.push_back(rest.translation);
   }
   return cal;
 }
@@ -80,7 +81,7 @@ glm::dquat Calibration::jointRotation(size_t j, std::span<const double> angles) 
     const Axis axis = static_cast<Axis>(a - 'X');
     double theta = 0;
     for (size_t i : jm.mappings)
-      if (map_.channels[i].axis == axis) theta = angles[i];
+      if (map_.channels[i].axis == axis && !map_.channels[i].translation) theta = angles[i];
     glm::dvec3 unit{0.0};
     unit[static_cast<int>(axis)] = 1.0;
     r = r * glm::angleAxis(theta, unit);
@@ -93,9 +94,14 @@ void Calibration::compose(std::span<const double> angles, std::vector<JointPose>
   for (size_t j = 0; j < map_.joints.size(); ++j) {
     JointPose& p = out[j];
     if (p.joint != map_.joints[j].joint) p.joint = map_.joints[j].joint;  // no per-frame string copies
-    p.hasTranslation = false;
-    p.translation = glm::vec3(0.0f);
     p.rotation = glm::normalize(rest_[j] * glm::quat(jointRotation(j, angles)));
+    p.hasTranslation = false;
+    p.translation = restTranslation_[j];
+    for (size_t i : map_.joints[j].mappings) {
+      if (!map_.channels[i].translation) continue;
+      p.hasTranslation = true;
+      p.translation[static_cast<int>(map_.channels[i].axis)] += static_cast<float>(angles[i]);
+    }
   }
 }
 

@@ -172,7 +172,8 @@ PoseCheck checkPose(const Calibration& calibration, const WindowAverage& window,
   for (const PoseTarget& t : targets) {
     int mapping = -1;
     for (size_t i = 0; i < map.channels.size(); ++i)
-      if (map.channels[i].joint == t.joint && map.channels[i].axis == t.axis) mapping = static_cast<int>(i);
+      if (map.channels[i].joint == t.joint && map.channels[i].axis == t.axis &&
+          !map.channels[i].translation) mapping = static_cast<int>(i);
     const std::string what = t.joint + " " + toString(t.axis);
     if (mapping < 0) {
       out.warnings.push_back("no channel drives " + what + "; its target is ignored");

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -64,14 +65,19 @@ std::string channelText(const ChannelMap& c) {
 template <typename LocFn>
 void checkChannelValues(const ChannelMap& c, int bits, LocFn at, Diagnostics& diags) {
   if (c.sign != 1 && c.sign != -1) diags.error(at("sign"), "'sign' must be 1 or -1, not " + std::to_string(c.sign));
+  const char* per = c.translation ? "metre" : "radian";
   if (!(std::isfinite(c.gain) && c.gain > 0))
-    diags.error(at("gain"), "gain must be a positive number of counts per radian (got " + std::to_string(c.gain) + ")");
+    diags.error(at("gain"), std::string("gain must be a positive number of counts per ") + per + " (got " +
+                                std::to_string(c.gain) + ")");
+  const double unit = c.translation ? 1.0 : kDegree;
+  const char* unitName = c.translation ? " m" : " deg";
   if (std::isnan(c.minAngle) || std::isnan(c.maxAngle)) diags.error(at("min"), "limits must not be NaN");
   else if (c.minAngle > c.maxAngle)
-    diags.error(at("max"), "'max' (" + std::to_string(c.maxAngle / kDegree) + " deg) is below 'min' (" +
-                               std::to_string(c.minAngle / kDegree) + " deg)");
+    diags.error(at("max"), "'max' (" + std::to_string(c.maxAngle / unit) + unitName + ") is below 'min' (" +
+                               std::to_string(c.minAngle / unit) + unitName + ")");
   if (!(c.deadband >= 0) || !std::isfinite(c.deadband))
-    diags.error(at("deadband"), "deadband must be >= 0 radians (got " + std::to_string(c.deadband) + ")");
+    diags.error(at("deadband"), std::string("deadband must be >= 0 ") + per + "s (got " + std::to_string(c.deadband) +
+                                    ")");
   if (!(c.smoothingMs >= 0) || !std::isfinite(c.smoothingMs))
     diags.error(at("smoothing_ms"), "smoothing_ms must be >= 0 (got " + std::to_string(c.smoothingMs) + ")");
   if (c.offset) {
@@ -147,6 +153,60 @@ void checkMap(RigMap& map, const RigMapContext& ctx, Diagnostics& diags) {
   }
 }
 
+// Where a channel's scale and limit values are in the file, for messages about them.
+struct ScaleLocs {
+  SourceLoc range, min, max, deadband;
+};
+
+// Rotation channels: gain explicit, or from the range the full 2^bits counts cover, or (absolute encoders) one
+// full turn; limits and deadband in radians or degrees.
+void parseRotationScale(const ObjectReader& r, int bits, ChannelMap& c, ScaleLocs& at, Diagnostics& diags) {
+  const std::optional<double> gain = r.number("gain");
+  const std::optional<double> range = r.angle("range", &at.range);
+  const double turn = static_cast<double>(uint64_t{1} << bits);
+  if (r.get("metres_per_count"))
+    diags.error(r.locOf("metres_per_count"), "'metres_per_count' is for translation axes (tx, ty, tz)");
+  if (r.get("gain") && (r.get("range") || r.get("range_deg"))) {
+    diags.error(r.locOf("gain"), "give either 'gain' (counts per radian) or 'range'/'range_deg', not both");
+  } else if (gain) {
+    c.gain = *gain;
+  } else if (range) {
+    if (!(*range > 0)) diags.error(at.range, "the range must be positive");
+    else c.gain = turn / *range;
+  } else if (!r.get("gain") && !r.get("range") && !r.get("range_deg")) {
+    if (c.encoder == EncoderKind::Absolute) c.gain = turn / (2 * std::numbers::pi);
+    else r.missing("gain' (or 'range_deg'; a linear sensor has no natural full scale)");
+  }
+  if (auto m = r.angle("min", &at.min)) c.minAngle = *m;
+  if (auto m = r.angle("max", &at.max)) c.maxAngle = *m;
+  if (auto d = r.angle("deadband", &at.deadband)) c.deadband = *d;
+}
+
+// Translation channels: 'metres_per_count' (or 'gain' in counts per metre), limits and deadband in metres.
+void parseTranslationScale(const ObjectReader& r, ChannelMap& c, ScaleLocs& at, Diagnostics& diags) {
+  for (const char* degrees : {"range", "range_deg", "min_deg", "max_deg", "deadband_deg"})
+    if (r.get(degrees))
+      diags.error(r.locOf(degrees), std::string("'") + degrees + "' is for rotation axes: a translation axis takes "
+                                    "'metres_per_count' and 'min'/'max'/'deadband' in metres");
+  const std::optional<double> gain = r.number("gain");
+  const std::optional<double> metres = r.number("metres_per_count");
+  at.range = r.locOf("metres_per_count");
+  if (r.get("gain") && r.get("metres_per_count")) {
+    diags.error(r.locOf("gain"), "give either 'gain' (counts per metre) or 'metres_per_count', not both");
+  } else if (gain) {
+    c.gain = *gain;
+  } else if (metres) {
+    if (!(*metres > 0) || !std::isfinite(*metres)) diags.error(at.range, "'metres_per_count' must be positive");
+    else c.gain = 1.0 / *metres;
+  } else if (!r.get("gain") && !r.get("metres_per_count")) {
+    r.missing("metres_per_count' (a translation axis has no natural full scale)");
+  }
+  at.min = r.locOf("min"), at.max = r.locOf("max"), at.deadband = r.locOf("deadband");
+  if (auto m = r.number("min")) c.minAngle = *m;
+  if (auto m = r.number("max")) c.maxAngle = *m;
+  if (auto d = r.number("deadband")) c.deadband = *d;
+}
+
 // Parses one channel object of a joint entry.
 void parseChannel(const JsonValue& v, const std::string& joint, int bits, RigMap& map, Diagnostics& diags) {
   if (v.kind != JsonValue::Kind::Object) {
@@ -155,7 +215,7 @@ void parseChannel(const JsonValue& v, const std::string& joint, int bits, RigMap
   }
   static const std::vector<std::string> kKeys = {
       "channel", "axis",     "sign",         "gain",         "range",       "range_deg", "offset",  "min", "min_deg",
-      "max",     "max_deg",  "deadband",     "deadband_deg", "smoothing_ms", "encoder"};
+      "max",     "max_deg",  "deadband",     "deadband_deg", "smoothing_ms", "encoder", "metres_per_count"};
   const size_t errorsBefore = static_cast<size_t>(diags.errorCount());
   ObjectReader r(v, "a channel of joint '" + joint + "'", kKeys, diags);
   ChannelMap c;
@@ -175,10 +235,15 @@ void parseChannel(const JsonValue& v, const std::string& joint, int bits, RigMap
     r.missing("channel");
   }
   if (const JsonValue* a = r.typed("axis", JsonValue::Kind::String, "a string")) {
-    if (a->string == "x" || a->string == "X") c.axis = Axis::X;
-    else if (a->string == "y" || a->string == "Y") c.axis = Axis::Y;
-    else if (a->string == "z" || a->string == "Z") c.axis = Axis::Z;
-    else diags.error(a->loc, "bad axis '" + a->string + "': expected 'x', 'y' or 'z'");
+    std::string name = a->string;
+    for (char& ch : name) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    c.translation = name.size() == 2 && name[0] == 't';
+    if (c.translation) name.erase(0, 1);
+    if (name == "x") c.axis = Axis::X;
+    else if (name == "y") c.axis = Axis::Y;
+    else if (name == "z") c.axis = Axis::Z;
+    else diags.error(a->loc, "bad axis '" + a->string + "': expected 'x', 'y' or 'z' (rotations) or 'tx', 'ty' or 'tz' "
+                             "(translations)");
   } else if (!r.get("axis")) {
     r.missing("axis");
   }
@@ -192,37 +257,22 @@ void parseChannel(const JsonValue& v, const std::string& joint, int bits, RigMap
     if (e->string == "absolute") c.encoder = EncoderKind::Absolute;
     else if (e->string == "linear") c.encoder = EncoderKind::Linear;
     else diags.error(e->loc, "bad encoder '" + e->string + "': expected 'absolute' or 'linear'");
+  } else if (c.translation) {
+    c.encoder = EncoderKind::Linear;  // a slide or string potentiometer does not wrap
   }
-  // Gain: explicit, or from the range the full 2^bits counts cover, or (absolute encoders) one full turn.
-  SourceLoc rangeLoc;
-  const std::optional<double> gain = r.number("gain");
-  const std::optional<double> range = r.angle("range", &rangeLoc);
-  const double turn = static_cast<double>(uint64_t{1} << bits);
-  if (r.get("gain") && (r.get("range") || r.get("range_deg"))) {
-    diags.error(r.locOf("gain"), "give either 'gain' (counts per radian) or 'range'/'range_deg', not both");
-  } else if (gain) {
-    c.gain = *gain;
-  } else if (range) {
-    if (!(*range > 0)) diags.error(rangeLoc, "the range must be positive");
-    else c.gain = turn / *range;
-  } else if (!r.get("gain") && !r.get("range") && !r.get("range_deg")) {
-    if (c.encoder == EncoderKind::Absolute) c.gain = turn / (2 * std::numbers::pi);
-    else r.missing("gain' (or 'range_deg'; a linear sensor has no natural full scale)");
-  }
+  ScaleLocs at{r.loc(), r.loc(), r.loc(), r.loc()};
+  if (c.translation) parseTranslationScale(r, c, at, diags);
+  else parseRotationScale(r, bits, c, at, diags);
   if (r.get("offset")) c.offset = r.number("offset");
-  SourceLoc minLoc = r.loc(), maxLoc = r.loc(), deadLoc = r.loc();
-  if (auto m = r.angle("min", &minLoc)) c.minAngle = *m;
-  if (auto m = r.angle("max", &maxLoc)) c.maxAngle = *m;
-  if (auto d = r.angle("deadband", &deadLoc)) c.deadband = *d;
   if (auto s = r.number("smoothing_ms")) c.smoothingMs = *s;
   if (static_cast<size_t>(diags.errorCount()) == errorsBefore) {
     checkChannelValues(
         c, bits,
         [&](std::string_view field) -> SourceLoc {
-          if (field == "min") return minLoc;
-          if (field == "max") return maxLoc;
-          if (field == "deadband") return deadLoc;
-          if (field == "gain" && !r.get("gain")) return rangeLoc;
+          if (field == "min") return at.min;
+          if (field == "max") return at.max;
+          if (field == "deadband") return at.deadband;
+          if (field == "gain" && !r.get("gain")) return at.range;
           return r.locOf(field);
         },
         diags);
@@ -256,14 +306,16 @@ void parseJoint(const JsonValue& v, RigMap& map, Diagnostics& diags) {
   }
   for (size_t i = first; i < map.channels.size(); ++i) jm.mappings.push_back(i);
   // The composition order must name exactly the driven axes.
-  std::string used;
+  std::string used, moved;  // rotation axes, translation axes
   for (size_t i : jm.mappings) {
-    const char a = static_cast<char>('X' + static_cast<int>(map.channels[i].axis));
-    if (used.find(a) != std::string::npos) {
-      diags.error(map.channels[i].loc, "joint '" + jm.joint + "' axis " + toString(map.channels[i].axis) +
-                                           " is driven by two channels");
+    const ChannelMap& c = map.channels[i];
+    const char a = static_cast<char>('X' + static_cast<int>(c.axis));
+    std::string& seen = c.translation ? moved : used;
+    if (seen.find(a) != std::string::npos) {
+      diags.error(c.loc, "joint '" + jm.joint + "' axis " + (c.translation ? "t" : "") + toString(c.axis) +
+                             " is driven by two channels");
     }
-    used += a;
+    seen += a;
   }
   if (const JsonValue* order = r.typed("order", JsonValue::Kind::String, "a string")) {
     std::string o;
@@ -382,6 +434,7 @@ bool validateRigMap(RigMap& map, const RigMapContext& context, Diagnostics& diag
         ok = false;
         continue;
       }
+      if (map.channels[i].translation) continue;  // the order composes rotations only
       used += static_cast<char>('X' + static_cast<int>(map.channels[i].axis));
     }
     ok = ok && jm.order.size() == used.size();
@@ -435,14 +488,19 @@ std::string toJson(const RigMap& map) {
       ordered_json o;
       if (c.channel >= 0) o["channel"] = c.channel;
       else o["channel"] = toValidUtf8(c.channelName);
-      o["axis"] = toString(c.axis);
+      o["axis"] = (c.translation ? "t" : "") + std::string(toString(c.axis));
       o["sign"] = c.sign;
-      if (c.encoder == EncoderKind::Linear) o["encoder"] = "linear";
-      o["gain"] = c.gain;
+      if (c.encoder == EncoderKind::Linear && !c.translation) o["encoder"] = "linear";
+      if (c.encoder == EncoderKind::Absolute && c.translation) o["encoder"] = "absolute";
+      o["gain"] = c.gain;  // counts per radian or per metre; exact, so the file round-trips
       if (c.offset) o["offset"] = *c.offset;
-      if (std::isfinite(c.minAngle)) o["min_deg"] = degrees(c.minAngle);
-      if (std::isfinite(c.maxAngle)) o["max_deg"] = degrees(c.maxAngle);
-      if (c.deadband > 0) o["deadband_deg"] = degrees(c.deadband);
+      // Rotation limits are written in degrees, translation limits in metres.
+      const char* minKey = c.translation ? "min" : "min_deg";
+      const char* maxKey = c.translation ? "max" : "max_deg";
+      const auto value = [&](double v) { return c.translation ? nlohmann::ordered_json(v) : degrees(v); };
+      if (std::isfinite(c.minAngle)) o[minKey] = value(c.minAngle);
+      if (std::isfinite(c.maxAngle)) o[maxKey] = value(c.maxAngle);
+      if (c.deadband > 0) o[c.translation ? "deadband" : "deadband_deg"] = value(c.deadband);
       if (c.smoothingMs > 0) o["smoothing_ms"] = c.smoothingMs;
       out += (k ? ",\n      " : "\n      ") + inlineObject(o);
     }

@@ -161,6 +161,7 @@ int runCli(int argc, char** argv) {
   addCalibrationCommands(app, commands);
   addSessionCommands(app, commands);
   addLiveCommands(app, commands);
+  addExportCommands(app, commands);
 
   try {
     app.parse(argc, argv);

@@ -69,6 +69,7 @@ void addTesselatorCommands(CLI::App& app, Commands& commands);  // bench
 void addCalibrationCommands(CLI::App& app, Commands& commands);  // calibrate
 void addSessionCommands(CLI::App& app, Commands& commands);      // info, convert
 void addLiveCommands(CLI::App& app, Commands& commands);         // view, replay, live
+void addExportCommands(CLI::App& app, Commands& commands);       // export
 
 int runCli(int argc, char** argv);
 

@@ -37,6 +37,8 @@
 #include "osc_stream.h"
 #include "scripted_input.h"
 #include "session_calibration.h"
+#include "pose_argument.h"
+#include "map_option.h"
 
 namespace imps::app {
 namespace {
@@ -64,6 +66,7 @@ struct LiveArgs {
   // replay
   std::string session;
   std::string rig, calibration;
+  std::string map = "auto";
   double speed = 1.0;
   bool stepped = false;
   std::string exportSession;
@@ -95,8 +98,9 @@ void addCommonOptions(CLI::App* cmd, LiveArgs& a) {
   cmd->add_option("--msaa", a.msaa, "Multisampling samples (0 = off; default: 4, or off under software GL)")
       ->check(CLI::Range(0, 16));
   cmd->add_option("--pose", a.poses,
-                  "JOINT=AX,AY,AZ,ANGLE: turn a joint by ANGLE radians about axis (AX,AY,AZ) of its parent's frame, "
-                  "on top of its rest rotation (repeatable)");
+                  "JOINT=AX,AY,AZ,ANGLE: turn a joint by ANGLE degrees (or e.g. 1.2rad) about axis (AX,AY,AZ) of its "
+                  "parent's frame, on top of its rest rotation; JOINT=TX,TY,TZ: move it by TX,TY,TZ metres in its "
+                  "parent's frame (repeatable)");
   cmd->add_option("--save-as", a.save, "Where the s key saves the posed scene (default: SCENE with .posed.wrl)");
   cmd->add_option("--keys", a.keys,
                   "Scripted key presses KEY@FRAME,... (e.g. \"o@5,k@10,p@20\"; keys a-z 0-9 [ ] F12 Esc Backspace)");
@@ -113,25 +117,6 @@ void addOscOutOption(CLI::App* cmd, LiveArgs& a) {
                   "Also stream every pose as OSC over UDP to osc.udp://HOST:PORT (repeatable; docs/osc.md)");
 }
 
-// Parses "NAME=ax,ay,az,angle".
-bool parsePose(const std::string& text, std::string* joint, glm::vec3* axis, float* angle) {
-  const size_t eq = text.find('=');
-  if (eq == std::string::npos || eq == 0) return false;
-  *joint = text.substr(0, eq);
-  std::string rest = text.substr(eq + 1);
-  for (char& c : rest)
-    if (c == ',') c = ' ';
-  std::istringstream in(rest);
-  float v[4];
-  for (float& x : v)
-    if (!(in >> x)) return false;
-  std::string extra;
-  if (in >> extra) return false;
-  *axis = glm::vec3(v[0], v[1], v[2]);
-  *angle = v[3];
-  return glm::length(*axis) > 0.0f && std::isfinite(*angle);
-}
-
 // Loads and compiles the scene, applies --pose; prints diagnostics and returns nullptr on bad input.
 std::unique_ptr<ViewerPipeline> makePipeline(const LiveArgs& a, int* exitCode) {
   auto loaded = loadScene(a.scene);
@@ -145,19 +130,16 @@ std::unique_ptr<ViewerPipeline> makePipeline(const LiveArgs& a, int* exitCode) {
                                                                                  : Polygonizer::Particles;
   o.threads = a.threads;
   auto pipeline = std::make_unique<ViewerPipeline>(std::move(loaded->scene), std::move(loaded->character), o);
-  for (const std::string& p : a.poses) {
-    std::string joint;
-    glm::vec3 axis;
-    float angle = 0.0f;
-    const int j = parsePose(p, &joint, &axis, &angle) ? pipeline->character().findJoint(joint) : -2;
+  for (const std::string& text : a.poses) {
+    const auto p = parsePoseArgument(text);
+    const int j = p ? pipeline->character().findJoint(p->joint) : -2;
     if (j < 0) {
-      std::fprintf(stderr, "puppeteer: error: --pose %s: %s\n", p.c_str(),
-                   j == -2 ? "expected JOINT=AX,AY,AZ,ANGLE with a non-zero axis" : "no joint of that name");
+      std::fprintf(stderr, "puppeteer: error: --pose %s: %s\n", text.c_str(),
+                   j == -2 ? p.error().c_str() : "no joint of that name");
       *exitCode = kExitUsage;
       return nullptr;
     }
-    const glm::quat rest = pipeline->character().joints()[size_t(j)].rest.rotation;
-    pipeline->skeleton().setRotation(j, glm::angleAxis(angle, glm::normalize(axis)) * rest);
+    applyPoseArgument(*p, j, pipeline->skeleton());
   }
   pipeline->skeleton().update();
   return pipeline;
@@ -352,11 +334,27 @@ int runReplay(const LiveArgs& given) {
   const std::string name = std::filesystem::path(a.session).filename().string();
   const drivers::DeviceInfo* device = session->devices.empty() ? nullptr : &session->devices[0];
 
-  // Samples → joints: --calibration, else the calibration recorded with the session, else channel names.
+  // Samples → joints: --calibration, else a clip's skeleton retargeted (--map), else the calibration recorded with
+  // the session, else channel names.
   std::optional<SampleMapper> mapper;
   if (!a.calibration.empty()) {
     mapper = readCalibration(a.calibration, pipeline->character(), device);
     if (!mapper) return kExitInvalidInput;
+  } else if (session->skeleton) {
+    auto clip = sim::readBvhText(session->skeleton->bvh, name + " skeleton");
+    if (!clip) {
+      std::fprintf(stderr, "%s\n", clip.error().c_str());
+      return kExitInvalidInput;
+    }
+    const auto options = retargetOptionsFor(a.map, *clip, pipeline->character());
+    if (!options) return kExitInvalidInput;
+    auto clipMap = ClipPoseMap::create(*session, pipeline->character(), *options);
+    if (!clipMap) {
+      std::fprintf(stderr, "puppeteer: error: %s: %s\n", a.session.c_str(), clipMap.error().c_str());
+      return kExitInvalidInput;
+    }
+    printRetargetReport(name, a.map, clipMap->retargeter().report());
+    mapper.emplace(std::move(*clipMap), a.map);
   } else {
     // The calibration recorded with the first sample, if any (a BVH clip's channel mapping is none: by name).
     auto c = calibrationForSample(*session, 0, &pipeline->character(), name);
@@ -375,6 +373,11 @@ int runReplay(const LiveArgs& given) {
   if (byName && !byName->unmatched().empty())
     std::printf(", %zu channels ignored (no such joint or not a rotation)", byName->unmatched().size());
   std::printf("\n");
+  if (mapper->mappedJoints() == 0 && mapper->clip()) {
+    std::fprintf(stderr, "puppeteer: error: %s: no clip joint drives a joint of %s (see the report above; pass --map "
+                         "FILE.json, docs/calibration.md)\n", a.session.c_str(), a.scene.c_str());
+    return kExitInvalidInput;
+  }
   if (mapper->mappedJoints() == 0) {
     std::fprintf(stderr,
                  "puppeteer: error: %s: no channel named JOINT:Xrotation/Yrotation/Zrotation matches a joint of %s "
@@ -486,6 +489,10 @@ void addLiveCommands(CLI::App& app, Commands& commands) {
       ->check(inputFile());
   replayCmd->add_option("--rig", replay->rig, "Rig map (only together with --calibration, which contains it)")
       ->check(inputFile());
+  replayCmd->add_option("--map", replay->map,
+                        "BVH clips: auto (name rules for CMU, Mixamo, Rokoko, Biovision, Bandai-Namco, 3ds-Max Biped "
+                        "+ the hierarchy), names (same joint names) or a joint map FILE.json")
+      ->capture_default_str();
   replayCmd->add_option("--speed", replay->speed, "Playback speed (1 = real time; 0 = as fast as possible)");
   replayCmd->add_flag("--stepped", replay->stepped,
                       "One recorded sample per rendered frame, no clock: deterministic (tests)");

@@ -7,6 +7,7 @@
 #include <string_view>
 #include <utility>
 
+#include "sim/bvh.h"
 #include "sim/bvh_session.h"
 
 namespace imps::app {
@@ -108,21 +109,81 @@ SampleMapper::SampleMapper(calibration::Calibration calibration, std::string lab
   calibrator_.emplace(std::move(calibration));
 }
 
+SampleMapper::SampleMapper(ClipPoseMap clip, std::string label) : label_(std::move(label)) {
+  clip_.emplace(std::move(clip));
+}
+
+std::expected<ClipPoseMap, std::string> ClipPoseMap::create(const sim::Session& session, const Character& character,
+                                                            const RetargetOptions& options) {
+  if (!session.skeleton) return std::unexpected("the session has no skeleton (it was not made from a BVH clip)");
+  auto parsed = sim::readBvhText(session.skeleton->bvh, "session skeleton");
+  if (!parsed) return std::unexpected(parsed.error());
+  ClipPoseMap m;
+  m.clip_ = std::move(*parsed);
+  m.unitsPerCount_ = session.skeleton->positionUnitsPerCount;
+  size_t slots = 0;
+  for (const sim::DeviceInfo& info : session.devices) {
+    m.firstSlot_.push_back(slots);
+    m.bits_.push_back(info.bitsPerChannel);
+    slots += static_cast<size_t>(info.channelCount);
+  }
+  if (slots != m.clip_.channelCount())
+    return std::unexpected("the skeleton has " + std::to_string(m.clip_.channelCount()) + " channels but the devices " +
+                           std::to_string(slots));
+  for (const sim::BvhJoint& j : m.clip_.joints)
+    for (sim::BvhChannel c : j.channels) m.rotation_.push_back(sim::isRotation(c));
+  m.values_.assign(slots, 0.0f);
+  // The first frame (every device's first sample) is the reference for translations.
+  std::vector<bool> seen(session.devices.size(), false);
+  for (size_t i = 0; i < session.samples.size(); ++i) {
+    const uint16_t d = session.sampleDevice[i];
+    if (d >= seen.size() || seen[d]) continue;
+    seen[d] = true;
+    m.read(d, session.samples[i]);
+  }
+  auto r = Retargeter::create(m.clip_, character, options);
+  if (!r) return std::unexpected(r.error());
+  r->setReferenceFrame(m.values_);
+  m.retargeter_.emplace(std::move(*r));
+  return m;
+}
+
+void ClipPoseMap::read(uint16_t device, const drivers::Sample& sample) {
+  if (device >= firstSlot_.size()) return;
+  const size_t first = firstSlot_[device];
+  const size_t end = device + 1u < firstSlot_.size() ? firstSlot_[device + 1u] : values_.size();
+  const size_t count = std::min<size_t>(end - first, sample.channelCount);
+  for (size_t c = 0; c < count; ++c)
+    if (sample.flags[c] == drivers::ChannelFlag::Valid)
+      values_[first + c] = static_cast<float>(
+          sessionChannelValue(sample.counts[c], rotation_[first + c], bits_[device], unitsPerCount_));
+}
+
+void ClipPoseMap::apply(uint16_t device, const drivers::Sample& sample, SkeletonCache& skeleton) {
+  read(device, sample);
+  retargeter_->pose(values_, pose_);
+  skeleton.setPose(pose_);
+}
+
 void SampleMapper::apply(uint16_t device, const drivers::Sample& sample, SkeletonCache& skeleton) {
   if (byName_) {
     byName_->apply(device, sample, skeleton);
+  } else if (clip_) {
+    clip_->apply(device, sample, skeleton);
   } else if (device == 0) {
     skeleton.setPose(calibrator_->update(sample));
   }
 }
 
 size_t SampleMapper::mappedJoints() const {
+  if (clip_) return clip_->retargeter().report().mapped();
   return byName_ ? byName_->mappedJoints() : calibrator_->calibration().rigMap().joints.size();
 }
 
 std::string SampleMapper::describe() const {
-  return (byName_ ? std::string("channel names") : "calibration " + label_) + ", " + std::to_string(mappedJoints()) +
-         " joints";
+  const std::string how = byName_ ? std::string("channel names") : clip_ ? "clip retargeted (" + label_ + ")"
+                                                                       : "calibration " + label_;
+  return how + ", " + std::to_string(mappedJoints()) + " joints";
 }
 
 ReplayPoseSource::ReplayPoseSource(const sim::Session& session, SampleMapper mapper, double speed, std::string name)

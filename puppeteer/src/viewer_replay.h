@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <expected>
 #include <memory>
 #include <optional>
 #include <string>
@@ -15,6 +16,7 @@
 #include "calibration/calibration.h"
 #include "drivers/pose_mailbox.h"
 #include "imps/skeleton_cache.h"
+#include "retarget.h"
 #include "sim/session_file.h"
 #include "viewer.h"
 
@@ -54,20 +56,48 @@ class ChannelPoseMap {
   std::vector<std::string> unmatched_;
 };
 
+// A session that carries a SKELETON (a BVH clip converted by bvhToSession) retargeted onto the character: raw counts
+// back to the clip's values (degrees, clip units), then Retargeter::pose (rotations with rest-pose correction, root
+// translation scaled by leg length). The reference for translations is the session's first frame.
+class ClipPoseMap {
+ public:
+  // Errors: the skeleton does not parse or its channels differ from the devices'.
+  static std::expected<ClipPoseMap, std::string> create(const sim::Session& session, const Character& character,
+                                                         const RetargetOptions& options);
+  void apply(uint16_t device, const drivers::Sample& sample, SkeletonCache& skeleton);
+  const Retargeter& retargeter() const { return *retargeter_; }
+  const sim::BvhClip& clip() const { return clip_; }
+
+ private:
+  void read(uint16_t device, const drivers::Sample& sample);
+  sim::BvhClip clip_;
+  std::optional<Retargeter> retargeter_;
+  std::vector<size_t> firstSlot_;
+  std::vector<int> bits_;
+  std::vector<bool> rotation_;  // per slot
+  double unitsPerCount_ = 1;
+  std::vector<float> values_;   // per slot: the clip's frame
+  std::vector<JointPose> pose_;
+};
+
 // How samples become joint rotations: a calibration (calibration/: offsets, signs, gains, limits, deadband,
-// smoothing) when there is one, else the channels-by-name fallback above. Not thread-safe: the frame loop owns it.
+// smoothing) when there is one, a retargeted clip for sessions made from BVH, else the channels-by-name fallback
+// above. Not thread-safe: the frame loop owns it.
 class SampleMapper {
  public:
   // By channel names; `devices` supplies the devices' channel names.
   SampleMapper(const sim::Session& devices, const Character& character);
   // Through a calibration (device 0's samples only; other devices are ignored). `label` is shown in the HUD.
   SampleMapper(calibration::Calibration calibration, std::string label);
+  // Through a retargeted clip; `label` ("auto", "names", the map file) is shown in the HUD.
+  SampleMapper(ClipPoseMap clip, std::string label);
 
   void apply(uint16_t device, const drivers::Sample& sample, SkeletonCache& skeleton);
   size_t mappedJoints() const;
   // "calibration LABEL, N joints" or "channel names, N joints".
   std::string describe() const;
   const ChannelPoseMap* byName() const { return byName_ ? &*byName_ : nullptr; }
+  const ClipPoseMap* clip() const { return clip_ ? &*clip_ : nullptr; }
   // The calibration in use, or null when mapping by channel names.
   const calibration::Calibration* calibration() const {
     return calibrator_ ? &calibrator_->calibration() : nullptr;
@@ -75,6 +105,7 @@ class SampleMapper {
 
  private:
   std::optional<ChannelPoseMap> byName_;
+  std::optional<ClipPoseMap> clip_;
   std::optional<calibration::Calibrator> calibrator_;
   std::string label_;
 };

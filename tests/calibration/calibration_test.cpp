@@ -154,6 +154,44 @@ TEST(Calibration, PoseIsRestRotationTimesCalibratedRotation) {
   EXPECT_NEAR(glm::length(glm::dvec3(restPose[0].rotation * glm::vec3(0, 1, 0)) - rest * glm::dvec3(0, 1, 0)), 0, 1e-6);
 }
 
+// A translation channel moves the joint from its rest translation (the file's) along the parent's axis, in metres,
+// clamped to its limits; the rotation channels of the same joint are unaffected by it.
+TEST(Calibration, TranslationChannelsMoveTheJointFromItsRestTranslation) {
+  const char* text =
+      "#VRML V2.0 utf8\n"
+      "Tesselator3MP { sceneGraph DEF Arm RigidTransform { translation 0.5 1 0 rotation 0 0 1 1.5707963267948966\n"
+      "  children [ LineSeg { point1 0 0 0 point2 1 0 0 radius1 0.1 radius2 0.1 } ] } }\n";
+  auto scene = readScene(text, "arm.wrl");
+  ASSERT_TRUE(scene.has_value()) << scene.error().str();
+  auto character = Character::fromScene(*scene);
+  ASSERT_TRUE(character.has_value()) << character.error().str();
+  ChannelMap ty = channel(1, "Arm", Axis::Y, 1000, -1, 1000.0);  // 1 mm per count, reversed
+  ty.translation = true;
+  ty.encoder = EncoderKind::Linear;
+  ty.maxAngle = 0.25;
+  RigMap map = makeMap({channel(0, "Arm", Axis::X, 2048), ty});
+  map.joints[0].order = "X";
+  auto cal = Calibration::create(map, &*character);
+  ASSERT_TRUE(cal.has_value()) << cal.error().str();
+  const auto pose = cal->apply(sample({2048 + 1024, 1000 - 150}));  // 90 degrees about x; 150 counts the other way
+  ASSERT_EQ(pose.size(), 1u);
+  EXPECT_TRUE(pose[0].hasTranslation);
+  EXPECT_NEAR(pose[0].translation.x, 0.5f, 1e-6f);
+  EXPECT_NEAR(pose[0].translation.y, 1.0f + 0.150f, 1e-6f);
+  EXPECT_NEAR(pose[0].translation.z, 0.0f, 1e-6f);
+  const glm::dquat expected = glm::angleAxis(kPi / 2, glm::dvec3(0, 0, 1)) * glm::angleAxis(kPi / 2, glm::dvec3(1, 0, 0));
+  EXPECT_NEAR(glm::length(glm::dvec3(pose[0].rotation * glm::vec3(0, 1, 0)) - expected * glm::dvec3(0, 1, 0)), 0, 1e-6);
+  // Limits are metres.
+  EXPECT_NEAR(cal->apply(sample({2048, 1000 - 900}))[0].translation.y, 1.25f, 1e-6f);
+  // Linear: no wrap-around even far from the offset.
+  EXPECT_NEAR(cal->apply(sample({2048, 1000 + 3000}))[0].translation.y, 1.0f - 3.0f, 1e-5f);
+  // The calibration pose is the file's pose.
+  EXPECT_NEAR(glm::length(cal->apply(sample({2048, 1000}))[0].translation - glm::vec3(0.5f, 1, 0)), 0, 1e-6f);
+  // The stateful Calibrator carries translations too.
+  Calibrator calibrator(*cal);
+  EXPECT_NEAR(calibrator.update(sample({2048, 1000 - 40}))[0].translation.y, 1.04f, 1e-6f);
+}
+
 TEST(Calibration, FlaggedChannelsReadAsTheCalibrationPose) {
   auto cal = make(makeMap({channel(0, "A", Axis::X, 2048), channel(1, "B", Axis::X, 2048)}));
   auto s = sample({3000, 3000});

@@ -90,7 +90,7 @@ TEST(RigMap, UnknownFieldSuggestsTheClosestName) {
   EXPECT_EQ(errors(oneChannel(R"({"channel": 0, "axis": "x", "sign": 1, "wobble": 1})")),
             "rig.json:6:46: error: unknown field 'wobble' in a channel of joint 'L_Forearm' (expected 'channel', "
             "'axis', 'sign', 'gain', 'range', 'range_deg', 'offset', 'min', 'min_deg', 'max', 'max_deg', 'deadband', "
-            "'deadband_deg', 'smoothing_ms' or 'encoder')\n");
+            "'deadband_deg', 'smoothing_ms', 'encoder' or 'metres_per_count')\n");
 }
 
 TEST(RigMap, MissingFields) {
@@ -109,7 +109,8 @@ TEST(RigMap, ImpossibleValues) {
   EXPECT_EQ(errors(oneChannel(R"({"channel": 0, "axis": "x", "sign": 1, "deadband": -0.1})")),
             "rig.json:6:58: error: deadband must be >= 0 radians (got -0.100000)\n");
   EXPECT_EQ(errors(oneChannel(R"({"channel": 0, "axis": "w", "sign": 1})")),
-            "rig.json:6:30: error: bad axis 'w': expected 'x', 'y' or 'z'\n");
+            "rig.json:6:30: error: bad axis 'w': expected 'x', 'y' or 'z' (rotations) or 'tx', 'ty' or 'tz' "
+            "(translations)\n");
   EXPECT_EQ(errors(oneChannel(R"({"channel": 0, "axis": "x", "sign": 2})")),
             "rig.json:6:43: error: 'sign' must be 1 or -1\n");
   EXPECT_EQ(errors(oneChannel(R"({"channel": 0, "axis": "x", "sign": 1, "gain": NaN})")),
@@ -118,6 +119,60 @@ TEST(RigMap, ImpossibleValues) {
             "rig.json:6:56: error: offset 4096.000000 is outside the encoder's counts [0, 4096)\n");
   EXPECT_EQ(errors(oneChannel(R"({"channel": 0, "axis": "x", "sign": 1, "gain": "600"})")),
             "rig.json:6:54: error: 'gain' must be a number, not a string\n");
+}
+
+// Translation axes: metres per count, limits and deadband in metres, linear by default, outside the rotation order.
+TEST(RigMap, TranslationAxesReadMetresAndRoundTrip) {
+  const std::string text =
+      "{\"version\": 1, \"bits\": 12, \"joints\": [\n"
+      "  {\"joint\": \"Pelvis\", \"order\": \"ZX\", \"channels\": [\n"
+      "    {\"channel\": 0, \"axis\": \"z\", \"sign\": 1},\n"
+      "    {\"channel\": 1, \"axis\": \"ty\", \"sign\": -1, \"metres_per_count\": 0.001, \"offset\": 100,\n"
+      "     \"min\": -0.5, \"max\": 0.75, \"deadband\": 0.002},\n"
+      "    {\"channel\": 2, \"axis\": \"x\", \"sign\": 1},\n"
+      "    {\"channel\": 3, \"axis\": \"TX\", \"sign\": 1, \"gain\": 500}\n"
+      "  ]}\n"
+      "]}\n";
+  auto r = parseRigMap(text, "rig.json", {&biped(), nullptr, false});
+  ASSERT_TRUE(r.has_value()) << r.error().str();
+  ASSERT_EQ(r->channels.size(), 4u);
+  const ChannelMap& ty = r->channels[1];
+  EXPECT_TRUE(ty.translation);
+  EXPECT_EQ(ty.axis, Axis::Y);
+  EXPECT_EQ(ty.encoder, EncoderKind::Linear);
+  EXPECT_DOUBLE_EQ(ty.gain, 1000.0);  // counts per metre
+  EXPECT_DOUBLE_EQ(ty.minAngle, -0.5);
+  EXPECT_DOUBLE_EQ(ty.maxAngle, 0.75);
+  EXPECT_DOUBLE_EQ(ty.deadband, 0.002);
+  EXPECT_TRUE(r->channels[3].translation);
+  EXPECT_EQ(r->channels[3].axis, Axis::X);
+  EXPECT_FALSE(r->channels[0].translation);
+  EXPECT_EQ(r->joints[0].order, "ZX");  // the rotation axes only
+  auto again = parseRigMap(toJson(*r), "again.json");
+  ASSERT_TRUE(again.has_value()) << again.error().str() << toJson(*r);
+  for (size_t i = 0; i < 4; ++i) {
+    EXPECT_EQ(again->channels[i].translation, r->channels[i].translation) << i;
+    EXPECT_EQ(again->channels[i].axis, r->channels[i].axis) << i;
+    EXPECT_EQ(again->channels[i].gain, r->channels[i].gain) << i;
+    EXPECT_EQ(again->channels[i].minAngle, r->channels[i].minAngle) << i;
+    EXPECT_EQ(again->channels[i].deadband, r->channels[i].deadband) << i;
+    EXPECT_EQ(again->channels[i].encoder, r->channels[i].encoder) << i;
+  }
+}
+
+TEST(RigMap, TranslationAxesRefuseDegreesAndNeedAScale) {
+  EXPECT_EQ(errors(oneChannel(R"({"channel": 0, "axis": "tz", "sign": 1})")),
+            "rig.json:6:7: error: missing field 'metres_per_count' (a translation axis has no natural full scale)' in a "
+            "channel of joint 'L_Forearm'\n");
+  EXPECT_EQ(errors(oneChannel(R"({"channel": 0, "axis": "tz", "sign": 1, "metres_per_count": 0.01, "max_deg": 5})")),
+            "rig.json:6:84: error: 'max_deg' is for rotation axes: a translation axis takes 'metres_per_count' and "
+            "'min'/'max'/'deadband' in metres\n");
+  EXPECT_EQ(errors(oneChannel(R"({"channel": 0, "axis": "tz", "sign": 1, "metres_per_count": -1})")),
+            "rig.json:6:67: error: 'metres_per_count' must be positive\n");
+  EXPECT_EQ(errors(oneChannel(R"({"channel": 0, "axis": "x", "sign": 1, "metres_per_count": 1})")),
+            "rig.json:6:66: error: 'metres_per_count' is for translation axes (tx, ty, tz)\n");
+  EXPECT_EQ(errors(oneChannel(R"({"channel": 0, "axis": "ty", "sign": 1, "gain": 10, "min": 1, "max": -1})")),
+            "rig.json:6:76: error: 'max' (-1.000000 m) is below 'min' (1.000000 m)\n");
 }
 
 TEST(RigMap, DuplicateChannelsAndAxes) {

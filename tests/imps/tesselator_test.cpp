@@ -8,6 +8,7 @@
 #include <cmath>
 #include <map>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -58,6 +59,16 @@ size_t foldedTriangles(const Field& field, const Mesh& mesh) {
     if (glm::dot(glm::cross(b - a, c - a), -field.sample((a + b + c) / 3.0f).gradient) <= 0.0f) ++folded;
   }
   return folded;
+}
+
+// Max over points of |F - iso| / |grad F| (metres).
+float worstSurfaceDistance(const Field& field, std::span<const glm::vec3> points) {
+  float worst = 0.0f;
+  for (const glm::vec3& x : points) {
+    const FieldSample fs = field.sample(x);
+    worst = std::max(worst, std::fabs(fs.value - field.iso()) / glm::length(fs.gradient));
+  }
+  return worst;
 }
 
 class PerExample : public ::testing::TestWithParam<const char*> {};
@@ -472,6 +483,42 @@ TEST(Tesselator, ATinyDesiredRadiusStopsAtTheParticleLimit) {
     EXPECT_LE(tess.particles().size(), o.maxParticles) << "update " << u;
   }
   EXPECT_GT(tess.particles().size(), 0u);
+}
+
+// Joint translations (issue 10): a jump of the biped's root, 30 cm up and 20 cm sideways in one frame, carries every
+// particle with it through the differential transforms (which include translation). Two identical tesselators, one
+// whose character jumps and one whose character stays: after the update each particle of the first is where its twin
+// is, moved by the jump (the settled particles' own step, a period-2 oscillation of ~0.3 h, is the same in both), and
+// the jumped mesh stays closed.
+TEST(Tesselator, ParticlesFollowAJointTranslation) {
+  Example e = load("simple_biped.wrl");
+  const float h = e.options.desiredRadius;
+  SkeletonCache still(*e.character), jumping(*e.character);
+  Tesselator a(e.options), b(e.options);
+  Mesh mesh;
+  a.settle(still, mesh);
+  b.settle(jumping, mesh);
+  const glm::vec3 jump(0.2f, 0.3f, 0.0f);
+  const int pelvis = e.character->findJoint("Pelvis");
+  jumping.setTranslation(pelvis, e.character->joints()[size_t(pelvis)].rest.translation + jump);
+  jumping.update();
+  still.update();
+  a.update(still);
+  b.update(jumping);
+  const ParticleView pa = a.particles(), pb = b.particles();
+  ASSERT_EQ(pa.size(), pb.size());
+  std::map<uint64_t, glm::vec3> twin;
+  for (size_t i = 0; i < pa.size(); ++i) twin[pa.ids[i]] = pa.positions[i];
+  size_t followed = 0;
+  for (size_t i = 0; i < pb.size(); ++i) {
+    const auto it = twin.find(pb.ids[i]);
+    ASSERT_NE(it, twin.end());
+    if (glm::length(pb.positions[i] - (it->second + jump)) < 0.02f * h) ++followed;
+  }
+  EXPECT_GT(double(followed), 0.99 * double(pb.size())) << followed << " of " << pb.size() << " followed the jump";
+  EXPECT_LT(worstSurfaceDistance(jumping.field(), pb.positions), 0.5f * h);
+  b.triangulate(mesh);
+  EXPECT_EQ(analyzeTopology(mesh).boundaryEdges, 0u);
 }
 
 TEST(Tesselator, FlatFieldWithoutSkeletonAndReset) {

@@ -17,11 +17,11 @@ run() { "$xvfb" -a "$puppeteer" "$@"; }
 # 1. view: rest pose and posed, both polygonizers.
 run view "$scene" --frames 30 --screenshot "$work/rest.png" --no-hud --width 640 --height 480
 run view "$scene" --frames 30 --screenshot "$work/posed.png" --no-hud --width 640 --height 480 \
-    --pose L_UpperArm=0,0,1,-1.2
+    --pose L_UpperArm=0,0,1,-69
 "$checker" "$work/rest.png" "$work/posed.png" 0.1
 run view "$scene" --frames 3 --polygonizer mc --screenshot "$work/rest_mc.png" --no-hud --width 640 --height 480
 run view "$scene" --frames 3 --polygonizer mc --screenshot "$work/posed_mc.png" --no-hud --width 640 --height 480 \
-    --pose L_UpperArm=0,0,1,-1.2
+    --pose L_UpperArm=0,0,1,-69
 "$checker" "$work/rest_mc.png" "$work/posed_mc.png" 0.1
 
 # 2. Bad input fails cleanly.

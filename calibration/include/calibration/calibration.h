@@ -1,5 +1,6 @@
 // Calibrated conversion of raw Samples to a Pose: per channel, angle = sign * wrap(count - offset) / gain, clamped
 // to the limits; per joint, the pose rotation is rest * R(order), the axis rotations composed in the joint's order.
+// Translation channels (axes tx, ty, tz) read metres the same way and move the joint from its rest translation.
 // `Calibration` is the stateless free conversion; `Calibrator` adds deadband, smoothing and hold-last-good across
 // samples. The math is in docs/calibration.md.
 #pragma once
@@ -48,12 +49,15 @@ class Calibration {
   // toJson() written with imps::writeFileAtomically (atomic_file.h).
   std::expected<void, std::string> save(const std::filesystem::path& path) const;
 
-  // Angle in radians of mapping i (index into rigMap().channels) for a raw count, before limits.
+  // Angle in radians of mapping i (index into rigMap().channels) for a raw count, before limits; metres for a
+  // translation channel.
   double rawAngle(size_t i, double count) const;
   // rawAngle clamped to the mapping's limits.
   double angle(size_t i, double count) const;
 
-  // The pose for one sample: every driven joint, rotation = rest * calibrated rotation, no translation. A channel
+  // The pose for one sample: every driven joint, rotation = rest * calibrated rotation; a joint with translation
+  // channels also gets translation = rest translation + the channels' metres along their axes of the parent's
+  // frame (hasTranslation), the others none. A channel
   // that is beyond the sample's channelCount or flagged NotConnected / Outlier reads as the calibration pose
   // (angle 0; Calibrator holds the previous angle instead). Deadband and smoothing are not applied here.
   std::vector<JointPose> apply(const drivers::Sample& sample) const;
@@ -65,6 +69,7 @@ class Calibration {
  private:
   RigMap map_;
   std::vector<glm::quat> rest_;  // per rigMap().joints entry
+  std::vector<glm::vec3> restTranslation_;  // per rigMap().joints entry, metres in the parent's frame
 };
 
 // Stateful conversion across a stream of samples, for the frame loop. Per mapping: clamp, then deadband (the output

@@ -30,20 +30,23 @@ const char* toString(Axis axis);
 // shortest signed difference from the offset. Linear sensors (potentiometers) never wrap.
 enum class EncoderKind : uint8_t { Absolute, Linear };
 
-// One channel → one joint axis. Angles in radians, counts in encoder counts.
+// One channel → one joint axis: a rotation about it (axis "x"/"y"/"z"), or a translation along it (axis
+// "tx"/"ty"/"tz"). Angles in radians, translations in metres, counts in encoder counts.
 struct ChannelMap {
   int channel = -1;              // device channel index; -1 until a name is resolved against a DeviceInfo
   std::string channelName;       // the device channel name when the file named the channel, else ""
   std::string joint;             // joint name in the character
-  Axis axis = Axis::X;           // rotation axis in the joint's local frame
+  Axis axis = Axis::X;           // rotation axis in the joint's local frame, or translation axis in its parent's
+  bool translation = false;      // true: the channel moves the joint along `axis` (metres), not about it
   int sign = 1;                  // +1: counts grow with the angle; -1: the encoder is mounted reversed
-  double gain = 0;               // counts per radian, > 0
+  double gain = 0;               // counts per radian (translation: counts per metre), > 0
   std::optional<double> offset;  // counts at the calibration pose (unset in a rig map not yet calibrated)
-  double minAngle = -std::numeric_limits<double>::infinity();  // limits after the offset, radians, min <= max
+  // Limits after the offset, radians (translation: metres), min <= max.
+  double minAngle = -std::numeric_limits<double>::infinity();
   double maxAngle = std::numeric_limits<double>::infinity();
-  double deadband = 0;     // radians, >= 0: changes smaller than this are ignored (hysteresis; Calibrator only)
+  double deadband = 0;     // radians (translation: metres), >= 0: changes smaller than this are ignored (hysteresis; Calibrator only)
   double smoothingMs = 0;  // one-pole low-pass time constant in ms, >= 0 (0: none; Calibrator only)
-  EncoderKind encoder = EncoderKind::Absolute;
+  EncoderKind encoder = EncoderKind::Absolute;  // translation channels default to Linear
   SourceLoc loc;  // where the file names the channel (its "channel" value)
 };
 
@@ -51,7 +54,8 @@ struct ChannelMap {
 struct JointMap {
   std::string joint;
   // Axes in composition order, e.g. "ZXY": the calibrated rotation is Rz * Rx * Ry (BVH's convention). Holds
-  // exactly the axes this joint's channels drive. For one channel it is that channel's axis.
+  // exactly the rotation axes this joint's channels drive. For one channel it is that channel's axis; "" when the
+  // joint is only translated.
   std::string order;
   std::vector<size_t> mappings;  // indices into RigMap::channels, in file order
   SourceLoc loc;  // the joint's name in the file
