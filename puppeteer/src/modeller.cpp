@@ -254,6 +254,7 @@ bool Modeller::grab(const ScreenView& view, const Handle& handle, HandlePart par
   handle_ = handle, part_ = part, twist_ = shift;
   press_ = last_ = pixel, center_ = layout.center;
   moved_ = glm::vec3(0.0f), factor_ = 1.0f;
+  refused_.clear();
   start_ = pipeline_.state();
   selected_ = handle.target;
   const bool joint = handle.target.kind == EditTarget::Kind::Joint;
@@ -272,6 +273,7 @@ bool Modeller::grab(const ScreenView& view, const Handle& handle, HandlePart par
 }
 
 void Modeller::drag(const ScreenView& view, const glm::vec2& pixel) {
+  if (!refused_.empty()) return;
   if (drag_ == Drag::Pose) dragPose(view, pixel);
   else if (drag_ == Drag::Document) dragDocument(view, pixel);
   last_ = pixel;
@@ -325,8 +327,7 @@ void Modeller::dragDocument(const ScreenView& view, const glm::vec2& pixel) {
     why = rotateTarget(next, character, handle_.target, handle_.container, q);
   }
   if (!why.empty()) {
-    grabbed_ += " (" + why + ")";
-    drag_ = Drag::None;
+    refused_ = grabbed_ + ": " + why;  // release() says so; the drag changes nothing
     return;
   }
   pipeline_.setState(std::move(next));
@@ -335,6 +336,7 @@ void Modeller::dragDocument(const ScreenView& view, const glm::vec2& pixel) {
 std::string Modeller::release() {
   const Drag was = std::exchange(drag_, Drag::None);
   if (was == Drag::None) return {};
+  if (!refused_.empty()) return std::exchange(refused_, std::string());
   DocumentState now = pipeline_.state();
   if (was == Drag::Pose) {
     // The joint's new local transform goes into its RigidTransform, so `s` saves it and undo brings it back.
