@@ -279,16 +279,19 @@ void Modeller::drag(const ScreenView& view, const glm::vec2& pixel) {
   last_ = pixel;
 }
 
+glm::vec3 Modeller::translation(const ScreenView& view, const glm::vec2& pixel) const {
+  if (part_ < HandlePart::AxisX) return planeDrag(view, handle_.origin, press_, pixel);
+  glm::vec3 unit(0.0f);
+  unit[int(part_) - int(HandlePart::AxisX)] = 1.0f;
+  const glm::vec3 axis = handle_.frame * unit;
+  return axisDrag(view, handle_.origin, axis, press_, pixel) * axis;
+}
+
 void Modeller::dragPose(const ScreenView& view, const glm::vec2& pixel) {
   SkeletonCache& skeleton = pipeline_.skeleton();
   const int j = handle_.target.index;
   if (mode_ == ManipulatorMode::Translate) {
-    const glm::vec3 axis = part_ >= HandlePart::AxisX
-                               ? handle_.frame * glm::vec3(glm::vec3(part_ == HandlePart::AxisX, part_ == HandlePart::AxisY,
-                                                                     part_ == HandlePart::AxisZ))
-                               : glm::vec3(0.0f);
-    moved_ = part_ >= HandlePart::AxisX ? axisDrag(view, handle_.origin, axis, press_, pixel) * axis
-                                        : planeDrag(view, handle_.origin, press_, pixel);
+    moved_ = translation(view, pixel);
     skeleton.setTranslation(j, start_.pose[size_t(j)].translation + glm::inverse(handle_.container) * moved_);
     return;
   }
@@ -307,14 +310,7 @@ void Modeller::dragDocument(const ScreenView& view, const glm::vec2& pixel) {
   const Character& character = pipeline_.character();
   std::string why;
   if (mode_ == ManipulatorMode::Translate) {
-    if (part_ >= HandlePart::AxisX) {
-      glm::vec3 unit(0.0f);
-      unit[int(part_) - int(HandlePart::AxisX)] = 1.0f;
-      const glm::vec3 axis = handle_.frame * unit;
-      moved_ = axisDrag(view, handle_.origin, axis, press_, pixel) * axis;
-    } else {
-      moved_ = planeDrag(view, handle_.origin, press_, pixel);
-    }
+    moved_ = translation(view, pixel);
     why = translateTarget(next, character, handle_.target, handle_.container, moved_);
   } else if (mode_ == ManipulatorMode::Scale) {
     // A press on the centre doubles 30 pixels further out; one on an axis scales by the ratio of distances.

@@ -107,6 +107,8 @@ class Modeller {
   enum class Drag { None, Pose, Document } drag_ = Drag::None;
   std::optional<Handle> handleOf(const EditTarget& target) const;
   bool grab(const ScreenView& view, const Handle& handle, HandlePart part, const glm::vec2& pixel, bool shift);
+  // Translate mode: the world delta of the drag so far (in the screen plane, or along the grabbed axis).
+  glm::vec3 translation(const ScreenView& view, const glm::vec2& pixel) const;
   void dragPose(const ScreenView& view, const glm::vec2& pixel);
   void dragDocument(const ScreenView& view, const glm::vec2& pixel);
   std::string apply(DocumentState state);
