@@ -254,6 +254,7 @@ bool Modeller::grab(const ScreenView& view, const Handle& handle, HandlePart par
   handle_ = handle, part_ = part, twist_ = shift;
   press_ = last_ = pixel, center_ = layout.center;
   moved_ = glm::vec3(0.0f), factor_ = 1.0f;
+  refused_.clear();
   start_ = pipeline_.state();
   selected_ = handle.target;
   const bool joint = handle.target.kind == EditTarget::Kind::Joint;
@@ -272,21 +273,25 @@ bool Modeller::grab(const ScreenView& view, const Handle& handle, HandlePart par
 }
 
 void Modeller::drag(const ScreenView& view, const glm::vec2& pixel) {
+  if (!refused_.empty()) return;
   if (drag_ == Drag::Pose) dragPose(view, pixel);
   else if (drag_ == Drag::Document) dragDocument(view, pixel);
   last_ = pixel;
+}
+
+glm::vec3 Modeller::translation(const ScreenView& view, const glm::vec2& pixel) const {
+  if (part_ < HandlePart::AxisX) return planeDrag(view, handle_.origin, press_, pixel);
+  glm::vec3 unit(0.0f);
+  unit[int(part_) - int(HandlePart::AxisX)] = 1.0f;
+  const glm::vec3 axis = handle_.frame * unit;
+  return axisDrag(view, handle_.origin, axis, press_, pixel) * axis;
 }
 
 void Modeller::dragPose(const ScreenView& view, const glm::vec2& pixel) {
   SkeletonCache& skeleton = pipeline_.skeleton();
   const int j = handle_.target.index;
   if (mode_ == ManipulatorMode::Translate) {
-    const glm::vec3 axis = part_ >= HandlePart::AxisX
-                               ? handle_.frame * glm::vec3(glm::vec3(part_ == HandlePart::AxisX, part_ == HandlePart::AxisY,
-                                                                     part_ == HandlePart::AxisZ))
-                               : glm::vec3(0.0f);
-    moved_ = part_ >= HandlePart::AxisX ? axisDrag(view, handle_.origin, axis, press_, pixel) * axis
-                                        : planeDrag(view, handle_.origin, press_, pixel);
+    moved_ = translation(view, pixel);
     skeleton.setTranslation(j, start_.pose[size_t(j)].translation + glm::inverse(handle_.container) * moved_);
     return;
   }
@@ -305,14 +310,7 @@ void Modeller::dragDocument(const ScreenView& view, const glm::vec2& pixel) {
   const Character& character = pipeline_.character();
   std::string why;
   if (mode_ == ManipulatorMode::Translate) {
-    if (part_ >= HandlePart::AxisX) {
-      glm::vec3 unit(0.0f);
-      unit[int(part_) - int(HandlePart::AxisX)] = 1.0f;
-      const glm::vec3 axis = handle_.frame * unit;
-      moved_ = axisDrag(view, handle_.origin, axis, press_, pixel) * axis;
-    } else {
-      moved_ = planeDrag(view, handle_.origin, press_, pixel);
-    }
+    moved_ = translation(view, pixel);
     why = translateTarget(next, character, handle_.target, handle_.container, moved_);
   } else if (mode_ == ManipulatorMode::Scale) {
     // A press on the centre doubles 30 pixels further out; one on an axis scales by the ratio of distances.
@@ -325,8 +323,7 @@ void Modeller::dragDocument(const ScreenView& view, const glm::vec2& pixel) {
     why = rotateTarget(next, character, handle_.target, handle_.container, q);
   }
   if (!why.empty()) {
-    grabbed_ += " (" + why + ")";
-    drag_ = Drag::None;
+    refused_ = grabbed_ + ": " + why;  // release() says so; the drag changes nothing
     return;
   }
   pipeline_.setState(std::move(next));
@@ -335,6 +332,7 @@ void Modeller::dragDocument(const ScreenView& view, const glm::vec2& pixel) {
 std::string Modeller::release() {
   const Drag was = std::exchange(drag_, Drag::None);
   if (was == Drag::None) return {};
+  if (!refused_.empty()) return std::exchange(refused_, std::string());
   DocumentState now = pipeline_.state();
   if (was == Drag::Pose) {
     // The joint's new local transform goes into its RigidTransform, so `s` saves it and undo brings it back.

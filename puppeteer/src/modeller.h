@@ -86,7 +86,8 @@ class Modeller {
   // The cursor moved to `pixel` with the button held: applies the drag to the pose or the document.
   void drag(const ScreenView& view, const glm::vec2& pixel);
   // Button released: the drag becomes one undoable edit (a joint's pose is written into its RigidTransform).
-  // Returns what was done ("translate LEFT by 0.2 0 0 m"), or "" when nothing changed.
+  // Returns what was done ("translate LEFT by 0.2 0 0 m"), why nothing could be ("translate metaball1: a USE of
+  // A: edit A itself"), or "" when nothing changed.
   std::string release();
   bool dragging() const { return drag_ != Drag::None; }
   // What the last press grabbed, for messages: "translate LEFT", "arcball L_UpperArm", "".
@@ -106,6 +107,8 @@ class Modeller {
   enum class Drag { None, Pose, Document } drag_ = Drag::None;
   std::optional<Handle> handleOf(const EditTarget& target) const;
   bool grab(const ScreenView& view, const Handle& handle, HandlePart part, const glm::vec2& pixel, bool shift);
+  // Translate mode: the world delta of the drag so far (in the screen plane, or along the grabbed axis).
+  glm::vec3 translation(const ScreenView& view, const glm::vec2& pixel) const;
   void dragPose(const ScreenView& view, const glm::vec2& pixel);
   void dragDocument(const ScreenView& view, const glm::vec2& pixel);
   std::string apply(DocumentState state);
@@ -124,6 +127,7 @@ class Modeller {
   DocumentState start_;
   std::optional<DocumentState> previewStart_;  // editDocument: the state before the first preview
   std::string grabbed_;
+  std::string refused_;    // why the drag in progress cannot edit its target ("" when it can)
   glm::vec3 moved_{0.0f};  // translate: the world delta so far
   float factor_ = 1.0f;    // scale: the factor so far
 };

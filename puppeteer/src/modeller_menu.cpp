@@ -18,7 +18,9 @@ void documentSlider(const char* label, float value, float lo, float hi, const ch
                                           logarithmic ? ImGuiSliderFlags_Logarithmic : ImGuiSliderFlags_None);
   const bool done = ImGui::IsItemDeactivatedAfterEdit();
   if (changed || done)
-    actions.push_back([set, v, done](ViewerPipeline&, Modeller& m) { m.editDocument([&](Scene& s) { set(s, v); }, done); });
+    actions.push_back([set, v, done](ViewerPipeline&, Modeller& m) {
+      m.editDocument([&](Scene& s) { set(s, v); }, done);
+    });
 }
 
 void blendSection(const Scene& scene, Actions& actions) {

@@ -3,7 +3,8 @@
 # a translate handle dragged moves its metaball to where it was dropped (checked against the scene files by
 # modeller_check, from the app's own first camera); a scale handle sets a metaball's radius; a joint handle of an
 # unnamed RigidTransform moves it and `s` saves it (as does a --pose on an unnamed joint); Ctrl+Z / Ctrl+Shift+Z undo
-# and redo; a saved file re-opens and saves byte for byte the same; --no-manipulators makes the drag orbit.
+# and redo; a saved file re-opens and saves byte for byte the same; --no-manipulators makes the drag orbit; view
+# uses the polygonizer the scene file names.
 # Usage: modeller_app_test.sh PUPPETEER SOURCE_DIR MODELLER_CHECK XVFB_RUN
 set -euo pipefail
 puppeteer=$1 src=$2 check=$3 xvfb=$4
@@ -62,4 +63,25 @@ view "$blobs" --frames 4 --no-manipulators --drag "$cx,$cy,$x1,$y1@1" --keys s@2
     | tee "$work/n.txt"
 grep -q "drag .*: orbit$" "$work/n.txt" || fail "--no-manipulators still grabbed a handle"
 cmp "$work/orig.wrl" "$work/n.wrl" || fail "--no-manipulators changed the document"
+# 6. view uses the polygonizer the file names: textured_blobs.wrl is a MarchingCubes scene, so its default meshes
+#    are exactly those of --polygonizer mc, and not the particles'.
+hashes() { "$xvfb" -a "$puppeteer" view "$blobs" --frames 3 --mesh-hashes --no-hud --width 320 --height 240 "$@" \
+    | grep '^frame '; }
+hashes >"$work/default.hashes"
+hashes --polygonizer mc >"$work/mc.hashes"
+hashes --polygonizer particles >"$work/particles.hashes"
+[ "$(wc -l <"$work/default.hashes")" -eq 3 ] || fail "expected 3 frame hashes"
+cmp "$work/default.hashes" "$work/mc.hashes" || fail "view did not use the scene file's MarchingCubes"
+cmp -s "$work/default.hashes" "$work/particles.hashes" && fail "the particle meshes equal Marching Cubes'"
+# 7. Bad flags fail cleanly with the command line's exit code (2).
+set +e
+"$puppeteer" view "$blobs" --frames 1 --point-size 0 >/dev/null 2>"$work/err"; code=$?
+set -e
+[ $code -eq 2 ] || fail "--point-size 0: exit $code, expected 2"
+grep -q "point-size" "$work/err" || fail "--point-size 0: the message does not name the option"
+set +e
+"$puppeteer" view "$blobs" --frames 1 --keys alt+z@1 >/dev/null 2>"$work/err"; code=$?
+set -e
+[ $code -eq 2 ] || fail "--keys alt+z@1: exit $code, expected 2"
+grep -q "expected \[ctrl+\]\[shift+\]KEY@FRAME" "$work/err" || fail "--keys alt+z@1: unclear message"
 echo "modeller app test passed"

@@ -5,7 +5,8 @@
 //   modeller_check moved SCENE SAVED W H TARGET X Y        the target in SAVED lies under pixel (X, Y) of SCENE's
 //                                                           first view (within 0.5 px), at the same depth
 //   modeller_check radius SAVED PRIMITIVE R                the metaball's radius in SAVED is R (within 1e-4 R)
-// TARGET: a primitive's name, NAME.point1 / NAME.point2 for a LineSeg's endpoints, or joint:N for joint N. Exit 0 when the check holds, 1 (with a message) otherwise.
+// TARGET: a primitive's name, NAME.point1 / NAME.point2 for a LineSeg's endpoints, or joint:N for joint N.
+// Exit 0 when the check holds, 1 (with a message) otherwise.
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>

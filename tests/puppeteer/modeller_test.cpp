@@ -167,6 +167,27 @@ TEST(Modeller, UndoRedoRestoreTheDocumentAndSaveReopensIdentically) {
   }
 }
 
+TEST(Modeller, AUseCopyCannotBeDraggedAndSaysWhy) {
+  auto scene = readScene(R"(#VRML V2.0 utf8
+MarchingCubes { sceneGraph ExponentialBlend { children [ DEF A Metaball { center -1 0 0 } USE A ] } }
+)",
+                         "use.wrl");
+  ASSERT_TRUE(scene.has_value());
+  auto character = Character::fromScene(*scene);
+  ASSERT_TRUE(character.has_value());
+  PipelineOptions o;
+  o.polygonizer = Polygonizer::MarchingCubes;
+  ViewerPipeline p(*scene, std::move(*character), o);
+  Modeller m(p);
+  const ScreenView v = viewOf(p);
+  // Both copies sit at the same place: the later handle (the USE) wins the tie.
+  const glm::vec2 c = project(v, {-1, 0, 0});
+  const std::string what = dragFromTo(m, v, c, c + glm::vec2(30, 0));
+  EXPECT_EQ(what, "translate metaball1: a USE of A: edit A itself");
+  EXPECT_TRUE(p.scene() == *scene);
+  EXPECT_EQ(m.history().undoCount(), 0u);
+}
+
 TEST(Modeller, ABoneDragTurnsTheJointIntoTheDocumentAndUndoTurnsItBack) {
   auto p = load("examples/simple_biped.wrl");
   Modeller m(*p);
