@@ -164,6 +164,16 @@ void OscPoseSender::run() {
   }
 }
 
+bool OscPoseSender::flush(int timeoutMs) {
+  const uint64_t head = head_.load(std::memory_order_relaxed);
+  const int64_t until = steadyNs() + int64_t(timeoutMs) * 1'000'000;
+  while (tail_.load(std::memory_order_acquire) < head) {
+    if (steadyNs() >= until) return false;
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+  return true;
+}
+
 OscSenderStats OscPoseSender::stats() const {
   OscSenderStats s;
   s.offered = offered_.load(std::memory_order_relaxed);

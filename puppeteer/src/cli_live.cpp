@@ -446,7 +446,7 @@ int runLive(const LiveArgs& a) {
     }
     auto source = OscPoseSource::open(*spec, pipeline->character(), std::move(mapper));
     if (!source) {
-      std::fprintf(stderr, "puppeteer live: error: %s\n", source.error().c_str());
+      std::fprintf(stderr, "puppeteer live: %s\n", source.error().c_str());
       return kExitIoError;
     }
     return runWithOscOut(a, *pipeline, **source, v);

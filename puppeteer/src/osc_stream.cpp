@@ -78,6 +78,7 @@ void OscStreamingSource::describe(HudInfo& info) {
 
 std::string OscStreamingSource::finish() {
   std::string message = inner_.finish();
+  sender_->flush(1000);  // the summary counts every frame the performance queued
   const drivers::OscSenderStats s = sender_->stats();
   std::string line = countsLine("OSC out:", {{"frames", s.offered}, {"bundles sent", s.sent},
                                              {"dropped (queue full)", s.dropped}, {"send errors", s.sendErrors}});

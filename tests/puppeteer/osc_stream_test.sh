@@ -44,21 +44,25 @@ for _ in $(seq 20); do
   p3=$((20000 + RANDOM % 20000))
   ss -Hlun "sport = :$p3" | grep -q . || break
 done
-setsid stdbuf -oL "$xvfb" -a "$puppeteer" live "$scene" --device "osc.udp://127.0.0.1:$p3" --frames 100000 "${view[@]}" \
-  >"$work/render.txt" 2>&1 & pids+=($!)
+setsid stdbuf -oL "$xvfb" -a "$puppeteer" live "$scene" --device "osc.udp://127.0.0.1:$p3" --frames 100000 \
+  "${view[@]}" >"$work/render.txt" 2>&1 & pids+=($!)
 for _ in $(seq 600); do ss -Hlun "sport = :$p3" | grep -q . && break; sleep 0.05; done
-ss -Hlun "sport = :$p3" | grep -q . || { cat "$work/render.txt"; echo "FAIL: the render host is not listening"; exit 1; }
+ss -Hlun "sport = :$p3" | grep -q . \
+  || { cat "$work/render.txt"; echo "FAIL: the render host is not listening"; exit 1; }
 
-# 3. The armature host streams every pose it shows to the three; garbage arrives mid-stream at r1 and the render host.
+# 3. The armature host streams every pose it shows to the three; garbage reaches r1 and the render host as it starts.
 "$xvfb" -a "$puppeteer" replay "$bvh" "$scene" --stepped --frames 30 "${view[@]}" --osc-out "osc.udp://127.0.0.1:$p1" \
   --osc-out "osc.udp://127.0.0.1:$p2" --osc-out "osc.udp://127.0.0.1:$p3" >"$work/host.txt" 2>&1 &
 host=$!
 sleep 0.5
-for p in "$p1" "$p3"; do printf 'garbage' >"/dev/udp/127.0.0.1/$p"; printf '/imps/joint/X\0\0\0,f\0\0' >"/dev/udp/127.0.0.1/$p"; done
+for p in "$p1" "$p3"; do
+  printf 'garbage' >"/dev/udp/127.0.0.1/$p"                       # not a multiple of 4 bytes
+  printf '/imps/joint/X\0\0\0,f\0\0' >"/dev/udp/127.0.0.1/$p"  # its argument missing
+done
 wait "$host" || { cat "$work/host.txt"; echo "FAIL: the armature host failed"; exit 1; }
 cat "$work/host.txt" | grep -v '^frame '
-sent=$(sed -n 's/.*OSC out: \([0-9]*\) frames, \([0-9]*\) bundles sent, 0 dropped (queue full), 0 send errors to 3 target.*/\1 \2/p' \
-  "$work/host.txt")
+clean='.*OSC out: \([0-9]*\) frames, \([0-9]*\) bundles sent, 0 dropped (queue full), 0 send errors to 3 target.*'
+sent=$(sed -n "s/$clean/\1 \2/p" "$work/host.txt")
 [ -n "$sent" ] || { echo "FAIL: the armature host did not report a clean stream"; exit 1; }
 frames=${sent% *}
 [ "${sent#* }" -eq $((3 * frames)) ] || { echo "FAIL: not every frame went to every target"; exit 1; }
@@ -74,5 +78,6 @@ done
 # 5. The render host, garbage notwithstanding, shows the armature host's last mesh (same pose, bit for bit).
 last=$(grep '^frame ' "$work/host.txt" | tail -n 1 | awk '{print $4}')
 for _ in $(seq 600); do grep -q " hash $last " "$work/render.txt" && break; sleep 0.05; done
-grep -q " hash $last " "$work/render.txt" || { tail -n 5 "$work/render.txt"; echo "FAIL: the render host never showed the last pose"; exit 1; }
+grep -q " hash $last " "$work/render.txt" \
+  || { tail -n 5 "$work/render.txt"; echo "FAIL: the render host never showed the last pose"; exit 1; }
 echo "PASS: $frames frames to 2 receivers in order; the render host reproduced the last mesh ($last)"

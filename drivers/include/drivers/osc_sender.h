@@ -50,6 +50,10 @@ class OscPoseSender {
   // whether the frame was queued.
   bool send(const OscPose& pose);
 
+  // Waits until every frame queued so far has been sent, or timeoutMs passes; returns whether the queue emptied.
+  // For the end of a performance (a summary that counts every frame), never for the frame loop.
+  bool flush(int timeoutMs);
+
   OscSenderStats stats() const;
   std::string lastError() const;  // the latest send failure, "" when none
   const std::vector<std::string>& targets() const { return urls_; }
