@@ -61,7 +61,7 @@ int runParticleMesh(const MeshArgs& a, const Scene& scene, const SkeletonCache& 
   }
   std::printf("%s: %zu particles, %zu triangles after %d updates, written to %s\n", a.scene.c_str(),
               mesh.vertexCount(), mesh.triangleCount(), updates, a.output.c_str());
-  if (a.check) reportTopology(mesh);
+  if (a.check && !reportTopology(mesh)) return kExitCheckFailed;
   return kExitOk;
 }
 
@@ -106,7 +106,7 @@ int runMesh(const MeshArgs& a) {
   if (stats.thinFeatureVertices > 0)
     std::printf("note: %zu grid vertices moved onto thin limbs to keep them (cell larger than the limb)\n",
                 stats.thinFeatureVertices);
-  if (a.check) reportTopology(mesh);
+  if (a.check && !reportTopology(mesh)) return kExitCheckFailed;
   return kExitOk;
 }
 
@@ -206,7 +206,8 @@ void addSceneCommands(CLI::App& app, Commands& commands) {
       ->excludes(cellOpt);
   meshCmd->add_option("--threads", mesh->threads, "Worker threads (0: all cores)")->check(CLI::Range(0, 1024));
   meshCmd->add_flag("--no-thin-features", mesh->noThin, "Do not move grid vertices onto limbs thinner than a cell");
-  meshCmd->add_flag("--check", mesh->check, "Also verify and print the mesh's topology (closed, manifold, components)");
+  meshCmd->add_flag("--check", mesh->check,
+                    "Also verify and print the mesh's topology; exit 4 when it is not a closed 2-manifold");
   meshCmd->add_option("--polygonizer", mesh->polygonizer, "mc (Marching Cubes, default) or particles (Tesselator3MP)")
       ->check(CLI::IsMember({"mc", "particles"}));
   meshCmd->add_option("--updates", mesh->updates, "particles: updates to run (default: until settled)")

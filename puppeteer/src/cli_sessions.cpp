@@ -6,11 +6,14 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "cli.h"
+#include "drivers/device_session.h"
 #include "sim/bvh.h"
 #include "sim/bvh_session.h"
 #include "sim/session_file.h"
+#include "sim/session_link.h"
 
 namespace imps::app {
 namespace {
@@ -19,6 +22,36 @@ std::string extensionOf(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
   return ext;
+}
+
+void printLink(const sim::SessionLink& a) {
+  const double seconds = double(a.spanNs) * 1e-9;
+  std::printf("    %zu samples over %.3f s (%.1f per second while sending), %llu sequence numbers missing, "
+              "%llu restart%s of the numbering (device reboots)\n",
+              a.samples, seconds, a.rateHz(), static_cast<unsigned long long>(a.missing),
+              static_cast<unsigned long long>(a.restarts), a.restarts == 1 ? "" : "s");
+  if (a.outages.empty()) return;
+  std::printf("    %zu outage%s (pauses over 100 ms), %.3f s in all:\n", a.outages.size(),
+              a.outages.size() == 1 ? "" : "s", double(a.outageNs) * 1e-9);
+  constexpr size_t kShown = 10;
+  for (size_t i = 0; i < a.outages.size() && i < kShown; ++i) {
+    const sim::SessionOutage& o = a.outages[i];
+    std::printf("      at %.3f s (after sample %zu): %.3f s, %llu sequence numbers missing\n", double(o.startNs) * 1e-9,
+                o.afterSample, double(o.lengthNs) * 1e-9, static_cast<unsigned long long>(o.missing));
+  }
+  if (a.outages.size() > kShown) std::printf("      … and %zu more\n", a.outages.size() - kShown);
+}
+
+// The link's counters as the recorder stored them (COUNTERS record), labelled when this build knows the name.
+void printCounters(const sim::SessionCounters& c) {
+  std::printf("  device link counters (device %u):", unsigned(c.device));
+  const char* separator = " ";
+  for (const sim::SessionCounter& v : c.values) {
+    const char* label = drivers::counterLabel(v.name);
+    std::printf("%s%s: %llu", separator, label ? label : v.name.c_str(), static_cast<unsigned long long>(v.value));
+    separator = ", ";
+  }
+  std::printf("\n");
 }
 
 int runInfo(const std::string& path) {
@@ -32,26 +65,16 @@ int runInfo(const std::string& path) {
               s.samples.size(), s.devices.size(), s.devices.size() == 1 ? "" : "s");
   for (size_t d = 0; d < s.devices.size(); ++d) {
     const drivers::DeviceInfo& info = s.devices[d];
-    size_t count = 0;
-    int64_t first = 0, last = 0;
-    uint64_t gaps = 0;
-    uint32_t previous = 0;
-    for (size_t i = 0; i < s.samples.size(); ++i) {
-      if (s.sampleDevice[i] != d) continue;
-      const drivers::Sample& sample = s.samples[i];
-      if (count == 0) first = sample.arrivalTimeNs;
-      else if (sample.sequence != previous + 1) ++gaps;
-      last = sample.arrivalTimeNs;
-      previous = sample.sequence;
-      ++count;
-    }
-    const double seconds = double(last - first) * 1e-9;
     std::printf("  device %zu: \"%s\" serial \"%s\" firmware \"%s\": %d channels of %d bits%s\n", d, info.name.c_str(),
                 info.serialNumber.c_str(), info.firmwareVersion.c_str(), info.channelCount, info.bitsPerChannel,
                 info.hasDeviceTimestamp ? ", device timestamps" : "");
-    std::printf("    %zu samples over %.3f s (%.1f per second), %llu sequence gaps\n", count, seconds,
-                seconds > 0.0 ? double(count - 1) / seconds : 0.0, static_cast<unsigned long long>(gaps));
+    for (const sim::SessionLayoutChange& change : s.layoutChanges)
+      if (change.device == d)
+        std::printf("    the same armature as device %u with a new channel layout, from sample %llu on\n",
+                    unsigned(change.previous), static_cast<unsigned long long>(change.firstSample));
+    printLink(sim::analyzeSessionLink(s, d));
   }
+  for (const sim::SessionCounters& c : s.counters) printCounters(c);
   std::printf("  calibrations: %zu", s.calibrations.size());
   for (const auto& c : s.calibrations) std::printf(" (from sample %llu)", static_cast<unsigned long long>(c.firstSample));
   std::printf("\n  markers: %zu, notes: %zu, skeleton: %s\n", s.markers.size(), s.notes.size(),
