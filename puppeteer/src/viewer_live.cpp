@@ -242,10 +242,12 @@ void LivePoseSource::describe(HudInfo& info) {
   if (map_) info.mapping = map_->describe();
   info.state = drivers::toString(st.state);
   if (map_ && map_->mappedJoints() == 0) info.state += ", no channel names a joint: nothing moves";
-  // Anything but streaming (or the first wait for a device that has not failed yet) is a problem to see at once.
+  // Not streaming because something failed (an open, the link) is a problem to see at once; the first open and
+  // wait of a device that has not failed yet are not.
   info.lastError = session_->lastError();
   info.problem = st.state != drivers::ConnectionState::Streaming &&
-                 !(st.state == drivers::ConnectionState::WaitingForHello && info.lastError.empty());
+                 (st.state == drivers::ConnectionState::Lost || st.state == drivers::ConnectionState::Reconnecting ||
+                  !info.lastError.empty());
   if (!info.problem) info.lastError.clear();
   info.sampleRateHz = rateHz_;
   info.dropped = st.samplesDropped;
