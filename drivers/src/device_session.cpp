@@ -244,6 +244,8 @@ struct DeviceSession::Io {
     });
     flushTextLine();
     if (w == Wait::Failed) return false;
+    // A HELLO unasked after a loss: the device rebooted (on the first open an Arduino always does).
+    if (info && everConnected) bump(s.counters_.deviceResets);
     bool failed = false;
     if (!info) {
       auto hello = command(msg::HostHello{}, MessageType::Hello, failed);

@@ -24,6 +24,7 @@ enum ExitCode : int {
   kExitInvalidInput = 1,  // an input file (scene, session, rig map …) has errors; printed as file:line:column
   kExitUsage = 2,         // bad command line
   kExitIoError = 3,       // an output could not be written (nothing was overwritten), or a device failed
+  kExitCheckFailed = 4,   // a requested check failed: `mesh --check` found the mesh not a closed 2-manifold
 };
 
 // ---- Checks every command shares, so that the same mistake gets the same message and exit code everywhere.

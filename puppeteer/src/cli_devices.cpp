@@ -4,6 +4,7 @@
 #include "device_opener.h"
 #include "device_ranking.h"
 #include "json_output.h"
+#include "interrupts.h"
 #include "session_recorder.h"
 
 #include <CLI/CLI.hpp>
@@ -28,16 +29,6 @@
 
 namespace imps::app {
 namespace {
-
-std::atomic<bool> interrupted{false};
-void onSignal(int) { interrupted.store(true); }
-
-// Ctrl-C (and SIGTERM) end a running command cleanly instead of killing it mid-write.
-void catchInterrupts() {
-  interrupted.store(false);
-  std::signal(SIGINT, onSignal);
-  std::signal(SIGTERM, onSignal);
-}
 
 bool timeUp(std::chrono::steady_clock::time_point start, double seconds) {
   return seconds > 0 &&
@@ -243,7 +234,7 @@ int runSim(const SimArgs& a) {
   sim::ArmatureFdServer server(sim::SimulatedArmature(*options), pty->master(), clock);
   server.start();
   const auto start = std::chrono::steady_clock::now();
-  while (!interrupted.load() && !timeUp(start, a.seconds)) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  while (!interruptRequested() && !timeUp(start, a.seconds)) std::this_thread::sleep_for(std::chrono::milliseconds(20));
   server.stop();
   if (!a.link.empty()) std::filesystem::remove(a.link);
   std::printf("Sent %llu samples.\n", static_cast<unsigned long long>(server.samplesSent()));
@@ -259,6 +250,18 @@ struct RecordArgs {
   double seconds = 0;
   bool json = false;
 };
+
+// How long `record --seconds N` waits for the first sample beyond N before giving up: a device's open, boot and
+// hello take up to a few seconds (docs/cli.md).
+constexpr double kFirstSampleGraceSeconds = 10.0;
+
+// The live counter line `record` redraws on stderr.
+void printRecordProgress(const std::string& state, const drivers::DeviceSessionStats& st) {
+  std::fprintf(stderr, "\r%-18s samples %llu  dropped %llu  crc %llu  timeouts %llu  reconnects %llu   ",
+               state.c_str(), static_cast<unsigned long long>(st.samples),
+               static_cast<unsigned long long>(st.samplesDropped), static_cast<unsigned long long>(st.crcErrors),
+               static_cast<unsigned long long>(st.timeouts), static_cast<unsigned long long>(st.reconnects));
+}
 
 int runRecord(const RecordArgs& a) {
   auto spec = drivers::parseDeviceSpec(a.device);
@@ -296,42 +299,56 @@ int runRecord(const RecordArgs& a) {
   std::vector<drivers::Sample> batch;
   std::string lastState;
   const auto start = std::chrono::steady_clock::now();
-  auto lastReport = start;
+  // --seconds counts from the first sample, not from opening the device and waiting for its hello.
+  std::optional<std::chrono::steady_clock::time_point> firstSample;
+  auto lastReport = start, lastCounters = start;
   int exitCode = kExitOk;
   auto drainInto = [&]() -> bool {
     batch.clear();
     mailbox.drain(batch);
     if (batch.empty()) return true;
+    const std::optional<drivers::DeviceInfo> info = session.deviceInfo();
+    if (!info) return true;  // cannot happen: samples come after the handshake
     if (!recorder) {
-      auto info = session.deviceInfo();
-      if (!info) return true;  // cannot happen: samples come after the handshake
-      auto created = app::SessionRecorder::create(a.output, *info, cal ? &*cal : nullptr);
+      // The description of the first sample's layout (the device may have re-locked since).
+      auto created = app::SessionRecorder::create(a.output, withChannelCount(*info, batch.front().channelCount),
+                                                  cal ? &*cal : nullptr);
       if (!created) {
         std::fprintf(stderr, "%s\n", created.error().c_str());
         exitCode = kExitIoError;
         return false;
       }
       recorder.emplace(std::move(*created));
+      firstSample = std::chrono::steady_clock::now();
       for (const std::string& w : session.warnings()) std::fprintf(stderr, "%s\n", w.c_str());
     }
-    if (auto r = recorder->append(batch); !r) {
+    if (auto r = recorder->append(batch, &*info); !r) {
       std::fprintf(stderr, "%s\n", r.error().c_str());
       exitCode = kExitIoError;
       return false;
     }
     return true;
   };
-  while (!interrupted.load() && !timeUp(start, a.seconds)) {
+  auto done = [&] {
+    if (firstSample) return timeUp(*firstSample, a.seconds);
+    return a.seconds > 0 && timeUp(start, a.seconds + kFirstSampleGraceSeconds);
+  };
+  while (!interruptRequested() && !done()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
     if (!drainInto()) break;
     const std::string state = drivers::toString(session.state());
     const auto now = std::chrono::steady_clock::now();
+    if (recorder && now - lastCounters >= std::chrono::seconds(1)) {
+      // A crash keeps the counts of the last second.
+      if (auto r = recorder->appendCounters(session.stats()); !r) {
+        std::fprintf(stderr, "%s\n", r.error().c_str());
+        exitCode = kExitIoError;
+        break;
+      }
+      lastCounters = now;
+    }
     if (state != lastState || now - lastReport >= std::chrono::seconds(1)) {
-      const drivers::DeviceSessionStats st = session.stats();
-      std::fprintf(stderr, "\r%-18s samples %llu  dropped %llu  crc %llu  timeouts %llu  reconnects %llu   ",
-                   state.c_str(), static_cast<unsigned long long>(st.samples),
-                   static_cast<unsigned long long>(st.samplesDropped), static_cast<unsigned long long>(st.crcErrors),
-                   static_cast<unsigned long long>(st.timeouts), static_cast<unsigned long long>(st.reconnects));
+      printRecordProgress(state, session.stats());
       if (state != lastState && !session.lastError().empty() && state != "streaming")
         std::fprintf(stderr, "\n  (%s)\n", session.lastError().c_str());
       lastState = state;
@@ -347,24 +364,31 @@ int runRecord(const RecordArgs& a) {
                  session.lastError().empty() ? "the device never started streaming" : session.lastError().c_str());
     return exitCode == kExitOk ? kExitIoError : exitCode;
   }
+  const drivers::DeviceSessionStats st = session.stats();
+  if (auto r = recorder->appendCounters(st); !r) {
+    std::fprintf(stderr, "%s\n", r.error().c_str());
+    return kExitIoError;
+  }
   if (auto r = recorder->close(); !r) {
     if (exitCode == kExitOk) std::fprintf(stderr, "%s\n", r.error().c_str());  // else the write error was printed
     return kExitIoError;
   }
-  const drivers::DeviceSessionStats st = session.stats();
-  const uint64_t skipped = recorder->skipped();  // a different device came back on reconnect: its samples do not fit
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - *firstSample).count();
   if (a.json) {
-    printJson(Json{{"output", a.output}, {"device", a.device}, {"samples", recorder->samples()},
-                   {"droppedByLink", st.samplesDropped}, {"crcErrors", st.crcErrors}, {"timeouts", st.timeouts},
-                   {"reconnects", st.reconnects}, {"queueOverflows", mailbox.stats().queueOverflows},
-                   {"skipped", skipped}, {"calibration", a.calibration}});
+    Json json{{"output", a.output}, {"device", a.device}, {"samples", recorder->samples()},
+              {"secondsFromFirstSample", seconds}, {"layoutChanges", recorder->layoutChanges()},
+              {"queueOverflows", mailbox.stats().queueOverflows}, {"calibration", a.calibration}};
+    for (const drivers::NamedCounter& c : drivers::namedCounters(st)) json["counters"][c.name] = c.value;
+    printJson(json);
     return exitCode;
   }
-  std::printf("Recorded %llu samples to %s (dropped by the device link: %llu, queue overflows: %llu%s)\n",
-              static_cast<unsigned long long>(recorder->samples()), a.output.c_str(),
-              static_cast<unsigned long long>(st.samplesDropped),
-              static_cast<unsigned long long>(mailbox.stats().queueOverflows),
-              skipped ? (", " + std::to_string(skipped) + " from a different device skipped").c_str() : "");
+  std::printf("Recorded %llu samples (%.1f s from the first sample) to %s%s\n",
+              static_cast<unsigned long long>(recorder->samples()), seconds, a.output.c_str(),
+              recorder->layoutChanges()
+                  ? (", " + std::to_string(recorder->layoutChanges()) + " channel-layout change(s) recorded").c_str()
+                  : "");
+  std::printf("%s, queue overflows: %llu\n", countersSummary(st).c_str(),
+              static_cast<unsigned long long>(mailbox.stats().queueOverflows));
   return exitCode;
 }
 
@@ -391,7 +415,8 @@ void addDeviceCommands(CLI::App& app, Commands& commands) {
   record->add_option("--device", recordArgs->device, "device spec, e.g. serial:/dev/ttyACM0 (docs/devices.md)")
       ->required();
   record->add_option("-o,--output", recordArgs->output, "session file to create (never overwritten)")->required();
-  record->add_option("--seconds", recordArgs->seconds, "stop after this long (default: until Ctrl-C)");
+  record->add_option("--seconds", recordArgs->seconds,
+                     "stop this long after the first sample (default: until Ctrl-C); waits at most 10 s more for it");
   record->add_flag("--json", recordArgs->json, "Print the summary as JSON (for scripts)");
   record->add_option("--calibration", recordArgs->calibration,
                      "calibration in force (puppeteer calibrate), stored with the take for replay")

@@ -124,8 +124,9 @@ int runParticleMesh(const MeshArgs& a, const Scene& scene, const SkeletonCache& 
                              : a.scene.c_str(),
                  options.maxParticles, double(options.desiredRadius));
   }
-  if (a.check) reportTopology(mesh, progress, a.json ? &json : nullptr);
+  const bool closed = !a.check || reportTopology(mesh, progress, a.json ? &json : nullptr);
   if (a.json) printJson(json);
+  if (!closed) return kExitCheckFailed;
   return kExitOk;
 }
 
@@ -184,9 +185,9 @@ int runMesh(const MeshArgs& a) {
               {"cellSize", stats.cellSize.x},
               {"threads", resolveThreads(options.threads)},
               {"thinFeatureVertices", stats.thinFeatureVertices}};
-    if (a.check) reportTopology(mesh, progress, &json);
+    const bool closed = !a.check || reportTopology(mesh, progress, &json);
     printJson(json);
-    return kExitOk;
+    return closed ? kExitOk : kExitCheckFailed;
   }
   std::printf("%s: %zu vertices, %zu triangles, polygonized in %.2f ms (grid %dx%dx%d, cell %.4g m, %d threads), "
               "written in %.1f ms to %s\n",
@@ -196,7 +197,7 @@ int runMesh(const MeshArgs& a) {
   if (stats.thinFeatureVertices > 0)
     std::printf("note: %zu grid vertices moved onto thin limbs to keep them (cell larger than the limb)\n",
                 stats.thinFeatureVertices);
-  if (a.check) reportTopology(mesh, progress, nullptr);
+  if (a.check && !reportTopology(mesh, progress, nullptr)) return kExitCheckFailed;
   return kExitOk;
 }
 
@@ -338,7 +339,8 @@ void addSceneCommands(CLI::App& app, Commands& commands) {
       ->excludes(cellOpt);
   meshCmd->add_option("--threads", mesh->threads, "Worker threads (0: all cores)")->check(CLI::Range(0, 1024));
   meshCmd->add_flag("--no-thin-features", mesh->noThin, "Do not move grid vertices onto limbs thinner than a cell");
-  meshCmd->add_flag("--check", mesh->check, "Also verify and print the mesh's topology (closed, manifold, components)");
+  meshCmd->add_flag("--check", mesh->check,
+                    "Also verify and print the mesh's topology; exit 4 when it is not a closed 2-manifold");
   meshCmd->add_option("--polygonizer", mesh->polygonizer, "mc (Marching Cubes, default) or particles (Tesselator3MP)")
       ->check(CLI::IsMember({"mc", "particles"}));
   meshCmd->add_option("--updates", mesh->updates, "particles: updates to run (default: until settled)")

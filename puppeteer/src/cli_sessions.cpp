@@ -6,57 +6,78 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "cli.h"
 #include "json_output.h"
 #include "progress.h"
+#include "drivers/device_session.h"
 #include "sim/bvh.h"
 #include "sim/bvh_session.h"
 #include "sim/session_file.h"
+#include "sim/session_link.h"
 
 namespace imps::app {
 namespace {
 
-// One device's samples in a session: how many, over how long, and the sequence gaps.
-struct DeviceSummary {
-  size_t count = 0;
-  double seconds = 0;
-  uint64_t gaps = 0;
-  double rate() const { return seconds > 0.0 ? double(count - 1) / seconds : 0.0; }
-};
+// One device's link as `info` prints it: samples, rate while sending, missing sequence numbers, restarts, outages.
 
-DeviceSummary summarize(const sim::Session& s, size_t device) {
-  DeviceSummary d;
-  int64_t first = 0, last = 0;
-  uint32_t previous = 0;
-  for (size_t i = 0; i < s.samples.size(); ++i) {
-    if (s.sampleDevice[i] != device) continue;
-    const drivers::Sample& sample = s.samples[i];
-    if (d.count == 0) first = sample.arrivalTimeNs;
-    else if (sample.sequence != previous + 1) ++d.gaps;
-    last = sample.arrivalTimeNs;
-    previous = sample.sequence;
-    ++d.count;
+void printLink(const sim::SessionLink& a) {
+  const double seconds = double(a.spanNs) * 1e-9;
+  std::printf("    %zu samples over %.3f s (%.1f per second while sending), %llu sequence numbers missing, "
+              "%llu restart%s of the numbering (device reboots)\n",
+              a.samples, seconds, a.rateHz(), static_cast<unsigned long long>(a.missing),
+              static_cast<unsigned long long>(a.restarts), a.restarts == 1 ? "" : "s");
+  if (a.outages.empty()) return;
+  std::printf("    %zu outage%s (pauses over 100 ms), %.3f s in all:\n", a.outages.size(),
+              a.outages.size() == 1 ? "" : "s", double(a.outageNs) * 1e-9);
+  constexpr size_t kShown = 10;
+  for (size_t i = 0; i < a.outages.size() && i < kShown; ++i) {
+    const sim::SessionOutage& o = a.outages[i];
+    std::printf("      at %.3f s (after sample %zu): %.3f s, %llu sequence numbers missing\n", double(o.startNs) * 1e-9,
+                o.afterSample, double(o.lengthNs) * 1e-9, static_cast<unsigned long long>(o.missing));
   }
-  d.seconds = (double(last) - double(first)) * 1e-9;  // any two int64 timestamps, no overflow
-  return d;
+  if (a.outages.size() > kShown) std::printf("      … and %zu more\n", a.outages.size() - kShown);
+}
+
+// The link's counters as the recorder stored them (COUNTERS record), labelled when this build knows the name.
+void printCounters(const sim::SessionCounters& c) {
+  std::printf("  device link counters (device %u):", unsigned(c.device));
+  const char* separator = " ";
+  for (const sim::SessionCounter& v : c.values) {
+    const char* label = drivers::counterLabel(v.name);
+    std::printf("%s%s: %llu", separator, label ? label : v.name.c_str(), static_cast<unsigned long long>(v.value));
+    separator = ", ";
+  }
+  std::printf("\n");
 }
 
 Json infoJson(const std::string& path, const sim::Session& s) {
   Json devices = Json::array(), calibrations = Json::array(), markers = Json::array();
   for (size_t d = 0; d < s.devices.size(); ++d) {
     const drivers::DeviceInfo& info = s.devices[d];
-    const DeviceSummary sum = summarize(s, d);
+    const sim::SessionLink link = sim::analyzeSessionLink(s, d);
+    Json outages = Json::array();
+    for (const sim::SessionOutage& o : link.outages)
+      outages.push_back({{"startSeconds", double(o.startNs) * 1e-9}, {"afterSample", o.afterSample},
+                         {"seconds", double(o.lengthNs) * 1e-9}, {"missing", o.missing}});
+    Json counters = Json::object();
+    for (const sim::SessionCounters& c : s.counters)
+      if (c.device == d)
+        for (const sim::SessionCounter& v : c.values) counters[v.name] = v.value;
     devices.push_back({{"name", info.name},
                        {"serialNumber", info.serialNumber},
                        {"firmware", info.firmwareVersion},
                        {"channels", info.channelCount},
                        {"bits", info.bitsPerChannel},
                        {"deviceTimestamps", info.hasDeviceTimestamp},
-                       {"samples", sum.count},
-                       {"seconds", sum.seconds},
-                       {"rateHz", sum.rate()},
-                       {"sequenceGaps", sum.gaps}});
+                       {"samples", link.samples},
+                       {"seconds", double(link.spanNs) * 1e-9},
+                       {"rateHz", link.rateHz()},
+                       {"missingSequenceNumbers", link.missing},
+                       {"restarts", link.restarts},
+                       {"outages", std::move(outages)},
+                       {"counters", std::move(counters)}});
   }
   for (const auto& c : s.calibrations) calibrations.push_back({{"firstSample", c.firstSample}});
   for (const auto& m : s.markers) markers.push_back({{"firstSample", m.firstSample}, {"label", m.label}});
@@ -90,13 +111,16 @@ int runInfo(const std::string& path, bool json) {
               s.samples.size(), s.devices.size(), s.devices.size() == 1 ? "" : "s");
   for (size_t d = 0; d < s.devices.size(); ++d) {
     const drivers::DeviceInfo& info = s.devices[d];
-    const DeviceSummary sum = summarize(s, d);
     std::printf("  device %zu: \"%s\" serial \"%s\" firmware \"%s\": %d channels of %d bits%s\n", d, info.name.c_str(),
                 info.serialNumber.c_str(), info.firmwareVersion.c_str(), info.channelCount, info.bitsPerChannel,
                 info.hasDeviceTimestamp ? ", device timestamps" : "");
-    std::printf("    %zu samples over %.3f s (%.1f per second), %llu sequence gaps\n", sum.count, sum.seconds,
-                sum.rate(), static_cast<unsigned long long>(sum.gaps));
+    for (const sim::SessionLayoutChange& change : s.layoutChanges)
+      if (change.device == d)
+        std::printf("    the same armature as device %u with a new channel layout, from sample %llu on\n",
+                    unsigned(change.previous), static_cast<unsigned long long>(change.firstSample));
+    printLink(sim::analyzeSessionLink(s, d));
   }
+  for (const sim::SessionCounters& c : s.counters) printCounters(c);
   std::printf("  calibrations: %zu", s.calibrations.size());
   for (const auto& c : s.calibrations) std::printf(" (from sample %llu)", static_cast<unsigned long long>(c.firstSample));
   std::printf("\n  markers: %zu, notes: %zu, skeleton: %s\n", s.markers.size(), s.notes.size(),

@@ -57,12 +57,21 @@ void Hud::draw(const HudInfo& info, const std::function<void()>& extra) {
       ImGui::Text("Marching Cubes: %.2f ms", info.marchingCubesMs);
     ImGui::Text("%zu particles  %zu triangles", info.particles, info.triangles);
     ImGui::Separator();
-    ImGui::TextWrapped("source: %s [%s]", info.source.c_str(), info.state.c_str());
+    const ImVec4 kProblem(1.0f, 0.45f, 0.25f, 1.0f);  // orange-red: reads as "something is wrong" on the grey panel
+    if (info.problem) {
+      ImGui::PushStyleColor(ImGuiCol_Text, kProblem);
+      ImGui::TextWrapped("source: %s [%s]", info.source.c_str(), info.state.c_str());
+      if (!info.lastError.empty()) ImGui::TextWrapped("%s", info.lastError.c_str());
+      ImGui::PopStyleColor();
+    } else {
+      ImGui::TextWrapped("source: %s [%s]", info.source.c_str(), info.state.c_str());
+    }
     if (!info.mapping.empty()) ImGui::TextWrapped("mapping: %s", info.mapping.c_str());
     if (info.sampleRateHz >= 0.0) {
       ImGui::Text("%.0f Hz  dropped %llu  corrupt %llu  not shown %llu", info.sampleRateHz,
                   static_cast<unsigned long long>(info.dropped), static_cast<unsigned long long>(info.corrupt),
                   static_cast<unsigned long long>(info.overwritten));
+      if (!info.faults.empty()) ImGui::TextColored(kProblem, "%s", info.faults.c_str());
       if (info.latencyMedianMs >= 0.0)
         ImGui::Text("age %.1f ms  to screen %.1f / %.1f ms (p50/p99)", info.sampleAgeMs, info.latencyMedianMs,
                     info.latencyP99Ms);

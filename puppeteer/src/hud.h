@@ -21,9 +21,12 @@ struct HudInfo {
   size_t particles = 0, triangles = 0;
   std::string source;         // "hand" / "replay: NAME" / device name
   std::string state;          // "posing", "playing (loop 2)", "Streaming" …
+  bool problem = false;       // the source is not delivering (no device, lost, reconnecting): state in a warning colour
+  std::string lastError;      // the source's latest problem ("cannot open /dev/ttyNOPE: …"); "" when none
   std::string mapping;        // how samples become joint rotations ("calibration FILE, 18 joints"); "" for hand
   double sampleRateHz = -1.0;
   uint64_t dropped = 0, corrupt = 0, overwritten = 0;
+  std::string faults;  // the live device's non-zero fault counters ("timeouts: 3, CRC errors: 1"); "" when none
   double sampleAgeMs = -1.0;
   double latencyMedianMs = -1.0, latencyP99Ms = -1.0;
   // Recording (key `o`): shown as "REC m:ss.s  N samples  FILE" while active.

@@ -13,22 +13,38 @@ std::expected<SessionRecorder, std::string> SessionRecorder::create(const std::f
                                                                     sim::SessionWriterOptions options) {
   auto writer = sim::SessionWriter::create(path, device, options);
   if (!writer) return std::unexpected(writer.error());
-  SessionRecorder recorder(std::move(*writer), device.channelCount);
+  SessionRecorder recorder(std::move(*writer), device);
   if (calibration) {
     if (auto r = recorder.appendCalibration(*calibration); !r) return std::unexpected(r.error());
   }
   return recorder;
 }
 
-std::expected<void, std::string> SessionRecorder::append(std::span<const drivers::Sample> samples) {
+std::expected<void, std::string> SessionRecorder::append(std::span<const drivers::Sample> samples,
+                                                         const drivers::DeviceInfo* latest) {
   for (const drivers::Sample& s : samples) {
-    if (s.channelCount != channelCount_) {
-      ++skipped_;
-      continue;
-    }
-    if (auto r = writer_.append(s); !r) return r;
+    if (s.channelCount != layout_.channelCount)
+      if (auto r = changeLayout(s.channelCount, latest); !r) return r;
+    if (auto r = writer_.append(s, device_); !r) return r;
   }
   return {};
+}
+
+std::expected<void, std::string> SessionRecorder::changeLayout(int channelCount, const drivers::DeviceInfo* latest) {
+  drivers::DeviceInfo next =
+      withChannelCount(latest && latest->channelCount == channelCount ? *latest : layout_, channelCount);
+  auto index = writer_.appendLayoutChange(next, device_);
+  if (!index) return std::unexpected(index.error());
+  device_ = *index;
+  layout_ = std::move(next);
+  ++layoutChanges_;
+  return {};
+}
+
+std::expected<void, std::string> SessionRecorder::appendCounters(const drivers::DeviceSessionStats& stats) {
+  std::vector<sim::SessionCounter> counters;
+  for (const drivers::NamedCounter& c : drivers::namedCounters(stats)) counters.push_back({c.name, c.value});
+  return writer_.appendCounters(0, counters);
 }
 
 std::expected<void, std::string> SessionRecorder::appendCalibration(const calibration::Calibration& calibration) {
@@ -36,6 +52,23 @@ std::expected<void, std::string> SessionRecorder::appendCalibration(const calibr
 }
 
 std::expected<void, std::string> SessionRecorder::close() { return writer_.close(); }
+
+drivers::DeviceInfo withChannelCount(drivers::DeviceInfo device, int channelCount) {
+  if (device.channelCount == channelCount) return device;
+  device.channelCount = channelCount;
+  device.channelNames.clear();
+  for (int i = 0; i < channelCount; ++i) device.channelNames.push_back("ch" + std::to_string(i));
+  return device;
+}
+
+std::string countersSummary(const drivers::DeviceSessionStats& stats) {
+  std::string out;
+  for (const drivers::NamedCounter& c : drivers::namedCounters(stats)) {
+    if (!out.empty()) out += ", ";
+    out += std::string(c.label) + ": " + std::to_string(c.value);
+  }
+  return out;
+}
 
 std::filesystem::path newTakePath(const std::filesystem::path& dir, std::time_t when) {
   std::tm tm{};

@@ -23,6 +23,7 @@
 #include <glm/mat4x4.hpp>
 
 #include "cli.h"
+#include "interrupts.h"
 #include "imps/scene_writer.h"
 #include "manipulator.h"
 #include "modeller.h"
@@ -308,6 +309,7 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
   glfwSetFramebufferSizeCallback(window, onFramebufferSize);
 
   int exitCode = kExitOk;
+  catchInterrupts();
   {
     auto renderer = std::make_unique<Renderer>();
     if (!renderer->ok()) {
@@ -383,7 +385,7 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
         s.message = "polygonizer reset";
       }
     };
-    while (!glfwWindowShouldClose(window)) {
+    while (!glfwWindowShouldClose(window) && !interruptRequested()) {
       phaseStart = steadyNowNs();
       if (worker) {
         worker->wait();  // frame N's mesh (its time is the polygonize phase's: what the draw did not hide)
@@ -510,6 +512,7 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
     }
     if (worker) worker->wait();
     if (source) report(s, source->finish());
+    if (source && exitCode == kExitOk) exitCode = source->exitCode();
 
     // Summary: frame rate over the whole loop (the settle before it excluded).
     const double seconds = double(lastFrameEnd - loopStart) * 1e-9;

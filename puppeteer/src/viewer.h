@@ -37,6 +37,9 @@ class PoseSource {
   virtual std::string takeMessage() { return {}; }
   // Called once after the last frame: closes what is open (a recording). Returns a message to print, or "".
   virtual std::string finish() { return {}; }
+  // After finish(): the run's exit code (cli.h) as far as the source is concerned: kExitIoError when a live device
+  // never delivered a sample (the source has printed why), else kExitOk.
+  virtual int exitCode() const { return 0; }
 };
 
 struct ViewerOptions {
@@ -66,9 +69,11 @@ struct ViewerOptions {
   std::vector<ScriptedEvent> script;
 };
 
-// Opens the window and runs until Esc / close / `frames` are done. `source` may be null (hand posing only).
-// Returns an ExitCode (cli.h): kExitIoError when no window / GL 3.3 context can be created or the screenshot cannot
-// be written. Prints a one-line performance summary (frames per second, sample-to-screen latency) at the end.
+// Opens the window and runs until Esc / close / `frames` are done, or SIGINT / SIGTERM arrives (Ctrl-C closes the
+// app as Esc does: the source finishes, a take is closed, the summary is printed). `source` may be null (hand
+// posing only). Returns an ExitCode (cli.h): kExitIoError when no window / GL 3.3 context can be created, the
+// screenshot cannot be written, or the source says so (PoseSource::exitCode). Prints a one-line performance
+// summary (frames per second, sample-to-screen latency) at the end.
 int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions& options);
 
 }  // namespace imps::app

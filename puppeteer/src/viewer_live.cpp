@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <utility>
 
+#include "cli.h"
+
 namespace imps::app {
 namespace {
 int64_t steadyNowNs() {
@@ -48,7 +50,18 @@ void LivePoseSource::say(std::string message) {
   message_ = std::move(message);
 }
 
+// Prints the device's problem to stderr each time a new one appears (the HUD may be off or the window hidden).
+void LivePoseSource::reportProblems() {
+  const drivers::ConnectionState state = session_->state();
+  if (state == drivers::ConnectionState::Streaming) return;
+  std::string error = session_->lastError();
+  if (error.empty() || error == reportedError_) return;
+  std::fprintf(stderr, "puppeteer: device %s: %s: %s\n", spec_.c_str(), drivers::toString(state), error.c_str());
+  reportedError_ = std::move(error);
+}
+
 bool LivePoseSource::poll(SkeletonCache& skeleton, int64_t* arrivalNs) {
+  reportProblems();
   if (!device_) {
     // The channel names arrive with the handshake; build the by-name map once (deviceInfo() takes a mutex: not
     // per frame once known).
@@ -65,18 +78,28 @@ bool LivePoseSource::poll(SkeletonCache& skeleton, int64_t* arrivalNs) {
   // Every sample, in order: the recording and the calibration window.
   batch_.clear();
   mailbox_.drain(batch_);
+  gotSample_ = gotSample_ || !batch_.empty();
+  // The description as it is now: a line-protocol device's layout may have changed since the handshake.
+  const std::optional<drivers::DeviceInfo> latest =
+      recordingWanted_ && !batch_.empty() ? session_->deviceInfo() : std::nullopt;
   if (recordingWanted_ && !recorder_ && !batch_.empty()) {
-    auto created = SessionRecorder::create(recordPath_, *device_, calibration());
+    auto created = SessionRecorder::create(
+        recordPath_, withChannelCount(latest ? *latest : *device_, batch_.front().channelCount), calibration());
     if (created) {
       recorder_.emplace(std::move(*created));
-      recordStartNs_ = steadyNowNs();
+      recordStartNs_ = countersWrittenNs_ = steadyNowNs();
     } else {
       recordingWanted_ = false;
       say("recording failed: " + created.error());
     }
   }
   if (recorder_) {
-    if (auto r = recorder_->append(batch_); !r) {
+    auto r = recorder_->append(batch_, latest ? &*latest : nullptr);
+    if (r && steadyNowNs() - countersWrittenNs_ >= 1'000'000'000) {
+      r = recorder_->appendCounters(session_->stats());  // a crash keeps the counts of the last second
+      countersWrittenNs_ = steadyNowNs();
+    }
+    if (!r) {
       recorder_.reset();
       recordingWanted_ = false;
       say("recording stopped: " + r.error());
@@ -101,9 +124,12 @@ std::string LivePoseSource::stopRecording() {
   // What the device sent up to now.
   batch_.clear();
   mailbox_.drain(batch_);
-  auto appended = recorder_->append(batch_);
+  const std::optional<drivers::DeviceInfo> latest = session_->deviceInfo();
+  auto appended = recorder_->append(batch_, latest ? &*latest : nullptr);
+  const drivers::DeviceSessionStats stats = session_->stats();
+  if (appended) appended = recorder_->appendCounters(stats);
   const double seconds = double(steadyNowNs() - recordStartNs_) * 1e-9;
-  const uint64_t samples = recorder_->samples(), skipped = recorder_->skipped();
+  const uint64_t samples = recorder_->samples(), layoutChanges = recorder_->layoutChanges();
   const std::string path = recorder_->path().string();
   auto closed = recorder_->close();
   recorder_.reset();
@@ -113,8 +139,8 @@ std::string LivePoseSource::stopRecording() {
   std::snprintf(buf, sizeof buf, "recorded %llu samples (%.1f s) to ", static_cast<unsigned long long>(samples),
                 seconds);
   std::string message = buf + path;
-  if (skipped) message += " (" + std::to_string(skipped) + " from a different device skipped)";
-  return message;
+  if (layoutChanges) message += " (" + std::to_string(layoutChanges) + " channel-layout change(s) recorded)";
+  return message + "; " + countersSummary(stats);
 }
 
 std::string LivePoseSource::toggleRecording() {
@@ -192,9 +218,18 @@ void LivePoseSource::finishCalibration() {
 std::string LivePoseSource::takeMessage() { return std::exchange(message_, std::string()); }
 
 std::string LivePoseSource::finish() {
+  if (finished_) return {};
+  finished_ = true;
+  if (!gotSample_) {
+    const std::string error = session_->lastError();
+    std::fprintf(stderr, "puppeteer: error: no samples from %s: %s\n", spec_.c_str(),
+                 error.empty() ? "the device never started streaming" : error.c_str());
+  }
   if (!recordingWanted_) return {};
   return stopRecording();
 }
+
+int LivePoseSource::exitCode() const { return gotSample_ ? kExitOk : kExitIoError; }
 
 void LivePoseSource::describe(HudInfo& info) {
   const drivers::DeviceSessionStats st = session_->stats();
@@ -207,12 +242,26 @@ void LivePoseSource::describe(HudInfo& info) {
   if (map_) info.mapping = map_->describe();
   info.state = drivers::toString(st.state);
   if (map_ && map_->mappedJoints() == 0) info.state += ", no channel names a joint: nothing moves";
+  // Not streaming because something failed (an open, the link) is a problem to see at once; the first open and
+  // wait of a device that has not failed yet are not.
+  info.lastError = session_->lastError();
+  info.problem = st.state != drivers::ConnectionState::Streaming &&
+                 (st.state == drivers::ConnectionState::Lost || st.state == drivers::ConnectionState::Reconnecting ||
+                  !info.lastError.empty());
+  if (!info.problem) info.lastError.clear();
   info.sampleRateHz = rateHz_;
   info.dropped = st.samplesDropped;
-  info.corrupt = st.crcErrors + st.malformedFrames + st.parseErrors;
+  info.corrupt = st.crcErrors + st.malformedFrames + st.unknownTypes + st.unsupportedVersions + st.oversizeFrames +
+                 st.truncatedFrames + st.parseErrors;
+  info.faults.clear();
+  for (const drivers::NamedCounter& c : drivers::namedCounters(st)) {
+    if (c.value == 0) continue;
+    if (!info.faults.empty()) info.faults += ", ";
+    info.faults += std::string(c.label) + ": " + std::to_string(c.value);
+  }
   const drivers::PoseMailboxStats ms = mailbox_.stats();
   info.overwritten = ms.overwritten;
-  info.sampleAgeMs = double(ms.lastAgeNs) * 1e-6;
+  info.sampleAgeMs = gotSample_ ? double(ms.lastAgeNs) * 1e-6 : -1.0;  // no sample yet: no age to show
   info.recording = recordingWanted_;
   info.recordSeconds = recorder_ ? double(now - recordStartNs_) * 1e-9 : 0.0;
   info.recordSamples = recorder_ ? recorder_->samples() : 0;

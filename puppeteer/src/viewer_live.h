@@ -34,6 +34,9 @@ struct LiveSourceOptions {
 // armature playing a BVH-derived session) drives the joints of those names; any other device streams but moves
 // nothing (the HUD says so).
 //
+// The device's problems reach the terminal (stderr, once per change of state or error) and the HUD (state and last
+// error in a warning colour); a run in which no sample ever arrived ends with exitCode() kExitIoError.
+//
 // Every frame, poll() drains the mailbox's in-order queue (every sample, oldest first): into the recording when one
 // is open (SessionRecorder, crash-safe like `puppeteer record`), and into the calibration window while one is
 // being collected; then it applies the newest sample. The queue holds 16 s at 1 kHz, so a frame loop stalled for
@@ -53,6 +56,7 @@ class LivePoseSource final : public PoseSource {
   bool handlesDeviceKeys() const override { return true; }
   std::string takeMessage() override;
   std::string finish() override;
+  int exitCode() const override;
 
   // The calibration in force (null when mapping by channel names).
   const calibration::Calibration* calibration() const { return map_ ? map_->calibration() : nullptr; }
@@ -63,6 +67,7 @@ class LivePoseSource final : public PoseSource {
   std::string stopRecording();
   void finishCalibration();
   void say(std::string message);
+  void reportProblems();
 
   const Character& character_;
   std::string spec_;
@@ -82,6 +87,10 @@ class LivePoseSource final : public PoseSource {
   std::string recordPath_;
   std::optional<SessionRecorder> recorder_;
   int64_t recordStartNs_ = 0;
+  int64_t countersWrittenNs_ = 0;  // when the take last stored the link's counters
+  std::string reportedError_;  // the device problem last printed, so each one is printed once
+  bool gotSample_ = false;  // a sample arrived at some point: the run was not a failure to connect
+  bool finished_ = false;
   // Re-calibration.
   CalibrationFlow flow_;
   std::string message_;

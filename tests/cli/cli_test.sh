@@ -73,7 +73,39 @@ expect "render" 0 "$puppeteer" render "$src/examples/beanito.wrl" --res 32 --wid
 check "png magic" test "$(head -c 4 "$work/b.png" | tail -c 3)" = "PNG"
 
 # devices: lists what is attached (here: possibly nothing) and exits 0.
+# mesh --check: a mesh that is not a closed 2-manifold is written, reported and exits 4 (issue 14 item 8); two
+# tesselator updates leave the swarm's particles short of a closed surface.
+expect "unclosed particle mesh fails --check" 4 "$puppeteer" mesh "$src/examples/swarm_1000.wrl" \
+  --polygonizer particles --updates 2 --check -o "$work/swarm.ply"
+check "unclosed mesh is reported" grep -q "NOT a closed 2-manifold" "$work/out"
+check "unclosed mesh is still written" test -s "$work/swarm.ply"
+expect "no --check, no verdict" 0 "$puppeteer" mesh "$src/examples/swarm_1000.wrl" --polygonizer particles \
+  --updates 2 -o "$work/swarm2.ply"
+
 expect "devices" 0 "$puppeteer" devices
+
+# record (issue 14 items 1, 4, 6): a line-protocol device whose boot banner is a number keeps its 8-channel layout
+# and every sample; the summary and info show every counter of the link.
+expect "record a line device with a numeric banner" 0 "$puppeteer" record \
+  --device 'sim:?protocol=lines&banner=115200&channels=8&rate=200' -o "$work/banner.session" --seconds 0.5
+check "no sample skipped" test -z "$(grep -i "skipped\|different device" "$work/out")"
+check "record summary shows the link counters" grep -q "line parse errors: 0" "$work/out"
+expect "info on the banner take" 0 "$puppeteer" info "$work/banner.session"
+check "the take has the settled 8-channel layout" grep -q "1 device" "$work/out"
+check "the take's device has 8 channels" grep -q ": 8 channels of" "$work/out"
+check "info shows the stored counters" grep -q "device link counters (device 0):.*garbage bytes: 0" "$work/out"
+#   --seconds counts from the first sample: a device that boots for 2 s still gives a take of about 1 s.
+expect "record a slow-booting device" 0 "$puppeteer" record --device 'sim:?rate=200&boot_ms=2000' \
+  -o "$work/slow.session" --seconds 1
+"$puppeteer" info "$work/slow.session" >"$work/out"
+check "a 1 s take of a slow-booting device spans most of 1 s" \
+  awk '/samples over/ { if ($4 + 0 >= 0.5) ok = 1 } END { exit !ok }' "$work/out"
+#   an unplugged and replugged device: info locates the outage and calls the reboot a reboot.
+expect "record through an unplug" 0 "$puppeteer" record --device 'sim:?rate=200&unplug_ms=300&replug_ms=600' \
+  -o "$work/unplug.session" --seconds 1.5
+"$puppeteer" info "$work/unplug.session" >"$work/out"
+check "info locates the outage" grep -q "1 outage" "$work/out"
+check "info calls the restart a reboot" grep -q "1 restart of the numbering (device reboots)" "$work/out"
 
 # record from the in-process simulated armature, then calibrate against it. The simulator's generated motion never
 # holds still, so calibration must refuse the window as too noisy, say which channels, and write nothing.

@@ -32,8 +32,8 @@ std::vector<std::vector<uint32_t>> countsOf(const std::vector<Sample>& samples) 
 void expectStatsAddUp(const LineDecoder& d) {
   const auto& s = d.stats();
   EXPECT_EQ(s.bytesReceived, s.bytesInLines + s.bytesSkipped + d.buffered());
-  EXPECT_EQ(s.lines,
-            s.samples + s.bannerLines + s.malformedLines + s.channelCountMismatches + s.overlongLines + d.pendingLines());
+  EXPECT_EQ(s.lines, s.samples + s.bannerLines + s.malformedLines + s.channelCountMismatches + s.overlongLines +
+                         d.pendingLines());
 }
 
 // A decoder that takes the first well-formed line as the layout (tests of line parsing, not of settling).

@@ -102,4 +102,38 @@ run live "$scene" --device "$still&noise=60" --calibration "$src/examples/simple
     --width 320 --height 240 >"$work/noisy.txt"
 grep -q "calibration rejected .* too noisy" "$work/noisy.txt" || { cat "$work/noisy.txt"; echo "FAIL: a noisy window was accepted"; exit 1; }
 [ ! -e "$work/noisy.json" ] || { echo "FAIL: a rejected calibration was written"; exit 1; }
+
+# 8. Issue 14 item 7: a device that cannot be opened is said on the terminal, and a run that never received a
+#    sample exits 3 (docs/cli.md) with nothing recorded.
+status=0
+run live "$scene" --device serial:/dev/ttyNOPE --frames 5 --width 320 --height 240 --record "$work/nope.session" \
+    >"$work/nope.txt" 2>&1 || status=$?
+cat "$work/nope.txt"
+[ "$status" -eq 3 ] || { echo "FAIL: live without a device exited with $status, expected 3"; exit 1; }
+grep -q "ttyNOPE.*no such serial port" "$work/nope.txt" || { echo "FAIL: the device's error was not printed"; exit 1; }
+[ ! -e "$work/nope.session" ] || { echo "FAIL: a take without samples was written"; exit 1; }
+
+# 9. Issue 14 item 5: Ctrl-C (SIGINT) or SIGTERM during `live --record` closes the take (END record), prints the
+#    summary and exits 0. The wrapper records puppeteer's own pid for the signal.
+for sig in INT TERM; do
+  rm -f "$work/pid"
+  "$xvfb" -a bash -c '"$@" & echo $! >"'"$work"'/pid"; wait $!' _ "$puppeteer" live "$scene" --device "$still" \
+      --record "$work/sig$sig.session" --no-hud --width 320 --height 240 >"$work/sig.txt" 2>&1 &
+  wrapper=$!
+  for _ in $(seq 600); do [ -s "$work/pid" ] && [ -s "$work/sig$sig.session" ] && break; sleep 0.1; done
+  [ -s "$work/sig$sig.session" ] || { cat "$work/sig.txt"; echo "FAIL: live --record never created its take"; exit 1; }
+  kill -"$sig" "$(cat "$work/pid")"
+  for _ in $(seq 300); do kill -0 "$(cat "$work/pid")" 2>/dev/null || break; sleep 0.1; done
+  if kill -0 "$(cat "$work/pid")" 2>/dev/null; then
+    kill -KILL "$(cat "$work/pid")"; echo "FAIL: SIG$sig did not end live"; exit 1
+  fi
+  status=0
+  wait "$wrapper" || status=$?
+  cat "$work/sig.txt"
+  [ "$status" -eq 0 ] || { echo "FAIL: live exited with $status after SIG$sig, expected 0"; exit 1; }
+  grep -q "recorded [0-9]* samples .* to $work/sig$sig.session" "$work/sig.txt" \
+    || { echo "FAIL: no take summary after SIG$sig"; exit 1; }
+  "$puppeteer" info "$work/sig$sig.session" >"$work/sig_info.txt"
+  grep -q "closed cleanly" "$work/sig_info.txt" || { cat "$work/sig_info.txt"; echo "FAIL: SIG$sig left the take open"; exit 1; }
+done
 echo "viewer app test: ok"

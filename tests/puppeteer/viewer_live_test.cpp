@@ -5,6 +5,7 @@
 #include "viewer_live.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -16,9 +17,13 @@
 #include <vector>
 
 #include "calibration_flow.h"
+#include "cli.h"
 #include "drivers/device_spec.h"
+#include "drivers/serial_transport.h"
+#include "eventually.h"
 #include "examples.h"
 #include "imps/skeleton_cache.h"
+#include "sim/pseudo_terminal.h"
 #include "sim/session_file.h"
 #include "sim/simulated_armature.h"
 
@@ -229,6 +234,81 @@ TEST(LiveCalibration, NoisyWindowIsRejectedAndNothingIsWritten) {
   auto original = calibration::Calibration::readFile(kCalibration, &test::exampleCharacter("simple_biped"));
   ASSERT_TRUE(original);
   EXPECT_EQ(rig.source->calibration()->toJson(), original->toJson());
+}
+
+// Issue 14 item 1, the app's recorder: a DIY line-protocol device on a pseudo-terminal changes from 4 to 6 channels
+// mid-take. Every line is recorded: the 6-channel samples under a second device declared as the same armature's
+// new layout, not skipped as "from a different device". The link's counters are stored with the take.
+TEST(LiveRecording, LayoutChangeMidTakeIsRecordedNotDropped) {
+  TempDir dir;
+  auto pty = sim::PseudoTerminal::open();
+  ASSERT_TRUE(pty) << pty.error();
+  LiveSourceOptions live;
+  live.recordPath = (dir.path / "take.session").string();
+  drivers::DeviceSessionOptions options;
+  options.protocol = drivers::WireProtocol::Lines;
+  const Character& character = test::exampleCharacter("simple_biped");
+  SkeletonCache skeleton(character);
+  LivePoseSource source(drivers::serialOpener(pty->slavePath()), options, character, "serial:" + pty->slavePath(),
+                        std::nullopt, live);
+  std::string text = "DIY rig\r\n";
+  for (int i = 0; i < 20; ++i) text += std::to_string(i) + " 1 2 3\r\n";
+  for (int i = 20; i < 40; ++i) text += std::to_string(i) + " 1 2 3 4 5\r\n";
+  HudInfo info;
+  ASSERT_TRUE(eventually([&] {  // the port is open: what is written now is read
+    int64_t arrival = 0;
+    source.poll(skeleton, &arrival);
+    source.describe(info);
+    return info.state == "waiting for hello";
+  })) << info.state;
+  ASSERT_EQ(::write(pty->master(), text.data(), text.size()), static_cast<ssize_t>(text.size()));
+  ASSERT_TRUE(eventually([&] {
+    int64_t arrival = 0;
+    source.poll(skeleton, &arrival);
+    source.describe(info);
+    return info.recordSamples >= 40;
+  })) << info.recordSamples;
+  const std::string message = source.finish();
+  EXPECT_NE(message.find("1 channel-layout change"), std::string::npos) << message;
+  EXPECT_EQ(source.exitCode(), kExitOk);
+
+  auto take = sim::readSession(live.recordPath);
+  ASSERT_TRUE(take) << take.error();
+  EXPECT_TRUE(take->recovery.closedCleanly);
+  ASSERT_EQ(take->samples.size(), 40u);
+  ASSERT_EQ(take->devices.size(), 2u);
+  EXPECT_EQ(take->devices[0].channelCount, 4);
+  EXPECT_EQ(take->devices[1].channelCount, 6);
+  EXPECT_EQ(take->layoutChanges, (std::vector<sim::SessionLayoutChange>{{1, 0, 20}}));
+  for (size_t i = 0; i < take->samples.size(); ++i) {
+    EXPECT_EQ(take->samples[i].counts[0], i);
+    EXPECT_EQ(take->sampleDevice[i], i < 20 ? 0 : 1);
+  }
+  ASSERT_EQ(take->counters.size(), 1u);
+  bool layoutCounted = false;
+  for (const sim::SessionCounter& c : take->counters[0].values)
+    if (c.name == "layoutChanges") layoutCounted = c.value == 1;
+  EXPECT_TRUE(layoutCounted);
+}
+
+// Issue 14 item 7: a device that cannot be opened is a problem the HUD shows (state and error, in the problem
+// colour), and a run that never received a sample ends with the I/O exit code.
+TEST(LiveDevice, MissingDeviceIsAProblemAndFailsTheRun) {
+  const Character& character = test::exampleCharacter("simple_biped");
+  SkeletonCache skeleton(character);
+  LivePoseSource source(drivers::serialOpener("/dev/ttyNOPE-imps-test"), {}, character, "serial:/dev/ttyNOPE-imps-test",
+                        std::nullopt, {});
+  HudInfo info;
+  ASSERT_TRUE(eventually([&] {
+    int64_t arrival = 0;
+    source.poll(skeleton, &arrival);
+    source.describe(info);
+    return info.problem && !info.lastError.empty();
+  })) << info.state;
+  EXPECT_NE(info.lastError.find("ttyNOPE-imps-test"), std::string::npos) << info.lastError;
+  EXPECT_LT(info.sampleAgeMs, 0.0);  // no sample: no "sample age 0.0 ms" as if connected
+  source.finish();
+  EXPECT_EQ(source.exitCode(), kExitIoError);
 }
 
 TEST(LiveCalibration, KeyNeedsARigMapAndSomewhereToSave) {

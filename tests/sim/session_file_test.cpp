@@ -382,6 +382,50 @@ TEST(SessionFile, SaveSessionRoundTrips) {
   EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);  // no temporary left
 }
 
+// Issue 14 items 1 and 4: a layout change mid-take (a new DEVICE_INFO plus LAYOUT) and the link's counters
+// (COUNTERS, the last one per device wins) are written, read back and copied by saveSession.
+TEST(SessionFile, LayoutChangesAndCountersRoundTrip) {
+  const fs::path dir = tempDir();
+  std::mt19937_64 rng(9);
+  auto w = SessionWriter::create(dir / "take.session", device(4, 12));
+  ASSERT_TRUE(w) << w.error();
+  std::vector<Sample> four, six;
+  for (int i = 0; i < 5; ++i) ASSERT_TRUE(w->append(four.emplace_back(randomSample(rng, 4, 4095, false))));
+  const std::vector<SessionCounter> early = {{"timeouts", 1}};
+  ASSERT_TRUE(w->appendCounters(0, early));
+  // Samples of the new layout are refused under the old device and accepted under the new one.
+  const Sample wide = randomSample(rng, 6, 4095, false);
+  EXPECT_FALSE(w->append(wide, 0));
+  auto index = w->appendLayoutChange(device(6, 12, "IMPS Monkey-test, 6 channels"), 0);
+  ASSERT_TRUE(index) << index.error();
+  EXPECT_EQ(*index, 1u);
+  EXPECT_FALSE(w->appendLayoutChange(device(2, 12), 7));  // no such device
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(w->append(six.emplace_back(randomSample(rng, 6, 4095, false)), 1));
+  const std::vector<SessionCounter> last = {{"timeouts", 2}, {"samplesDropped", 500}, {"aNewerCounter", 7}};
+  ASSERT_TRUE(w->appendCounters(0, last));
+  ASSERT_TRUE(w->close());
+
+  auto back = readSession(dir / "take.session");
+  ASSERT_TRUE(back) << back.error();
+  EXPECT_TRUE(back->recovery.closedCleanly);
+  EXPECT_EQ(back->recovery.unknownRecords, 0u);
+  ASSERT_EQ(back->devices.size(), 2u);
+  EXPECT_EQ(back->devices[1].channelCount, 6);
+  ASSERT_EQ(back->samples.size(), 8u);
+  EXPECT_EQ(back->sampleDevice, (std::vector<uint16_t>{0, 0, 0, 0, 0, 1, 1, 1}));
+  EXPECT_EQ(back->layoutChanges, (std::vector<SessionLayoutChange>{{1, 0, 5}}));
+  ASSERT_EQ(back->counters.size(), 1u);
+  EXPECT_EQ(back->counters[0].device, 0u);
+  EXPECT_EQ(back->counters[0].values, last);
+
+  ASSERT_TRUE(saveSession(dir / "copy.session", *back));
+  auto copy = readSession(dir / "copy.session");
+  ASSERT_TRUE(copy) << copy.error();
+  EXPECT_EQ(copy->samples, back->samples);
+  EXPECT_EQ(copy->layoutChanges, back->layoutChanges);
+  EXPECT_EQ(copy->counters, back->counters);
+}
+
 // ---- Replay
 
 Session replaySession() {

@@ -1,0 +1,47 @@
+// Outages, missing sequence numbers and restarts in a recorded session (see session_link.h).
+#include "sim/session_link.h"
+
+#include <algorithm>
+
+namespace imps::sim {
+
+double SessionLink::rateHz() const {
+  const int64_t active = spanNs - outageNs;
+  const size_t intervals = samples > 1 ? samples - 1 - outages.size() : 0;
+  return active > 0 && intervals > 0 ? double(intervals) / (double(active) * 1e-9) : 0.0;
+}
+
+SessionLink analyzeSessionLink(const Session& session, size_t device) {
+  std::vector<const Sample*> samples;
+  for (size_t i = 0; i < session.samples.size() && i < session.sampleDevice.size(); ++i)
+    if (session.sampleDevice[i] == device) samples.push_back(&session.samples[i]);
+  SessionLink link;
+  link.samples = samples.size();
+  if (samples.size() < 2) return link;
+  std::vector<int64_t> spacing;
+  spacing.reserve(samples.size() - 1);
+  for (size_t i = 1; i < samples.size(); ++i)
+    spacing.push_back(samples[i]->arrivalTimeNs - samples[i - 1]->arrivalTimeNs);
+  std::vector<int64_t> sorted = spacing;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+  const int64_t median = std::max<int64_t>(sorted[sorted.size() / 2], 0);
+  const int64_t threshold = std::max<int64_t>(median > INT64_MAX / 20 ? INT64_MAX : 20 * median, 100'000'000);
+  const int64_t first = samples.front()->arrivalTimeNs;
+  link.spanNs = samples.back()->arrivalTimeNs - first;
+  for (size_t i = 1; i < samples.size(); ++i) {
+    const uint32_t delta = samples[i]->sequence - samples[i - 1]->sequence;  // wrapping is not a gap
+    uint64_t missing = 0;
+    if (delta == 0 || delta > 0x80000000u)
+      ++link.restarts;
+    else
+      missing = delta - 1;
+    link.missing += missing;
+    if (spacing[i - 1] > threshold) {
+      link.outages.push_back({i - 1, samples[i - 1]->arrivalTimeNs - first, spacing[i - 1], missing});
+      link.outageNs += spacing[i - 1];
+    }
+  }
+  return link;
+}
+
+}  // namespace imps::sim
