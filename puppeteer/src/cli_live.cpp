@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <span>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -228,8 +229,9 @@ bool checkRigArgs(const LiveArgs& a) {
 
 // --calibration FILE, checked against the character (and the device when known); nullopt after printing errors.
 std::optional<SampleMapper> readCalibration(const std::string& path, const Character& character,
-                                            const drivers::DeviceInfo* device) {
-  auto c = calibration::Calibration::readFile(path, &character, device);
+                                            const drivers::DeviceInfo* device,
+                                            std::span<const drivers::DeviceInfo> devices = {}) {
+  auto c = calibration::Calibration::readFile(path, &character, device, devices);
   if (!c) {
     std::fputs(c.error().str().c_str(), stderr);
     return std::nullopt;
@@ -260,7 +262,7 @@ int runReplay(const LiveArgs& a) {
   // the session, else channel names.
   std::optional<SampleMapper> mapper;
   if (!a.calibration.empty()) {
-    mapper = readCalibration(a.calibration, pipeline->character(), device);
+    mapper = readCalibration(a.calibration, pipeline->character(), device, session->devices);
     if (!mapper) return kExitInvalidInput;
   } else if (session->skeleton) {
     auto clip = sim::readBvhText(session->skeleton->bvh, name + " skeleton");
@@ -279,7 +281,7 @@ int runReplay(const LiveArgs& a) {
     mapper.emplace(std::move(*clipMap), a.map);
   } else if (!session->calibrations.empty()) {
     auto c = calibration::Calibration::parse(session->calibrations.front().json, name + " (recorded calibration)",
-                                             &pipeline->character(), device);
+                                             &pipeline->character(), device, session->devices);
     if (c) {
       mapper.emplace(std::move(*c), "recorded in " + name);
     } else {
