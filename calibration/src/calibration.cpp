@@ -19,9 +19,10 @@ double countDelta(double count, double offset, double countsPerTurn, EncoderKind
 }
 
 std::expected<Calibration, Diagnostics> Calibration::create(RigMap map, const Character* character,
-                                                            const drivers::DeviceInfo* device) {
+                                                            const drivers::DeviceInfo* device,
+                                                            std::span<const drivers::DeviceInfo> devices) {
   Diagnostics diags;
-  RigMapContext ctx{character, device, true};
+  RigMapContext ctx{character, device, true, devices};
   validateRigMap(map, ctx, diags);
   for (const ChannelMap& c : map.channels)
     if (c.channel < 0)
@@ -44,18 +45,20 @@ std::expected<Calibration, Diagnostics> Calibration::create(RigMap map, const Ch
 
 std::expected<Calibration, Diagnostics> Calibration::parse(std::string_view json, std::string_view name,
                                                            const Character* character,
-                                                           const drivers::DeviceInfo* device) {
-  auto map = parseRigMap(json, name, RigMapContext{character, device, true});
+                                                           const drivers::DeviceInfo* device,
+                                                           std::span<const drivers::DeviceInfo> devices) {
+  auto map = parseRigMap(json, name, RigMapContext{character, device, true, devices});
   if (!map) return std::unexpected(map.error());
-  return create(std::move(*map), character, device);
+  return create(std::move(*map), character, device, devices);
 }
 
 std::expected<Calibration, Diagnostics> Calibration::readFile(const std::filesystem::path& path,
                                                               const Character* character,
-                                                              const drivers::DeviceInfo* device) {
-  auto map = readRigMapFile(path, RigMapContext{character, device, true});
+                                                              const drivers::DeviceInfo* device,
+                                                              std::span<const drivers::DeviceInfo> devices) {
+  auto map = readRigMapFile(path, RigMapContext{character, device, true, devices});
   if (!map) return std::unexpected(map.error());
-  return create(std::move(*map), character, device);
+  return create(std::move(*map), character, device, devices);
 }
 
 std::expected<void, std::string> Calibration::save(const std::filesystem::path& path) const {
@@ -118,7 +121,7 @@ std::vector<JointPose> Calibration::apply(const drivers::Sample& sample) const {
   std::vector<double> angles(map_.channels.size(), 0.0);
   for (size_t i = 0; i < map_.channels.size(); ++i) {
     const int ch = map_.channels[i].channel;
-    if (usable(sample, ch)) angles[i] = angle(i, sample.counts[static_cast<size_t>(ch)]);
+    if (map_.channels[i].device == 0 && usable(sample, ch)) angles[i] = angle(i, sample.counts[static_cast<size_t>(ch)]);
   }
   std::vector<JointPose> pose;
   compose(angles, pose);
@@ -132,26 +135,34 @@ void Calibrator::reset() {
   held_.assign(n, 0.0);
   output_.assign(n, 0.0);
   seen_.assign(n, false);
-  havePrevious_ = false;
+  havePrevious_.clear();
+  previousDeviceNs_.clear();
+  previousArrivalNs_.clear();
   calibration_.compose(output_, pose_);
 }
 
-const std::vector<JointPose>& Calibrator::update(const drivers::Sample& sample) {
-  // Time since the previous sample: the device clock when it advances, else the host's, else a nominal 1 ms.
-  double dtMs = 1.0;
-  if (havePrevious_) {
-    if (sample.deviceTimeNs > previousDeviceNs_) dtMs = static_cast<double>(sample.deviceTimeNs - previousDeviceNs_) * 1e-6;
-    else if (sample.arrivalTimeNs > previousArrivalNs_)
-      dtMs = static_cast<double>(sample.arrivalTimeNs - previousArrivalNs_) * 1e-6;
+const std::vector<JointPose>& Calibrator::update(uint16_t device, const drivers::Sample& sample) {
+  // Time since the device's previous sample: its clock when it advances, else the host's, else a nominal 1 ms.
+  if (device >= havePrevious_.size()) {
+    havePrevious_.resize(device + 1u, false);
+    previousDeviceNs_.resize(device + 1u, 0);
+    previousArrivalNs_.resize(device + 1u, 0);
   }
-  havePrevious_ = true;
-  previousDeviceNs_ = sample.deviceTimeNs;
-  previousArrivalNs_ = sample.arrivalTimeNs;
+  double dtMs = 1.0;
+  if (havePrevious_[device]) {
+    if (sample.deviceTimeNs > previousDeviceNs_[device])
+      dtMs = static_cast<double>(sample.deviceTimeNs - previousDeviceNs_[device]) * 1e-6;
+    else if (sample.arrivalTimeNs > previousArrivalNs_[device])
+      dtMs = static_cast<double>(sample.arrivalTimeNs - previousArrivalNs_[device]) * 1e-6;
+  }
+  havePrevious_[device] = true;
+  previousDeviceNs_[device] = sample.deviceTimeNs;
+  previousArrivalNs_[device] = sample.arrivalTimeNs;
 
   const RigMap& map = calibration_.rigMap();
   for (size_t i = 0; i < map.channels.size(); ++i) {
     const ChannelMap& c = map.channels[i];
-    if (!usable(sample, c.channel)) continue;  // hold the previous angle
+    if (c.device != device || !usable(sample, c.channel)) continue;  // hold the previous angle
     const double a = calibration_.angle(i, sample.counts[static_cast<size_t>(c.channel)]);
     if (!seen_[i]) {
       seen_[i] = true;

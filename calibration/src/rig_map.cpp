@@ -14,6 +14,7 @@
 #include <fstream>
 #include <numbers>
 #include <sstream>
+#include <map>
 #include <unordered_map>
 
 #include <nlohmann/json.hpp>
@@ -95,37 +96,73 @@ void checkMap(RigMap& map, const RigMapContext& ctx, Diagnostics& diags) {
     diags.error(map.bitsLoc, "the rig map is for " + std::to_string(map.bits) + "-bit encoders but the device '" +
                                  ctx.device->name + "' reports " + std::to_string(ctx.device->bitsPerChannel) +
                                  " bits per channel");
-  // Channel names → indices.
+  // The devices channels live on: a session's, else the one device.
+  std::vector<const drivers::DeviceInfo*> devices;
+  for (const drivers::DeviceInfo& d : ctx.devices) devices.push_back(&d);
+  if (ctx.devices.empty() && ctx.device) devices.push_back(ctx.device);
+  auto deviceText = [&](size_t d) {
+    return devices.size() > 1 ? "device " + std::to_string(d) + " '" + devices[d]->name + "'"
+                              : "device '" + devices[d]->name + "'";
+  };
+  auto channelOn = [&](size_t d, const std::string& name) {
+    const auto& names = devices[d]->channelNames;
+    const auto it = std::find(names.begin(), names.end(), name);
+    return it == names.end() ? -1 : static_cast<int>(it - names.begin());
+  };
   for (ChannelMap& c : map.channels) {
+    if (devices.empty()) continue;  // resolved later; Calibration requires indices
+    if (static_cast<size_t>(c.device) >= devices.size()) {
+      diags.error(c.deviceLoc, "device " + std::to_string(c.device) + " does not exist: the session has " +
+                                   std::to_string(devices.size()) + " device" + (devices.size() == 1 ? "" : "s"));
+      c.channel = -1;
+      continue;
+    }
     if (c.channelName.empty()) continue;
-    if (!ctx.device) continue;  // resolved later; Calibration requires indices
-    int found = -1;
-    for (size_t i = 0; i < ctx.device->channelNames.size(); ++i)
-      if (ctx.device->channelNames[i] == c.channelName) found = static_cast<int>(i);
-    if (found < 0) {
-      std::string message = "device '" + ctx.device->name + "' has no channel named '" + c.channelName + "'";
-      const std::string guess = closestMatch(c.channelName, ctx.device->channelNames);
-      if (!guess.empty()) message += "; did you mean '" + guess + "'?";
+    // Channel names → indices: on the channel's device, else (no "device" given) on whichever device has it.
+    int found = channelOn(static_cast<size_t>(c.device), c.channelName);
+    for (size_t d = 0; found < 0 && d < devices.size(); ++d) {
+      const int there = channelOn(d, c.channelName);
+      if (there < 0) continue;
+      if (c.deviceLoc.line == 0) {
+        c.device = static_cast<int>(d), found = there;
+      } else {
+        diags.error(c.loc, deviceText(static_cast<size_t>(c.device)) + " has no channel named '" + c.channelName +
+                               "'; " + deviceText(d) + " has it: write \"device\": " + std::to_string(d));
+        found = -2;
+      }
+    }
+    if (found == -1) {
+      std::string message = deviceText(static_cast<size_t>(c.device)) + " has no channel named '" + c.channelName + "'";
+      if (devices.size() > 1 && c.deviceLoc.line == 0) message = "no device of the session has a channel named '" + c.channelName + "'";
+      std::string guess;
+      size_t guessDevice = 0;
+      for (size_t d = 0; d < devices.size() && guess.empty(); ++d)
+        if (c.deviceLoc.line == 0 || d == static_cast<size_t>(c.device))
+          guess = closestMatch(c.channelName, devices[d]->channelNames), guessDevice = d;
+      if (!guess.empty())
+        message += "; did you mean '" + guess + "'" + (devices.size() > 1 ? " (" + deviceText(guessDevice) + ")" : "") + "?";
       diags.error(c.loc, message);
     }
-    c.channel = found;
+    c.channel = found < 0 ? -1 : found;
   }
-  std::unordered_map<int, size_t> byIndex;          // channel index -> its first mapping
-  std::unordered_map<std::string, size_t> byName;   // unresolved channel name -> its first mapping
+  std::map<std::pair<int, int>, size_t> byIndex;          // (device, channel index) -> its first mapping
+  std::map<std::pair<int, std::string>, size_t> byName;   // (device, unresolved channel name) -> its first mapping
   for (size_t i = 0; i < map.channels.size(); ++i) {
     const ChannelMap& c = map.channels[i];
-    if (ctx.device && c.channel >= ctx.device->channelCount)
-      diags.error(c.loc, "channel " + std::to_string(c.channel) + " is out of range: device '" + ctx.device->name +
-                             "' has " + std::to_string(ctx.device->channelCount) + " channels (0.." +
-                             std::to_string(ctx.device->channelCount - 1) + ")");
+    const drivers::DeviceInfo* own =
+        static_cast<size_t>(c.device) < devices.size() ? devices[static_cast<size_t>(c.device)] : nullptr;
+    if (own && c.channel >= own->channelCount)
+      diags.error(c.loc, "channel " + std::to_string(c.channel) + " is out of range: " +
+                             deviceText(static_cast<size_t>(c.device)) + " has " + std::to_string(own->channelCount) +
+                             " channels (0.." + std::to_string(own->channelCount - 1) + ")");
     if (c.channel >= drivers::kMaxChannels)
       diags.error(c.loc, "channel " + std::to_string(c.channel) + " is out of range: armatures have at most " +
                              std::to_string(drivers::kMaxChannels) + " channels (0.." +
                              std::to_string(drivers::kMaxChannels - 1) + ")");
     // The first mapping of the same channel (by index, or by name while unresolved), found by hash: linear time.
     size_t first = i;
-    if (c.channel >= 0) first = byIndex.try_emplace(c.channel, i).first->second;
-    else if (!c.channelName.empty()) first = byName.try_emplace(c.channelName, i).first->second;
+    if (c.channel >= 0) first = byIndex.try_emplace({c.device, c.channel}, i).first->second;
+    else if (!c.channelName.empty()) first = byName.try_emplace({c.device, c.channelName}, i).first->second;
     if (first != i) {
       const ChannelMap& o = map.channels[first];
       diags.error(c.loc, channelText(c) + " is mapped twice: it already drives " + o.joint + " " + toString(o.axis) +
@@ -215,7 +252,8 @@ void parseChannel(const JsonValue& v, const std::string& joint, int bits, RigMap
   }
   static const std::vector<std::string> kKeys = {
       "channel", "axis",     "sign",         "gain",         "range",       "range_deg", "offset",  "min", "min_deg",
-      "max",     "max_deg",  "deadband",     "deadband_deg", "smoothing_ms", "encoder", "metres_per_count"};
+      "max",     "max_deg",  "deadband",     "deadband_deg", "smoothing_ms", "encoder", "metres_per_count",
+      "device"};
   const size_t errorsBefore = static_cast<size_t>(diags.errorCount());
   ObjectReader r(v, "a channel of joint '" + joint + "'", kKeys, diags);
   ChannelMap c;
@@ -233,6 +271,14 @@ void parseChannel(const JsonValue& v, const std::string& joint, int bits, RigMap
     }
   } else {
     r.missing("channel");
+  }
+  if (const JsonValue* d = r.get("device")) {
+    if (d->kind == JsonValue::Kind::Number && d->integral && d->number >= 0 && d->number < 65536) {
+      c.device = static_cast<int>(d->number);
+      c.deviceLoc = d->loc;
+    } else {
+      diags.error(d->loc, "'device' must be a device index (0, 1, …) of the session");
+    }
   }
   if (const JsonValue* a = r.typed("axis", JsonValue::Kind::String, "a string")) {
     std::string name = a->string;
@@ -488,6 +534,7 @@ std::string toJson(const RigMap& map) {
       ordered_json o;
       if (c.channel >= 0) o["channel"] = c.channel;
       else o["channel"] = toValidUtf8(c.channelName);
+      if (c.device != 0) o["device"] = c.device;
       o["axis"] = (c.translation ? "t" : "") + std::string(toString(c.axis));
       o["sign"] = c.sign;
       if (c.encoder == EncoderKind::Linear && !c.translation) o["encoder"] = "linear";

@@ -166,7 +166,7 @@ std::optional<Take> loadTake(const ExportArgs& a, const Character& character, in
   std::optional<calibration::Calibration> cal;
   const drivers::DeviceInfo* device = session->devices.empty() ? nullptr : &session->devices[0];
   if (!a.calibration.empty()) {
-    auto c = calibration::Calibration::readFile(a.calibration, &character, device);
+    auto c = calibration::Calibration::readFile(a.calibration, &character, device, session->devices);
     if (!c) {
       std::fputs(c.error().str().c_str(), stderr);
       return *code = kExitInvalidInput, std::nullopt;

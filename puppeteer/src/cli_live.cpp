@@ -11,6 +11,7 @@
 #include <fstream>
 #include <memory>
 #include <optional>
+#include <span>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -267,8 +268,9 @@ bool checkRigArgs(const LiveArgs& a) {
 // --calibration FILE, checked against the character (and the device when known, or the bits a line-protocol
 // spec gives: `calibrate` checks the same); nullopt after printing errors.
 std::optional<SampleMapper> readCalibration(const std::string& path, const Character& character,
-                                            const drivers::DeviceInfo* device, int lineBits = 0) {
-  auto c = calibration::Calibration::readFile(path, &character, device);
+                                            const drivers::DeviceInfo* device,
+                                            std::span<const drivers::DeviceInfo> devices = {}, int lineBits = 0) {
+  auto c = calibration::Calibration::readFile(path, &character, device, devices);
   if (!c) {
     std::fputs(c.error().str().c_str(), stderr);
     return std::nullopt;
@@ -338,7 +340,7 @@ int runReplay(const LiveArgs& given) {
   // the session, else channel names.
   std::optional<SampleMapper> mapper;
   if (!a.calibration.empty()) {
-    mapper = readCalibration(a.calibration, pipeline->character(), device);
+    mapper = readCalibration(a.calibration, pipeline->character(), device, session->devices);
     if (!mapper) return kExitInvalidInput;
   } else if (session->skeleton) {
     auto clip = sim::readBvhText(session->skeleton->bvh, name + " skeleton");
@@ -434,7 +436,7 @@ int runLive(const LiveArgs& a) {
   if (!a.calibration.empty()) {
     const drivers::DeviceSessionOptions session = drivers::sessionOptionsFor(*spec);
     const bool lines = session.protocol == drivers::WireProtocol::Lines;
-    mapper = readCalibration(a.calibration, pipeline->character(), nullptr, lines ? session.lineBitsPerChannel : 0);
+    mapper = readCalibration(a.calibration, pipeline->character(), nullptr, {}, lines ? session.lineBitsPerChannel : 0);
     if (!mapper) return kExitInvalidInput;
   }
   ViewerOptions v = viewerOptions(a, "IMPS Puppeteer: live " + a.device);

@@ -69,11 +69,18 @@ std::expected<Take, std::string> takeFromSession(const sim::Session& session, co
   std::vector<double> times;
   std::vector<std::vector<Rigid>> all;
   const bool deviceClock = session.devices[0].hasDeviceTimestamp;
-  for (size_t i = 0; i < session.samples.size(); ++i) {
-    if (session.sampleDevice[i] != 0) continue;
+  // A frame per device-0 sample, emitted once the other devices' samples of that frame (recorded after it) are in.
+  bool pending = false;
+  for (size_t i = 0; i <= session.samples.size(); ++i) {
+    const bool end = i == session.samples.size();
+    if (pending && (end || session.sampleDevice[i] == 0)) all.push_back(localsFor(skeleton, calibrator.pose()));
+    if (end) break;
     const drivers::Sample& s = session.samples[i];
-    times.push_back(static_cast<double>(deviceClock ? s.deviceTimeNs : s.arrivalTimeNs) * 1e-9);
-    all.push_back(localsFor(skeleton, calibrator.update(s)));
+    if (session.sampleDevice[i] == 0) {
+      times.push_back(static_cast<double>(deviceClock ? s.deviceTimeNs : s.arrivalTimeNs) * 1e-9);
+      pending = true;
+    }
+    calibrator.update(session.sampleDevice[i], s);
   }
   // The source frame time: the median spacing.
   std::vector<double> gaps;

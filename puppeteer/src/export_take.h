@@ -43,8 +43,8 @@ std::expected<std::vector<size_t>, std::string> selectFrames(std::span<const dou
 // A clip retargeted onto the character (every frame through `retargeter`).
 std::expected<Take, std::string> takeFromClip(const sim::BvhClip& clip, const Retargeter& retargeter,
                                               const Character& character, const FrameSelection& selection);
-// A session through a calibration: the stateful Calibrator over every sample of the calibration's device (0) in order
-// (so smoothing and hold-last-good behave as in the app), one frame per device-0 sample.
+// A session through a calibration: the stateful Calibrator over every sample of every device in order (so smoothing
+// and hold-last-good behave as in the app), one frame per device-0 sample (with the other devices' samples of it).
 std::expected<Take, std::string> takeFromSession(const sim::Session& session, const calibration::Calibration& calibration,
                                                  const Character& character, const FrameSelection& selection);
 

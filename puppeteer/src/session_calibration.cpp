@@ -31,7 +31,7 @@ std::expected<std::optional<calibration::Calibration>, Diagnostics> calibrationF
   else if (!session.devices.empty())
     device = &session.devices[0];
   auto cal = calibration::Calibration::parse(found->json, sessionName + " calibration #" + std::to_string(number),
-                                             character, device);
+                                             character, device, session.devices);
   if (!cal) return std::unexpected(cal.error());
   return std::optional<calibration::Calibration>(std::move(*cal));
 }

@@ -170,8 +170,8 @@ void SampleMapper::apply(uint16_t device, const drivers::Sample& sample, Skeleto
     byName_->apply(device, sample, skeleton);
   } else if (clip_) {
     clip_->apply(device, sample, skeleton);
-  } else if (device == 0) {
-    skeleton.setPose(calibrator_->update(sample));
+  } else {
+    skeleton.setPose(calibrator_->update(device, sample));
   }
 }
 

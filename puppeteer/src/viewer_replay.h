@@ -87,7 +87,7 @@ class SampleMapper {
  public:
   // By channel names; `devices` supplies the devices' channel names.
   SampleMapper(const sim::Session& devices, const Character& character);
-  // Through a calibration (device 0's samples only; other devices are ignored). `label` is shown in the HUD.
+  // Through a calibration (each device's samples drive the mappings on that device). `label` is shown in the HUD.
   SampleMapper(calibration::Calibration calibration, std::string label);
   // Through a retargeted clip; `label` ("auto", "names", the map file) is shown in the HUD.
   SampleMapper(ClipPoseMap clip, std::string label);

@@ -192,6 +192,22 @@ TEST(Calibration, TranslationChannelsMoveTheJointFromItsRestTranslation) {
   EXPECT_NEAR(calibrator.update(sample({2048, 1000 - 40}))[0].translation.y, 1.04f, 1e-6f);
 }
 
+// Channels of a second device take their readings from that device's samples only.
+TEST(Calibrator, EachDeviceDrivesItsOwnChannels) {
+  ChannelMap second = channel(0, "B", Axis::X, 2048);
+  second.device = 1;
+  Calibrator c(make(makeMap({channel(0, "A", Axis::X, 2048), second})));
+  c.update(0, sample({2048 + 1024}));
+  EXPECT_NEAR(c.angles()[0], kPi / 2, 1e-9);
+  EXPECT_NEAR(c.angles()[1], 0.0, 1e-12) << "device 0's channel 0 is not device 1's";
+  c.update(1, sample({2048 - 1024}));
+  EXPECT_NEAR(c.angles()[0], kPi / 2, 1e-9) << "held";
+  EXPECT_NEAR(c.angles()[1], -kPi / 2, 1e-9);
+  // The stateless conversion reads device 0 only.
+  auto pose = c.calibration().apply(sample({2048 + 1024}));
+  EXPECT_NEAR(glm::angle(pose[1].rotation), 0.0f, 1e-6f);
+}
+
 TEST(Calibration, FlaggedChannelsReadAsTheCalibrationPose) {
   auto cal = make(makeMap({channel(0, "A", Axis::X, 2048), channel(1, "B", Axis::X, 2048)}));
   auto s = sample({3000, 3000});

@@ -90,7 +90,7 @@ TEST(RigMap, UnknownFieldSuggestsTheClosestName) {
   EXPECT_EQ(errors(oneChannel(R"({"channel": 0, "axis": "x", "sign": 1, "wobble": 1})")),
             "rig.json:6:46: error: unknown field 'wobble' in a channel of joint 'L_Forearm' (expected 'channel', "
             "'axis', 'sign', 'gain', 'range', 'range_deg', 'offset', 'min', 'min_deg', 'max', 'max_deg', 'deadband', "
-            "'deadband_deg', 'smoothing_ms', 'encoder' or 'metres_per_count')\n");
+            "'deadband_deg', 'smoothing_ms', 'encoder', 'metres_per_count' or 'device')\n");
 }
 
 TEST(RigMap, MissingFields) {
@@ -173,6 +173,39 @@ TEST(RigMap, TranslationAxesRefuseDegreesAndNeedAScale) {
             "rig.json:6:66: error: 'metres_per_count' is for translation axes (tx, ty, tz)\n");
   EXPECT_EQ(errors(oneChannel(R"({"channel": 0, "axis": "ty", "sign": 1, "gain": 10, "min": 1, "max": -1})")),
             "rig.json:6:76: error: 'max' (-1.000000 m) is below 'min' (1.000000 m)\n");
+}
+
+// A session split over two devices (a BVH clip with more than 64 channels): names resolve on whichever device has
+// them, "device" pins one, and the errors name the device that does have the channel.
+TEST(RigMap, ChannelsOfEveryDeviceOfASession) {
+  std::vector<drivers::DeviceInfo> devices(2, device32());
+  devices[0].name = "BVH: clip.bvh";
+  devices[1].name = "BVH: clip.bvh (part 2)";
+  devices[1].channelNames[3] = "RightHand:Zrotation";
+  const std::string text =
+      "{\"version\": 1, \"bits\": 12, \"joints\": [\n"
+      "  {\"joint\": \"R_Hand\", \"channels\": [{\"channel\": \"RightHand:Zrotation\", \"axis\": \"z\", \"sign\": 1}]},\n"
+      "  {\"joint\": \"L_Hand\", \"channels\": [{\"channel\": 4, \"device\": 1, \"axis\": \"z\", \"sign\": 1}]},\n"
+      "  {\"joint\": \"Head\", \"channels\": [{\"channel\": 3, \"axis\": \"z\", \"sign\": 1}]}\n"
+      "]}\n";
+  RigMapContext ctx{&biped(), &devices[0], false, devices};
+  auto r = parseRigMap(text, "rig.json", ctx);
+  ASSERT_TRUE(r.has_value()) << r.error().str();
+  EXPECT_EQ(r->channels[0].device, 1);
+  EXPECT_EQ(r->channels[0].channel, 3);
+  EXPECT_EQ(r->channels[1].device, 1);
+  EXPECT_EQ(r->channels[2].device, 0) << "channel 3 of device 0 is another channel than channel 3 of device 1";
+  auto again = parseRigMap(toJson(*r), "again.json", ctx);
+  ASSERT_TRUE(again.has_value()) << again.error().str();
+  EXPECT_EQ(again->channels[1].device, 1);
+  EXPECT_EQ(errors(oneChannel(R"({"channel": "RightHand:Zrotation", "device": 0, "axis": "z", "sign": 1})"), ctx),
+            "rig.json:6:19: error: device 0 'BVH: clip.bvh' has no channel named 'RightHand:Zrotation'; device 1 "
+            "'BVH: clip.bvh (part 2)' has it: write \"device\": 1\n");
+  EXPECT_EQ(errors(oneChannel(R"({"channel": "RightHand:Zrotaton", "axis": "z", "sign": 1})"), ctx),
+            "rig.json:6:19: error: no device of the session has a channel named 'RightHand:Zrotaton'; did you mean "
+            "'RightHand:Zrotation' (device 1 'BVH: clip.bvh (part 2)')?\n");
+  EXPECT_EQ(errors(oneChannel(R"({"channel": 1, "device": 2, "axis": "z", "sign": 1})"), ctx),
+            "rig.json:6:32: error: device 2 does not exist: the session has 2 devices\n");
 }
 
 TEST(RigMap, DuplicateChannelsAndAxes) {

@@ -24,6 +24,7 @@
 #include "examples.h"
 #include "imps/mesh_io.h"
 #include "sim/bvh.h"
+#include "sim/session_file.h"
 
 namespace imps::app {
 namespace {
@@ -239,6 +240,47 @@ TEST(Export, SkinnedGlbWeightsAreNormalisedAndTheSkinFollowsTheSurface) {
   if (code != 0 && code != 1) GTEST_SKIP() << "node or gltf-validator not available: " << text;
   std::printf("gltf-validator: %s", text.c_str());
   EXPECT_EQ(code, 0) << text;
+}
+
+// A session split over two devices: a calibration channel on device 1 drives its joint in every exported frame
+// (the frame of each device-0 sample includes the device-1 sample recorded after it).
+TEST(Export, SessionChannelsOfTheSecondDeviceDriveTheTake) {
+  const Character& biped = test::exampleCharacter("simple_biped");
+  sim::Session session;
+  for (int d = 0; d < 2; ++d) {
+    drivers::DeviceInfo info;
+    info.name = "part " + std::to_string(d);
+    info.channelCount = 2;
+    info.bitsPerChannel = 12;
+    info.channelNames = {"a" + std::to_string(d), "b" + std::to_string(d)};
+    info.hasDeviceTimestamp = true;
+    session.devices.push_back(info);
+  }
+  for (uint32_t f = 0; f < 5; ++f)
+    for (uint16_t d = 0; d < 2; ++d) {
+      drivers::Sample s;
+      s.sequence = f;
+      s.deviceTimeNs = s.arrivalTimeNs = int64_t(f) * 10'000'000;
+      s.channelCount = 2;
+      s.counts[0] = 2048;
+      s.counts[1] = d == 1 ? 2048 + 100 * f : 2048;
+      session.samples.push_back(s);
+      session.sampleDevice.push_back(d);
+    }
+  const std::string json = R"({"version": 1, "bits": 12, "joints": [
+    {"joint": "L_Forearm", "channels": [{"channel": "b1", "axis": "y", "sign": 1, "offset": 2048}]}]})";
+  auto cal = calibration::Calibration::parse(json, "cal.json", &biped, &session.devices[0], session.devices);
+  ASSERT_TRUE(cal.has_value()) << cal.error().str();
+  EXPECT_EQ(cal->rigMap().channels[0].device, 1);
+  auto take = takeFromSession(session, *cal, biped, {});
+  ASSERT_TRUE(take.has_value()) << take.error();
+  ASSERT_EQ(take->frames(), 5u);
+  EXPECT_NEAR(take->frameTime, 0.01, 1e-12);
+  const size_t fore = size_t(biped.findJoint("L_Forearm"));
+  for (size_t f = 0; f < 5; ++f) {
+    const glm::quat relative = glm::inverse(biped.joints()[fore].rest.rotation) * take->locals[f][fore].rotation;
+    EXPECT_NEAR(glm::angle(relative), 100.0 * double(f) * 2 * 3.14159265358979 / 4096, 1e-4) << f;
+  }
 }
 
 TEST(Export, SurfaceSequencesAreNumberedFiles) {

@@ -33,15 +33,19 @@ class Calibration {
   // Errors (at the map's locations): a channel without an offset or with an unresolved channel name, and
   // everything validateRigMap reports against `character` (may be null: rest rotations are then the identity
   // and joint names are not checked). The character is only read here, not kept.
+  // `devices`: every device of a session (RigMapContext::devices), so channels of any of them can be mapped.
   static std::expected<Calibration, Diagnostics> create(RigMap map, const Character* character = nullptr,
-                                                        const drivers::DeviceInfo* device = nullptr);
+                                                        const drivers::DeviceInfo* device = nullptr,
+                                                        std::span<const drivers::DeviceInfo> devices = {});
   // parseRigMap(json, name, {character, device, requireOffsets = true}) + create(). The session blob reader.
   static std::expected<Calibration, Diagnostics> parse(std::string_view json, std::string_view name,
                                                        const Character* character = nullptr,
-                                                       const drivers::DeviceInfo* device = nullptr);
+                                                       const drivers::DeviceInfo* device = nullptr,
+                                                       std::span<const drivers::DeviceInfo> devices = {});
   static std::expected<Calibration, Diagnostics> readFile(const std::filesystem::path& path,
                                                           const Character* character = nullptr,
-                                                          const drivers::DeviceInfo* device = nullptr);
+                                                          const drivers::DeviceInfo* device = nullptr,
+                                                          std::span<const drivers::DeviceInfo> devices = {});
 
   const RigMap& rigMap() const { return map_; }
   // The calibration file / session blob text (toJson of the map); parse(toJson()) gives an equal calibration.
@@ -55,7 +59,7 @@ class Calibration {
   // rawAngle clamped to the mapping's limits.
   double angle(size_t i, double count) const;
 
-  // The pose for one sample: every driven joint, rotation = rest * calibrated rotation; a joint with translation
+  // The pose for one sample of device 0 (channels of other devices read as the calibration pose): every driven joint, rotation = rest * calibrated rotation; a joint with translation
   // channels also gets translation = rest translation + the channels' metres along their axes of the parent's
   // frame (hasTranslation), the others none. A channel
   // that is beyond the sample's channelCount or flagged NotConnected / Outlier reads as the calibration pose
@@ -82,8 +86,11 @@ class Calibrator {
  public:
   explicit Calibrator(Calibration calibration);
 
-  // Converts one sample; the returned pose stays valid until the next update()/reset().
-  const std::vector<JointPose>& update(const drivers::Sample& sample);
+  // Converts one sample of device 0; the returned pose stays valid until the next update()/reset().
+  const std::vector<JointPose>& update(const drivers::Sample& sample) { return update(0, sample); }
+  // Converts one sample of session device `device`: only the mappings on that device take new readings (their own
+  // timestamps drive their smoothing); the others keep their angles.
+  const std::vector<JointPose>& update(uint16_t device, const drivers::Sample& sample);
   // Current per-mapping angles (radians), after deadband and smoothing.
   std::span<const double> angles() const { return output_; }
   const std::vector<JointPose>& pose() const { return pose_; }
@@ -96,8 +103,8 @@ class Calibrator {
   std::vector<double> held_;    // after deadband
   std::vector<double> output_;  // after smoothing
   std::vector<bool> seen_;
-  bool havePrevious_ = false;
-  int64_t previousDeviceNs_ = 0, previousArrivalNs_ = 0;
+  std::vector<bool> havePrevious_;  // per device
+  std::vector<int64_t> previousDeviceNs_, previousArrivalNs_;
   std::vector<JointPose> pose_;
 };
 

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <limits>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -34,6 +35,8 @@ enum class EncoderKind : uint8_t { Absolute, Linear };
 // "tx"/"ty"/"tz"). Angles in radians, translations in metres, counts in encoder counts.
 struct ChannelMap {
   int channel = -1;              // device channel index; -1 until a name is resolved against a DeviceInfo
+  int device = 0;                // which device of a session (0 = the first; "device" in the file)
+  SourceLoc deviceLoc;           // where the file gives "device" (line 0: not given, so a name may resolve anywhere)
   std::string channelName;       // the device channel name when the file named the channel, else ""
   std::string joint;             // joint name in the character
   Axis axis = Axis::X;           // rotation axis in the joint's local frame, or translation axis in its parent's
@@ -84,6 +87,9 @@ struct RigMapContext {
   const Character* character = nullptr;       // joint names must exist (with "did you mean" suggestions)
   const drivers::DeviceInfo* device = nullptr;  // channel indices in range, channel names resolved, bits agree
   bool requireOffsets = false;                // a calibration: every channel must have an "offset"
+  // Every device of a session (devices[0] is `device` when both are given): channel names resolve on any of them
+  // (the channel's "device" when the file gives one), indices are checked against their own device.
+  std::span<const drivers::DeviceInfo> devices = {};
 };
 
 // Parses and validates a rig map or calibration file. Every problem is reported (not only the first) as
