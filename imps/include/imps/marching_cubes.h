@@ -74,7 +74,8 @@ struct MarchingCubesStats {
   bool cancelled = false;          // options.cancel stopped the call: the mesh is empty
 };
 
-// Polygonizes field's iso-surface. Reuses nothing between calls; see MarchingCubes for repeated use.
+// Polygonizes field's iso-surface. Reuses nothing between calls; see MarchingCubes for repeated use. Empty when
+// options.cancel stopped it (stats->cancelled then says so).
 Mesh polygonize(const Field& field, const MarchingCubesOptions& options = {}, MarchingCubesStats* stats = nullptr);
 
 // A polygonizer that keeps its buffers between calls (for the live app, which meshes every frame).
