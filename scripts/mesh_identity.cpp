@@ -64,7 +64,8 @@ int main(int argc, char** argv) {
       plain.threads = threads;
       plain.preserveThinFeatures = false;
       plain.resolution = 40;
-      print(std::string(name) + " mc res 40 no-thin t" + std::to_string(threads), imps::polygonize(skel.field(), plain));
+      print(std::string(name) + " mc res 40 no-thin t" + std::to_string(threads),
+            imps::polygonize(skel.field(), plain));
       if (std::string(name) == "swarm_1000") continue;
       imps::TesselatorOptions to;
       if (const auto* node = std::get_if<imps::Tesselator3MPNode>(&scene->polygonizer))

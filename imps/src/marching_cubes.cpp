@@ -702,7 +702,7 @@ RootTransform::RootTransform(const Field& field)
       invB(logSpace ? 1.0f / field.blend().defaultParam : 0.0f),
       rootIso(std::sqrt(std::max(1.0f + logIso * invB, 0.0f))) {}
 
-float RootTransform::operator()(float v) const {
+[[gnu::always_inline]] inline float RootTransform::operator()(float v) const {
   if (!logSpace) return v - iso;
   const float lnF = lnPositive(std::max(v, kExponentialCutoff));
   return (lnF - logIso) / std::max(rootIso + std::sqrt(std::max(1.0f + lnF * invB, 0.0f)), 1e-6f);

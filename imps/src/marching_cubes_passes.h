@@ -107,7 +107,7 @@ struct RootTransform {
   bool logSpace = false;
   float iso = 1.0f, logIso = 0.0f, invB = 0.0f, rootIso = 0.0f;
   explicit RootTransform(const Field& field);
-  float operator()(float v) const;
+  float operator()(float v) const;  // inline in marching_cubes.cpp, so that loops over it vectorise
 };
 
 // The samples' coordinates along each axis of one block (Grid::vertex's).

@@ -86,7 +86,7 @@ struct MarchingCubesStats {
 std::expected<glm::ivec3, std::string> planGrid(const Field& field, const MarchingCubesOptions& options);
 
 // Polygonizes field's iso-surface. Reuses nothing between calls; see MarchingCubes for repeated use. A grid beyond
-// options.maxCells gives an empty mesh (see planGrid).
+// options.maxCells gives an empty mesh (see planGrid); so does options.cancel (stats->cancelled then says so).
 Mesh polygonize(const Field& field, const MarchingCubesOptions& options = {}, MarchingCubesStats* stats = nullptr);
 
 // A polygonizer that keeps its buffers between calls (for the live app, which meshes every frame).
