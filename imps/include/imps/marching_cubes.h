@@ -51,8 +51,8 @@ struct MarchingCubesOptions {
   bool preserveThinFeatures = true;
   bool computeNormals = true;
   bool computeColors = true;
-  // The most cells a grid may have (2^28: 645^3, about 3 GB of work at the densest). A finer grid is refused:
-  // polygonize() gives an empty mesh and planGrid() says why. Raise it for a deliberately huge mesh.
+  // The most cells a grid may have (2^28, about 645^3). A finer grid is refused: polygonize() gives an empty mesh
+  // and planGrid() says why. Raise it for a deliberately huge mesh.
   size_t maxCells = size_t{1} << 28;
 };
 
