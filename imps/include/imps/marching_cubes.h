@@ -53,8 +53,8 @@ struct MarchingCubesOptions {
   bool preserveThinFeatures = true;
   bool computeNormals = true;
   bool computeColors = true;
-  // The most cells a grid may have (2^28: 645^3, about 3 GB of work at the densest). A finer grid is refused:
-  // polygonize() gives an empty mesh and planGrid() says why. Raise it for a deliberately huge mesh.
+  // The most cells a grid may have (2^28, about 645^3). A finer grid is refused: polygonize() gives an empty mesh
+  // and planGrid() says why. Raise it for a deliberately huge mesh.
   size_t maxCells = size_t{1} << 28;
   // Long bakes (libfive's BRepSettings is the model). When *cancel becomes true (from any thread) the call returns
   // promptly: every pass stops at its next block, `out` is left empty and stats->cancelled is set. Null: never.
