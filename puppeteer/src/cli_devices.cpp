@@ -4,6 +4,7 @@
 #include "device_opener.h"
 #include "device_ranking.h"
 #include "json_output.h"
+#include "progress.h"
 #include "interrupts.h"
 #include "session_recorder.h"
 
@@ -298,6 +299,7 @@ int runRecord(const RecordArgs& a) {
   std::optional<app::SessionRecorder> recorder;
   std::vector<drivers::Sample> batch;
   std::string lastState;
+  const bool onTerminal = Progress::stderrIsTerminal();
   const auto start = std::chrono::steady_clock::now();
   // --seconds counts from the first sample, not from opening the device and waiting for its hello.
   std::optional<std::chrono::steady_clock::time_point> firstSample;
@@ -348,7 +350,10 @@ int runRecord(const RecordArgs& a) {
       lastCounters = now;
     }
     if (state != lastState || now - lastReport >= std::chrono::seconds(1)) {
-      printRecordProgress(state, session.stats());
+      // On a terminal one redrawn line of counters; into a pipe or a log one line per change of state (the summary
+      // at the end has every counter).
+      if (onTerminal) printRecordProgress(state, session.stats());
+      else if (state != lastState) std::fprintf(stderr, "puppeteer record: %s\n", state.c_str());
       if (state != lastState && !session.lastError().empty() && state != "streaming")
         std::fprintf(stderr, "\n  (%s)\n", session.lastError().c_str());
       lastState = state;
@@ -357,7 +362,7 @@ int runRecord(const RecordArgs& a) {
   }
   session.stop();
   if (exitCode == kExitOk) drainInto();
-  std::fprintf(stderr, "\n");
+  if (onTerminal) std::fprintf(stderr, "\n");
   if (!recorder) {
     if (exitCode != kExitOk) return exitCode;  // the file could not be created: that cause is already printed
     std::fprintf(stderr, "puppeteer record: error: no samples from %s: %s\n", a.device.c_str(),

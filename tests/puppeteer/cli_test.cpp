@@ -347,6 +347,16 @@ TEST_F(CliTest, LongWorkShowsProgressOnATerminalOnly) {
   EXPECT_EQ(terminal.substr(terminal.size() - 4), "\r\033[K") << "the line is erased at the end";
 }
 
+// record's live counter line is redrawn with \r on a terminal only: into a pipe or a log it writes one line per
+// change of state, and the summary carries the counters.
+TEST_F(CliTest, RecordIsQuietOfRedrawnLinesWhenPiped) {
+  const test::ProgramRun run =
+      runProgram(puppeteer(), {"record", "--device", "sim:?rate=200", "-o", at("quiet.session"), "--seconds", "0.3"});
+  ASSERT_EQ(run.exitCode, kOk) << run.err;
+  EXPECT_EQ(run.err.find('\r'), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("puppeteer record: streaming\n"), std::string::npos) << run.err;
+}
+
 // ---- Noise
 
 // Particle runs with more threads than the machine has cores used to print oneTBB's "The number of workers is
