@@ -58,6 +58,15 @@ bool reportTopology(const Mesh& mesh, Progress& progress, Json* json) {
   return t.closedManifold();
 }
 
+// The status line follows Marching Cubes' own progress ("polygonizing 42 %") when it is shown.
+void followPolygonizing(Progress& progress, MarchingCubesOptions& options) {
+  progress.phase("polygonizing");
+  if (!progress.enabled()) return;
+  options.progress = [&progress](float fraction) {
+    progress.phase("polygonizing " + std::to_string(int(fraction * 100.0f)) + " %");
+  };
+}
+
 // A Marching Cubes grid beyond --max-cells is refused before any work: the message says where its size came from
 // (`source`: "--cell 1e-09", or the scene's cellSize / x/y/zResolution at file:line:column) and how to go further.
 bool gridRefused(const char* command, const Field& field, const MarchingCubesOptions& options,
@@ -160,7 +169,7 @@ int runMesh(const MeshArgs& a) {
                   resolutionSource(a.cell, a.res, std::get_if<MarchingCubesNode>(&scene.polygonizer))))
     return a.cell > 0.0f || a.res > 0 ? kExitUsage : kExitInvalidInput;  // the command line's value, or the file's
   MarchingCubesStats stats;
-  progress.phase("polygonizing");
+  followPolygonizing(progress, options);
   const Mesh mesh = polygonize(skeleton.field(), options, &stats);
 
   progress.phase("writing " + std::to_string(mesh.triangleCount()) + " triangles to " + a.output);
@@ -300,7 +309,7 @@ int runRender(const RenderArgs& a) {
   if (gridRefused("render", skeleton.field(), options, resolutionSource(a.cell, a.cell > 0 ? 0 : a.res, nullptr)))
     return kExitUsage;
   Progress progress("render");
-  progress.phase("polygonizing");
+  followPolygonizing(progress, options);
   const Mesh mesh = polygonize(skeleton.field(), options);
   progress.phase("rendering " + std::to_string(mesh.triangleCount()) + " triangles");
   SnapshotOptions snap;
