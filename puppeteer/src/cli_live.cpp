@@ -21,6 +21,7 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include "imps/character.h"
+#include "imps/marching_cubes.h"
 #include "calibration/calibration.h"
 #include "drivers/device_session.h"
 #include "drivers/device_spec.h"
@@ -143,6 +144,15 @@ std::unique_ptr<ViewerPipeline> makePipeline(const LiveArgs& a, int* exitCode) {
     applyPoseArgument(*p, j, pipeline->skeleton());
   }
   pipeline->skeleton().update();
+  // A Marching Cubes grid the scene asks for beyond the cell limit is refused here, as `mesh` refuses it, instead
+  // of showing an empty window.
+  if (auto plan = planGrid(pipeline->skeleton().field(), pipeline->marchingCubesOptions()); !plan) {
+    std::fprintf(stderr,
+                 "%s: error: %s; give the scene's MarchingCubes node a larger cellSize or smaller resolutions\n",
+                 a.scene.c_str(), plan.error().c_str());
+    *exitCode = kExitInvalidInput;
+    return nullptr;
+  }
   return pipeline;
 }
 

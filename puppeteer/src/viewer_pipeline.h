@@ -58,6 +58,8 @@ class ViewerPipeline {
 
   const Tesselator& tesselator() const { return *tesselator_; }
   const MarchingCubesStats& marchingCubesStats() const { return mcStats_; }
+  // The Marching Cubes options in force (the scene's MarchingCubes node, else a resolution).
+  const MarchingCubesOptions& marchingCubesOptions() const { return mcOptions_; }
   int updatesPerRender() const { return tesselator_->options().updatesPerRender; }
   double lastFrameMs() const { return lastFrameMs_; }
   // The character's surface bounds in the file's pose (conservative), for framing a camera that posing does not move.

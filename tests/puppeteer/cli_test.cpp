@@ -357,6 +357,19 @@ TEST_F(CliTest, RecordIsQuietOfRedrawnLinesWhenPiped) {
   EXPECT_NE(run.err.find("puppeteer record: streaming\n"), std::string::npos) << run.err;
 }
 
+// The live app refuses a Marching Cubes grid beyond the cell limit before opening a window, as `mesh` does (it
+// used to show an empty window).
+TEST_F(CliTest, ViewRefusesAGridBeyondTheCellLimit) {
+  const std::string scene = at("fine.wrl");
+  {
+    std::ofstream out(scene);
+    out << "#VRML V2.0 utf8\nMarchingCubes { cellSize 0.0001 sceneGraph RigidTransform { children [ Metaball { } ] } }\n";
+  }
+  const test::ProgramRun run = runProgram(puppeteer(), {"view", scene, "--frames", "1"});
+  EXPECT_EQ(run.exitCode, 1) << run.err;
+  EXPECT_NE(run.err.find("more than the limit of"), std::string::npos) << run.err;
+}
+
 // ---- Noise
 
 // Particle runs with more threads than the machine has cores used to print oneTBB's "The number of workers is
