@@ -48,7 +48,7 @@ TEST(BlendGraph, MaximalCliquesMatchBruteForceOnRandomGraphs) {
   std::mt19937 rng(7);
   for (int trial = 0; trial < 200; ++trial) {
     const size_t n = 1 + rng() % 12;
-    const double density = (rng() % 100) / 100.0;
+    const double density = double(rng() % 100) / 100.0;
     std::vector<uint32_t> classOf(n);
     for (size_t i = 0; i < n; ++i) classOf[i] = static_cast<uint32_t>(i);
     BlendGraph g(classOf, n);
@@ -313,8 +313,9 @@ TEST(BlendGraph, BipedCalvesNeverBlendWithThePelvis) {
   for (size_t s = 0; s < c.blendSets().count(); ++s) {
     const auto set = c.blendSets().set(s);
     for (uint32_t a : set)
-      for (uint32_t b : set)
+      for (uint32_t b : set) {
         if (a != b) EXPECT_TRUE(c.blends(a, b)) << c.primitives()[a].name << " " << c.primitives()[b].name;
+      }
   }
 }
 
