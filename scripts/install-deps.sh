@@ -22,6 +22,16 @@ if [ "${1:-}" = "fuzz" ]; then
   packages+=(clang-16 libclang-rt-16-dev)
 fi
 
+# The Khronos glTF validator, from the npm registry, for the export tests (they skip without it). Optional: a machine
+# without npm, or without the registry, still builds and tests.
+install_gltf_validator() {
+  command -v npm >/dev/null || return 0
+  npm ls -g gltf-validator >/dev/null 2>&1 && return 0
+  echo "install-deps: installing gltf-validator (npm)"
+  npm install -g --no-fund --no-audit gltf-validator >/dev/null 2>&1 || echo "install-deps: gltf-validator not installed" >&2
+}
+install_gltf_validator
+
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")
