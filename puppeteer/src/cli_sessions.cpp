@@ -23,7 +23,7 @@ namespace {
 // One device's link as `info` prints it: samples, rate while sending, missing sequence numbers, restarts, outages.
 
 void printLink(const sim::SessionLink& a) {
-  const double seconds = double(a.spanNs) * 1e-9;
+  const double seconds = a.spanSeconds;
   std::printf("    %zu samples over %.3f s (%.1f per second while sending), %llu sequence numbers missing, "
               "%llu restart%s of the numbering (device reboots)\n",
               a.samples, seconds, a.rateHz(), static_cast<unsigned long long>(a.missing),
@@ -72,7 +72,7 @@ Json infoJson(const std::string& path, const sim::Session& s) {
                        {"bits", info.bitsPerChannel},
                        {"deviceTimestamps", info.hasDeviceTimestamp},
                        {"samples", link.samples},
-                       {"seconds", double(link.spanNs) * 1e-9},
+                       {"seconds", link.spanSeconds},
                        {"rateHz", link.rateHz()},
                        {"missingSequenceNumbers", link.missing},
                        {"restarts", link.restarts},

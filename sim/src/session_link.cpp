@@ -5,8 +5,20 @@
 
 namespace imps::sim {
 
+namespace {
+// b - a and a + b saturated to int64: timestamps read from a file may be anything.
+int64_t difference(int64_t a, int64_t b) {
+  int64_t d;
+  return __builtin_sub_overflow(b, a, &d) ? (b > a ? INT64_MAX : INT64_MIN) : d;
+}
+int64_t sum(int64_t a, int64_t b) {
+  int64_t d;
+  return __builtin_add_overflow(a, b, &d) ? (b > 0 ? INT64_MAX : INT64_MIN) : d;
+}
+}  // namespace
+
 double SessionLink::rateHz() const {
-  const int64_t active = spanNs - outageNs;
+  const int64_t active = difference(outageNs, spanNs);
   const size_t intervals = samples > 1 ? samples - 1 - outages.size() : 0;
   return active > 0 && intervals > 0 ? double(intervals) / (double(active) * 1e-9) : 0.0;
 }
@@ -21,13 +33,14 @@ SessionLink analyzeSessionLink(const Session& session, size_t device) {
   std::vector<int64_t> spacing;
   spacing.reserve(samples.size() - 1);
   for (size_t i = 1; i < samples.size(); ++i)
-    spacing.push_back(samples[i]->arrivalTimeNs - samples[i - 1]->arrivalTimeNs);
+    spacing.push_back(difference(samples[i - 1]->arrivalTimeNs, samples[i]->arrivalTimeNs));
   std::vector<int64_t> sorted = spacing;
   std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
   const int64_t median = std::max<int64_t>(sorted[sorted.size() / 2], 0);
   const int64_t threshold = std::max<int64_t>(median > INT64_MAX / 20 ? INT64_MAX : 20 * median, 100'000'000);
   const int64_t first = samples.front()->arrivalTimeNs;
-  link.spanNs = samples.back()->arrivalTimeNs - first;
+  link.spanNs = difference(first, samples.back()->arrivalTimeNs);
+  link.spanSeconds = (double(samples.back()->arrivalTimeNs) - double(first)) * 1e-9;  // exact for any two
   for (size_t i = 1; i < samples.size(); ++i) {
     const uint32_t delta = samples[i]->sequence - samples[i - 1]->sequence;  // wrapping is not a gap
     uint64_t missing = 0;
@@ -37,8 +50,8 @@ SessionLink analyzeSessionLink(const Session& session, size_t device) {
       missing = delta - 1;
     link.missing += missing;
     if (spacing[i - 1] > threshold) {
-      link.outages.push_back({i - 1, samples[i - 1]->arrivalTimeNs - first, spacing[i - 1], missing});
-      link.outageNs += spacing[i - 1];
+      link.outages.push_back({i - 1, difference(first, samples[i - 1]->arrivalTimeNs), spacing[i - 1], missing});
+      link.outageNs = sum(link.outageNs, spacing[i - 1]);
     }
   }
   return link;

@@ -243,12 +243,12 @@ TEST_F(CliTest, CalibrateAndLiveAgreeOnALineDevicesBits) {
 }
 
 // A session converted from BVH by an earlier version carries the BVH channel mapping as its "calibration": it is
-// read as what it is (channels by name), with no note; the bundled take has none any more.
+// not taken for one (the clip is retargeted from its skeleton), with no note; the bundled take has none any more.
 TEST_F(CliTest, ReplayOfABvhSessionSaysNothingAboutCalibrations) {
   for (const std::string& session : {kWave, kSource + "/tests/data/sessions/legacy_bvh_mapping.session", kBvh}) {
     const test::ProgramRun run = runProgram(puppeteer(), {"replay", session, kBiped, "--frames", "1"});
     EXPECT_NE(run.out.find("replaying"), std::string::npos) << session << "\n" << run.out << run.err;
-    EXPECT_NE(run.out.find(": channel names"), std::string::npos) << session << "\n" << run.out;
+    EXPECT_NE(run.out.find(": clip retargeted"), std::string::npos) << session << "\n" << run.out;
     EXPECT_EQ(run.out.find("calibration does not apply"), std::string::npos) << session << "\n" << run.out;
     EXPECT_EQ(run.err.find("calibration"), std::string::npos) << session << "\n" << run.err;
   }

@@ -55,7 +55,7 @@ view "$tblobs" --frames 4 --polygonizer mc --keys w@0,s@2 --drag "$jx,$jy,$j1,$k
 grep -q "drag .*: translate joint1$" "$work/joint.txt" || fail "the drag did not grab joint1's handle"
 "$check" moved "$tblobs" "$work/joint.wrl" $W $H joint:1 "$j1" "$k1"
 #    A --pose on an unnamed joint is saved too (it used to be lost).
-view "$tblobs" --frames 2 --polygonizer mc --pose joint1=0,0,1,0.5 --keys s@1 --save-as "$work/posed.wrl" >/dev/null
+view "$tblobs" --frames 2 --polygonizer mc --pose joint1=0,0,1,0.5rad --keys s@1 --save-as "$work/posed.wrl" >/dev/null
 grep -q "rotation 0 0 1 0.5$" "$work/posed.wrl" || fail "the pose of an unnamed RigidTransform was not saved"
 
 # 5. --no-manipulators (the thesis's -n): the same drag orbits and the document is unchanged.

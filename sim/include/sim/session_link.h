@@ -21,7 +21,8 @@ struct SessionOutage {
 
 struct SessionLink {
   size_t samples = 0;
-  int64_t spanNs = 0;    // first to last arrival
+  int64_t spanNs = 0;    // first to last arrival (saturated to int64)
+  double spanSeconds = 0.0;  // the same in seconds, exact for any two timestamps
   int64_t outageNs = 0;  // of which in outages
   uint64_t missing = 0;  // sequence numbers skipped anywhere (modulo 2^32, as the drivers count drops)
   uint64_t restarts = 0; // the sequence repeated or went backwards: the device restarted its numbering
