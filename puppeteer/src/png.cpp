@@ -33,6 +33,7 @@ const Plugin& plugin() {
     std::error_code ec;
     const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
     if (!ec) candidates.push_back((exe.parent_path() / "libimps_png.so").string());
+    if (!ec) candidates.push_back((exe.parent_path().parent_path() / "lib/imps_puppeteer/libimps_png.so").string());
     candidates.push_back(IMPS_PNG_PLUGIN_PATH);  // the build tree
     std::string tried;
     for (const std::string& path : candidates) {
