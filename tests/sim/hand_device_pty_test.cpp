@@ -154,6 +154,7 @@ struct Rig {
     return o;
   }()};
   std::vector<Sample> got;
+  explicit Rig(PseudoTerminal terminal) : pty(std::move(terminal)) {}
   void drain() { mailbox.drain(got); }
 };
 
@@ -161,7 +162,7 @@ struct Rig {
 TEST(HandDevicePty, SamplesLostAcrossATimeoutAreCounted) {
   auto pty = PseudoTerminal::open();
   ASSERT_TRUE(pty) << pty.error();
-  Rig rig{std::move(*pty)};
+  Rig rig(std::move(*pty));
   HandDevice device(rig.pty.master());
   DeviceSession session(serialOpener(rig.pty.slavePath()), rig.mailbox, quickOptions());
   session.start();
@@ -181,7 +182,7 @@ TEST(HandDevicePty, SamplesLostAcrossATimeoutAreCounted) {
 TEST(HandDevicePty, SamplesLostAcrossAReconnectAreCounted) {
   auto pty = PseudoTerminal::open();
   ASSERT_TRUE(pty) << pty.error();
-  Rig rig{std::move(*pty)};
+  Rig rig(std::move(*pty));
   HandDevice device(rig.pty.master());
   DeviceSessionOptions o = quickOptions();
   o.timeoutsBeforeLost = 1;
@@ -205,7 +206,7 @@ TEST(HandDevicePty, SamplesLostAcrossAReconnectAreCounted) {
 TEST(HandDevicePty, PollModeFindsTheSampleBehindAForgedHeaderAndCountsUnansweredPolls) {
   auto pty = PseudoTerminal::open();
   ASSERT_TRUE(pty) << pty.error();
-  Rig rig{std::move(*pty)};
+  Rig rig(std::move(*pty));
   HandDevice device(rig.pty.master());
   std::atomic<uint32_t> polls{0};
   device.onPoll = [&](uint32_t) -> std::vector<uint8_t> {
@@ -247,7 +248,7 @@ TEST(HandDevicePty, PollModeFindsTheSampleBehindAForgedHeaderAndCountsUnanswered
 TEST(HandDevicePty, RepeatedFrameIsPublishedOnceAndCounted) {
   auto pty = PseudoTerminal::open();
   ASSERT_TRUE(pty) << pty.error();
-  Rig rig{std::move(*pty)};
+  Rig rig(std::move(*pty));
   HandDevice device(rig.pty.master());
   DeviceSession session(serialOpener(rig.pty.slavePath()), rig.mailbox, quickOptions());
   session.start();
@@ -272,7 +273,7 @@ TEST(HandDevicePty, RepeatedFrameIsPublishedOnceAndCounted) {
 TEST(HandDevicePty, NumericBootBannerIsNotTakenForTheLayout) {
   auto pty = PseudoTerminal::open();
   ASSERT_TRUE(pty) << pty.error();
-  Rig rig{std::move(*pty)};
+  Rig rig(std::move(*pty));
   HandDevice device(rig.pty.master());
   DeviceSessionOptions o = quickOptions();
   o.protocol = WireProtocol::Lines;
