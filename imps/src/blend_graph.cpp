@@ -89,10 +89,10 @@ class CliqueSearch {
     }
     const Bits& pivotNb = adj_[pivot(p, x)];
     for (size_t w = 0; w < p.size(); ++w) {
-      uint64_t todo = p[w] & ~pivotNb[w];
-      while (todo != 0) {
-        const size_t v = w * 64 + static_cast<size_t>(std::countr_zero(todo));
-        todo &= todo - 1;
+      uint64_t branches = p[w] & ~pivotNb[w];  // P minus the pivot's neighbours: one branch per vertex
+      while (branches != 0) {
+        const size_t v = w * 64 + static_cast<size_t>(std::countr_zero(branches));
+        branches &= branches - 1;
         Bits p2(p.size()), x2(p.size());
         for (size_t k = 0; k < p.size(); ++k) {
           p2[k] = p[k] & adj_[v][k];

@@ -166,11 +166,14 @@ class CharacterBuilder {
     std::vector<int> count(c_.joints_.size(), 0);
     for (const auto& p : c_.primitives_)
       if (p.joint >= 0) ++count[p.joint];
+    std::vector<int> parentOf(classCount, -1);  // each class's joint's nearest primitive-holding ancestor
+    for (uint32_t a = 0; a < classCount; ++a)
+      if (jointOf[a] >= 0) parentOf[a] = shapeParent(jointOf[a], count);
     for (uint32_t a = 0; a < classCount; ++a)
       for (uint32_t b = a + 1; b < classCount; ++b) {
         const int ja = jointOf[a], jb = jointOf[b];
-        const bool related = !c_.hierarchical_ || ja == jb || (ja >= 0 && shapeParent(ja, count) == jb) ||
-                             (jb >= 0 && shapeParent(jb, count) == ja);
+        const bool related = !c_.hierarchical_ || ja == jb || (ja >= 0 && parentOf[a] == jb) ||
+                             (jb >= 0 && parentOf[b] == ja);
         graph.setBlend(a, b, related);
       }
     // BlendGroups override the rule, later groups winning. Each group's members are a union of twin classes.
