@@ -142,9 +142,9 @@ class Parser {
       FieldValue value;
       value.bracketed = true;
       value.loc = lexer_.loc(inside);
-      while (isScalar(lexer_.peek())) value.items.push_back(lexer_.next());
+      const bool kept = readScalars(value);
       if (!expectClose(open, !value.items.empty())) return;
-      target_.field(name.text, nameLoc, value);
+      if (kept) target_.field(name.text, nameLoc, value);
       return;
     }
     if (startsNode(0)) {
@@ -156,11 +156,28 @@ class Parser {
     if (isScalar(t)) {
       FieldValue value;
       value.loc = lexer_.loc(t);
-      while (isScalar(lexer_.peek())) value.items.push_back(lexer_.next());
-      target_.field(name.text, nameLoc, value);
+      if (readScalars(value)) target_.field(name.text, nameLoc, value);
       return;
     }
     fail(t, "expected a value for field '" + name.text + "', found " + describe(t));
+  }
+
+  // Reads the run of scalars into value.items, at most kMaxFieldItems of them: past that one error is reported and
+  // the rest of the run is read and dropped, so one huge list costs bounded memory. False when the list was cut.
+  bool readScalars(FieldValue& value) {
+    bool cut = false;
+    while (isScalar(lexer_.peek())) {
+      if (value.items.size() < kMaxFieldItems) {
+        value.items.push_back(lexer_.next());
+        continue;
+      }
+      const Token extra = lexer_.next();
+      if (!cut)
+        sink_.error(lexer_.loc(extra), "a value of more than " + std::to_string(kMaxFieldItems) +
+                                           " items; the format's limit per field (docs/scene-format.md)");
+      cut = true;
+    }
+    return !cut;
   }
 
   // Consumes the ']' closing the list opened at `open`, or says why it is missing.

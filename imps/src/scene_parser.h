@@ -13,6 +13,10 @@ namespace imps::vrml {
 // Files may nest nodes at most this deep (a Tesselator3MP holding a RigidTransform holding a Metaball is 3).
 constexpr int kMaxNesting = 200;
 
+// A field's value holds at most this many numbers, strings or booleans (each is kept with its spelling and
+// position until the target has checked it, ~50 bytes apiece); longer lists are an error, read past and dropped.
+constexpr size_t kMaxFieldItems = 1'000'000;
+
 // A field's value when it is not nodes: the run of numbers, strings and TRUE/FALSE after the field name, or the
 // contents of `[ ... ]`. The parser does not know field types; the target checks count and kinds.
 struct FieldValue {

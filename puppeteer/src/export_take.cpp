@@ -75,7 +75,7 @@ std::expected<Take, std::string> takeFromSession(const sim::Session& session, co
     const bool end = i == session.samples.size();
     if (pending && (end || session.sampleDevice[i] == 0)) all.push_back(localsFor(skeleton, calibrator.pose()));
     if (end) break;
-    const drivers::Sample& s = session.samples[i];
+    const drivers::Sample s = session.samples[i];
     if (session.sampleDevice[i] == 0) {
       times.push_back(static_cast<double>(deviceClock ? s.deviceTimeNs : s.arrivalTimeNs) * 1e-9);
       pending = true;

@@ -249,7 +249,7 @@ std::expected<BvhClip, std::string> sessionToBvh(const Session& session, Session
 
   // Frame time.
   auto timeOf = [&](size_t i) {
-    return session.devices[0].hasDeviceTimestamp ? session.samples[i].deviceTimeNs : session.samples[i].arrivalTimeNs;
+    return session.devices[0].hasDeviceTimestamp ? session.samples.deviceTimeNs(i) : session.samples.arrivalTimeNs(i);
   };
   if (!session.skeleton) {
     std::vector<int64_t> deltas;
@@ -301,7 +301,7 @@ std::expected<BvhClip, std::string> sessionToBvh(const Session& session, Session
       if (pending) emit();
       pending = true;
     }
-    const Sample& sample = session.samples[i];
+    const Sample sample = session.samples[i];
     const size_t n = std::min<size_t>(sample.channelCount, static_cast<size_t>(session.devices[d].channelCount));
     for (size_t k = 0; k < n; ++k)
       if (sample.flags[k] == drivers::ChannelFlag::Valid) counts[deviceFirst[d] + k] = sample.counts[k];

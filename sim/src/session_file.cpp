@@ -658,6 +658,8 @@ std::expected<Session, std::string> readSessionBytes(std::span<const uint8_t> by
   if (!rec.closedCleanly && rec.message.empty())
     rec.message = file + ": warning: no END record: the recording was not closed (" + std::to_string(s.samples.size()) +
                   " samples recovered)";
+  s.samples.shrink_to_fit();
+  s.sampleDevice.shrink_to_fit();
   return s;
 }
 
@@ -749,12 +751,12 @@ SessionReplay::SessionReplay(const Session& session, Clock& clock, ReplayOptions
 void SessionReplay::seek(size_t index) { position_ = std::min(index, session_.samples.size()); }
 
 int64_t SessionReplay::recordedTimeNs(size_t index) const {
-  const Sample& s = session_.samples[index];
   if (options_.timebase == ReplayOptions::Timebase::Device) {
     const uint16_t device = index < session_.sampleDevice.size() ? session_.sampleDevice[index] : 0;
-    if (device < session_.devices.size() && session_.devices[device].hasDeviceTimestamp) return s.deviceTimeNs;
+    if (device < session_.devices.size() && session_.devices[device].hasDeviceTimestamp)
+      return session_.samples.deviceTimeNs(index);
   }
-  return s.arrivalTimeNs;
+  return session_.samples.arrivalTimeNs(index);
 }
 
 size_t SessionReplay::run(const std::function<bool(uint16_t, const Sample&)>& consume) {
@@ -774,7 +776,7 @@ size_t SessionReplay::run(SampleConsumer& consumer) {
     const int64_t firstRecordedNs = recordedTimeNs(position_);
     const bool paced = options_.speed > 0;
     const int64_t maxSleep = std::max<int64_t>(options_.maxSleepNs, 1);
-    Sample rewritten;
+    Sample out;
     while (position_ < n && !stopRequested_.load(std::memory_order_relaxed)) {
       const size_t p = position_;
       if (paced) {
@@ -789,15 +791,11 @@ size_t SessionReplay::run(SampleConsumer& consumer) {
         if (stopRequested_.load(std::memory_order_relaxed)) break;
       }
       const uint16_t device = p < session_.sampleDevice.size() ? session_.sampleDevice[p] : 0;
-      const Sample* out = &session_.samples[p];
-      if (options_.rewriteArrivalTime) {
-        rewritten = *out;
-        rewritten.arrivalTimeNs = clock_.nowNs();
-        out = &rewritten;
-      }
+      out = session_.samples[p];
+      if (options_.rewriteArrivalTime) out.arrivalTimeNs = clock_.nowNs();
       position_ = p + 1;
       ++delivered;
-      if (!consumer.consume(device, *out)) break;
+      if (!consumer.consume(device, out)) break;
     }
   }
   stopRequested_.store(false, std::memory_order_relaxed);

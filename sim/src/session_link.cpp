@@ -24,25 +24,26 @@ double SessionLink::rateHz() const {
 }
 
 SessionLink analyzeSessionLink(const Session& session, size_t device) {
-  std::vector<const Sample*> samples;
+  std::vector<size_t> samples;  // the device's samples, as indices into session.samples
   for (size_t i = 0; i < session.samples.size() && i < session.sampleDevice.size(); ++i)
-    if (session.sampleDevice[i] == device) samples.push_back(&session.samples[i]);
+    if (session.sampleDevice[i] == device) samples.push_back(i);
+  auto arrival = [&](size_t k) { return session.samples.arrivalTimeNs(samples[k]); };
   SessionLink link;
   link.samples = samples.size();
   if (samples.size() < 2) return link;
   std::vector<int64_t> spacing;
   spacing.reserve(samples.size() - 1);
   for (size_t i = 1; i < samples.size(); ++i)
-    spacing.push_back(difference(samples[i - 1]->arrivalTimeNs, samples[i]->arrivalTimeNs));
+    spacing.push_back(difference(arrival(i - 1), arrival(i)));
   std::vector<int64_t> sorted = spacing;
   std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
   const int64_t median = std::max<int64_t>(sorted[sorted.size() / 2], 0);
   const int64_t threshold = std::max<int64_t>(median > INT64_MAX / 20 ? INT64_MAX : 20 * median, 100'000'000);
-  const int64_t first = samples.front()->arrivalTimeNs;
-  link.spanNs = difference(first, samples.back()->arrivalTimeNs);
-  link.spanSeconds = (double(samples.back()->arrivalTimeNs) - double(first)) * 1e-9;  // exact for any two
+  const int64_t first = arrival(0);
+  link.spanNs = difference(first, arrival(samples.size() - 1));
+  link.spanSeconds = (double(arrival(samples.size() - 1)) - double(first)) * 1e-9;  // exact for any two
   for (size_t i = 1; i < samples.size(); ++i) {
-    const uint32_t delta = samples[i]->sequence - samples[i - 1]->sequence;  // wrapping is not a gap
+    const uint32_t delta = session.samples.sequence(samples[i]) - session.samples.sequence(samples[i - 1]);  // wrapping is not a gap
     uint64_t missing = 0;
     if (delta == 0 || delta > 0x80000000u)
       ++link.restarts;
@@ -50,7 +51,7 @@ SessionLink analyzeSessionLink(const Session& session, size_t device) {
       missing = delta - 1;
     link.missing += missing;
     if (spacing[i - 1] > threshold) {
-      link.outages.push_back({i - 1, difference(first, samples[i - 1]->arrivalTimeNs), spacing[i - 1], missing});
+      link.outages.push_back({i - 1, difference(first, arrival(i - 1)), spacing[i - 1], missing});
       link.outageNs = sum(link.outageNs, spacing[i - 1]);
     }
   }

@@ -1,5 +1,6 @@
 // Tests for readScene / readSceneFile: figure A-1, every node and field, and the exact text of every error.
 #include "imps/scene_reader.h"
+#include "scene_parser.h"  // kMaxFieldItems
 
 #include <gtest/gtest.h>
 
@@ -288,6 +289,21 @@ TEST(SceneReaderErrors, Brackets) {
             "t.wrl:2:1: error: expected a node at top level, found 'Metaball'\n");
   EXPECT_EQ(errorsOf(kHeader + "RigidTransform { children [ 1 Metaball { } ] }"),
             "t.wrl:2:31: error: a list holds either values or nodes, not both\n");
+}
+
+// A 40 MB scene of one long list took 1.7 GB in `check`: a field keeps at most vrml::kMaxFieldItems values. The
+// list is read past (one error at the first value too many), so the rest of the file is still checked.
+TEST(SceneReaderErrors, OverlongListIsBoundedAndReadPast) {
+  std::string list;
+  list.reserve(2 * (vrml::kMaxFieldItems + 2));
+  for (size_t i = 0; i < vrml::kMaxFieldItems + 2; ++i) list += "1 ";
+  const std::string text = kHeader + "Metaball { center [ " + list + "] radius -1 }\n";
+  const std::string column = std::to_string(std::string("Metaball { center [ ").size() + 2 * vrml::kMaxFieldItems + 1);
+  const std::string errors = errorsOf(text);
+  EXPECT_EQ(errors.substr(0, errors.find('\n') + 1),
+            "t.wrl:2:" + column + ": error: a value of more than " + std::to_string(vrml::kMaxFieldItems) +
+                " items; the format's limit per field (docs/scene-format.md)\n");
+  EXPECT_NE(errors.find("radius"), std::string::npos) << "the field after the list was not checked: " << errors;
 }
 
 TEST(SceneReaderErrors, FileEndsMidNode) {

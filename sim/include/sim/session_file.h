@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "drivers/sample.h"
+#include "sim/sample_table.h"
 
 namespace imps::sim {
 
@@ -125,7 +126,7 @@ struct SessionRecovery {
 struct Session {
   uint16_t formatVersion = 0;
   std::vector<DeviceInfo> devices;            // index = device number in SAMPLE records
-  std::vector<Sample> samples;                // in recording order; counts/flags beyond channelCount are zero
+  SampleTable samples;                        // in recording order; counts/flags beyond channelCount are zero
   std::vector<uint16_t> sampleDevice;         // same length as samples
   std::vector<SessionCalibration> calibrations;
   std::vector<SessionMarker> markers;
