@@ -3,6 +3,7 @@ BUILD      ?= build
 ASAN_BUILD ?= build-asan
 JOBS       ?= $(shell nproc)
 CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
+WERROR     ?= OFF# ON: the project's warnings are errors (CI sets it)
 
 .PHONY: deps build demo test test-sanitize bench fuzz clean
 
@@ -10,7 +11,7 @@ deps:
 	@bash scripts/install-deps.sh
 
 build: deps
-	cmake -S . -B $(BUILD) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=Release
+	cmake -S . -B $(BUILD) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=Release -DIMPS_WERROR=$(WERROR)
 	cmake --build $(BUILD) -j $(JOBS)
 
 # The main job on a bundled example: mesh the simple biped and write a glTF you can open anywhere.

@@ -81,7 +81,7 @@ double processCpuSeconds() {
 // firstReadingNs() + Sample::deviceTimeNs is the steady time a sample was due on the device. freeze() stops time
 // for the armature (no sample falls due afterwards) while its server keeps writing what it has produced, which
 // ends the stream at an exact sample so "sent" and "received" can be compared.
-class SoakClock final : public sim::Clock {
+class SoakClock final : public imps::Clock {
  public:
   int64_t nowNs() override {
     const int64_t t = std::min(steadyNs(), frozenAt_.load(std::memory_order_acquire));

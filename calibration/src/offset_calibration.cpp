@@ -158,7 +158,7 @@ std::expected<std::vector<PoseTarget>, Diagnostics> readCheckPoseFile(const std:
   if (!text) {
     Diagnostics d;
     d.error({path.string(), 0, 0}, "cannot read check pose: " + (text.error().starts_with("larger")
-                                                                    ? text.error() + " (a check pose is a few lines)"
+                                                                    ? text.error() + "; a check pose is a few lines"
                                                                     : std::string("not a readable file")));
     return std::unexpected(d);
   }

@@ -454,7 +454,7 @@ std::expected<RigMap, Diagnostics> readRigMapFile(const std::filesystem::path& p
   auto text = readFileText(path, detail::kMaxFileBytes);
   if (!text) {
     const std::string reason = !std::filesystem::exists(path)       ? std::string("no such file")
-                               : text.error().starts_with("larger") ? text.error() + " (a rig map is a few kilobytes)"
+                               : text.error().starts_with("larger") ? text.error() + "; a rig map is a few kilobytes"
                                                                     : std::string("not a readable file");
     Diagnostics d;
     d.error({path.string(), 0, 0}, "cannot read rig map: " + reason);

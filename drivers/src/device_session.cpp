@@ -10,6 +10,7 @@
 #include "drivers/binary_protocol.h"
 #include "drivers/hid_report.h"
 #include "text.h"
+#include "imps/clock.h"
 
 namespace imps::drivers {
 
@@ -51,10 +52,6 @@ DeviceSessionOptions sessionOptionsFor(const DeviceSpec& spec) {
 
 namespace {
 
-int64_t steadyNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 constexpr int64_t kMs = 1'000'000;
 
 void bump(std::atomic<uint64_t>& c, uint64_t by = 1) { c.fetch_add(by, std::memory_order_relaxed); }
@@ -85,7 +82,7 @@ struct DeviceSession::Io {
 
   Io(DeviceSession& session) : s(session), o(session.options_), lines(session.options_.lineOptions) {}
 
-  int64_t hostNow() const { return o.clock ? o.clock() : steadyNs(); }
+  int64_t hostNow() const { return o.clock ? o.clock->nowNs() : steadyNowNs(); }
   bool stopping() const { return s.stopRequested_.load(std::memory_order_relaxed); }
 
   // Copies the decoders' cumulative counters into the session's atomics.
@@ -166,7 +163,7 @@ struct DeviceSession::Io {
 
   void publish(const Sample& sample) {
     s.mailbox_.publish(sample);
-    lastSampleNs = steadyNs();
+    lastSampleNs = steadyNowNs();
     bump(s.counters_.samples);
     consecutiveTimeouts = 0;
   }
@@ -183,7 +180,7 @@ struct DeviceSession::Io {
   // Pumps until `match` accepts a message or timeoutMs passes. Samples that arrive meanwhile are published.
   template <class Match>
   Wait waitFor(int timeoutMs, Match&& match) {
-    const int64_t deadline = steadyNs() + timeoutMs * kMs;
+    const int64_t deadline = steadyNowNs() + timeoutMs * kMs;
     for (;;) {
       while (auto m = binary.next()) {
         if (match(*m)) return Wait::Got;
@@ -192,7 +189,7 @@ struct DeviceSession::Io {
       }
       syncCounters();
       if (stopping()) return Wait::Failed;
-      const int64_t left = deadline - steadyNs();
+      const int64_t left = deadline - steadyNowNs();
       if (left <= 0) return Wait::Timeout;
       if (!pump(static_cast<int>((left + kMs - 1) / kMs))) return Wait::Failed;
     }
@@ -289,14 +286,14 @@ struct DeviceSession::Io {
       if (!handshakeBinary()) return stopping() ? End::Stopped : End::Lost;
       connected();
       bool rehandshake = false;
-      int64_t nextPoll = steadyNs();
+      int64_t nextPoll = steadyNowNs();
       while (!rehandshake) {
         if (stopping()) return End::Stopped;
         if (o.mode == AcquisitionMode::Poll) {
           if (o.rateHz) {
-            const int64_t wait = nextPoll - steadyNs();
+            const int64_t wait = nextPoll - steadyNowNs();
             if (wait > 0 && !pump(static_cast<int>(wait / kMs) + 1)) return End::Lost;
-            nextPoll = std::max(nextPoll + 1'000'000'000 / o.rateHz, steadyNs() - 100 * kMs);
+            nextPoll = std::max(nextPoll + 1'000'000'000 / o.rateHz, steadyNowNs() - 100 * kMs);
           }
           bool failed = false;
           auto reply = command(msg::Poll{}, MessageType::Sample, failed);
@@ -325,7 +322,7 @@ struct DeviceSession::Io {
           continue;
         }
         // A whole sampleTimeout without a HELLO: were there samples? waitFor only returns on timeout.
-        if (steadyNs() - lastSampleNs >= o.sampleTimeoutMs * kMs) {
+        if (steadyNowNs() - lastSampleNs >= o.sampleTimeoutMs * kMs) {
           bump(s.counters_.timeouts);
           binary.resync();
           if (++consecutiveTimeouts >= o.timeoutsBeforeLost) {
@@ -335,7 +332,7 @@ struct DeviceSession::Io {
           bool failed = false;
           auto reply = command(msg::StartStream{o.rateHz ? o.rateHz : uint16_t{100}}, MessageType::Ack, failed);
           if (failed) return stopping() ? End::Stopped : End::Lost;
-          lastSampleNs = steadyNs();
+          lastSampleNs = steadyNowNs();
         }
       }
     }
@@ -345,7 +342,7 @@ struct DeviceSession::Io {
 
   End runLines() {
     s.setState(ConnectionState::WaitingForHello);
-    int64_t lastSample = steadyNs();
+    int64_t lastSample = steadyNowNs();
     bool haveSample = false;
     for (;;) {
       if (stopping()) return End::Stopped;
@@ -369,7 +366,7 @@ struct DeviceSession::Io {
         }
         if (sample->channelCount != layoutChannels) followLayout(sample->channelCount);
         publish(*sample);
-        lastSample = steadyNs();
+        lastSample = steadyNowNs();
       }
       syncCounters();
       if (silenceLost(lastSample, haveSample, "sample lines")) return End::Lost;
@@ -394,9 +391,9 @@ struct DeviceSession::Io {
   // connection. `lastSample` is the last sample's time (restarted at each timeout). True when lost.
   bool silenceLost(int64_t& lastSample, bool haveSample, const char* what) {
     const int64_t limit = (haveSample ? o.sampleTimeoutMs : o.bootWaitMs + o.sampleTimeoutMs) * kMs;
-    if (steadyNs() - lastSample < limit) return false;
+    if (steadyNowNs() - lastSample < limit) return false;
     bump(s.counters_.timeouts);
-    lastSample = steadyNs();
+    lastSample = steadyNowNs();
     if (++consecutiveTimeouts < o.timeoutsBeforeLost) return false;
     s.setError(cat("no ", what, " for ", o.sampleTimeoutMs * o.timeoutsBeforeLost, " ms"));
     return true;
@@ -419,13 +416,13 @@ struct DeviceSession::Io {
       s.info_ = d->info;
     }
     s.setState(ConnectionState::WaitingForHello);
-    int64_t lastSample = steadyNs();
+    int64_t lastSample = steadyNowNs();
     for (;;) {
       if (stopping()) return End::Stopped;
       const uint64_t before = s.counters_.samples.load(std::memory_order_relaxed);
       if (!pump(o.ioWaitMs)) return End::Lost;
       syncCounters();
-      if (s.counters_.samples.load(std::memory_order_relaxed) != before) lastSample = steadyNs();
+      if (s.counters_.samples.load(std::memory_order_relaxed) != before) lastSample = steadyNowNs();
       if (silenceLost(lastSample, s.state() == ConnectionState::Streaming, "HID input reports")) return End::Lost;
     }
   }
@@ -433,7 +430,7 @@ struct DeviceSession::Io {
   bool everConnected = false;
   void connected() {
     consecutiveTimeouts = 0;
-    lastSampleNs = steadyNs();
+    lastSampleNs = steadyNowNs();
     bump(s.counters_.connections);
     if (everConnected) bump(s.counters_.reconnects);
     everConnected = true;
@@ -483,8 +480,8 @@ void DeviceSession::run() {
       bump(counters_.openFailures);
       setError(transport.error());
       if (wasConnected) setState(ConnectionState::Lost);
-      const int64_t until = steadyNs() + options_.reconnectIntervalMs * kMs;
-      while (!stopRequested_.load() && steadyNs() < until) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      const int64_t until = steadyNowNs() + options_.reconnectIntervalMs * kMs;
+      while (!stopRequested_.load() && steadyNowNs() < until) std::this_thread::sleep_for(std::chrono::milliseconds(5));
       continue;
     }
     io.transport = std::move(*transport);
@@ -515,8 +512,8 @@ void DeviceSession::run() {
     io.transport.reset();
     wasConnected = wasConnected || io.everConnected;
     setState(ConnectionState::Lost);
-    const int64_t until = steadyNs() + options_.reconnectIntervalMs * kMs;
-    while (!stopRequested_.load() && steadyNs() < until) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    const int64_t until = steadyNowNs() + options_.reconnectIntervalMs * kMs;
+    while (!stopRequested_.load() && steadyNowNs() < until) std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
   setState(ConnectionState::Disconnected);
 }

@@ -13,14 +13,11 @@
 #include <vector>
 
 #include "text.h"
+#include "imps/clock.h"
 
 namespace imps::drivers {
 namespace {
 
-int64_t steadyNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 constexpr int64_t kMs = 1'000'000;
 // A frame-counter jump larger than this either way is a new stream (the sender restarted), not a gap.
 constexpr int64_t kRestartJump = int64_t(1) << 20;
@@ -88,7 +85,7 @@ void OscReceiver::setState(ConnectionState s) {
 
 void OscReceiver::run() {
   std::vector<uint8_t> buffer(kMaxOscPacket + 1);
-  int64_t lastPacket = steadyNs();
+  int64_t lastPacket = steadyNowNs();
   int consecutiveTimeouts = 0;
   while (!stopRequested_.load(std::memory_order_relaxed)) {
     pollfd p{fd_, POLLIN, 0};
@@ -97,9 +94,9 @@ void OscReceiver::run() {
       // MSG_TRUNC: the datagram's real length, so an oversize one is reported, not decoded cut short.
       const ssize_t n = recv(fd_, buffer.data(), buffer.size(), MSG_TRUNC | MSG_DONTWAIT);
       if (n < 0) break;
-      const int64_t arrival = options_.clock ? options_.clock() : steadyNs();
+      const int64_t arrival = options_.clock ? options_.clock->nowNs() : steadyNowNs();
       if (!handle(std::span(buffer.data(), std::min(size_t(n), buffer.size())), arrival)) continue;
-      lastPacket = steadyNs();
+      lastPacket = steadyNowNs();
       consecutiveTimeouts = 0;
       if (state() != ConnectionState::Streaming) {
         bump(counters_.connections);
@@ -109,9 +106,9 @@ void OscReceiver::run() {
       }
     }
     // Silence: a timeout each sampleTimeoutMs; enough of them in a row lose the source (the last pose stays).
-    if (state() == ConnectionState::Streaming && steadyNs() - lastPacket >= options_.sampleTimeoutMs * kMs) {
+    if (state() == ConnectionState::Streaming && steadyNowNs() - lastPacket >= options_.sampleTimeoutMs * kMs) {
       bump(counters_.timeouts);
-      lastPacket = steadyNs();
+      lastPacket = steadyNowNs();
       if (++consecutiveTimeouts >= options_.timeoutsBeforeLost) {
         {
           std::lock_guard lock(mutex_);

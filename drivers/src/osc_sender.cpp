@@ -8,14 +8,10 @@
 #include <chrono>
 
 #include "text.h"
+#include "imps/clock.h"
 
 namespace imps::drivers {
 namespace {
-
-int64_t steadyNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 constexpr std::string_view kScheme = "osc.udp://";
 
@@ -147,7 +143,7 @@ void OscPoseSender::run() {
       continue;
     }
     OscPose& pose = ring_[tail & mask_];
-    pose.sentTimeNs = steadyNs();
+    pose.sentTimeNs = steadyNowNs();
     lo_bundle b = makeBundle(pose, paths);
     for (lo_address a : targets_->addresses) {
       if (lo_send_bundle(a, b) < 0) {
@@ -166,9 +162,9 @@ void OscPoseSender::run() {
 
 bool OscPoseSender::flush(int timeoutMs) {
   const uint64_t head = head_.load(std::memory_order_relaxed);
-  const int64_t until = steadyNs() + int64_t(timeoutMs) * 1'000'000;
+  const int64_t until = steadyNowNs() + int64_t(timeoutMs) * 1'000'000;
   while (tail_.load(std::memory_order_acquire) < head) {
-    if (steadyNs() >= until) return false;
+    if (steadyNowNs() >= until) return false;
     std::this_thread::sleep_for(std::chrono::microseconds(200));
   }
   return true;

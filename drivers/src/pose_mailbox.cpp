@@ -19,21 +19,14 @@ void bump(std::atomic<T>& counter, T by = 1) {
 }
 }  // namespace
 
-PoseMailbox::PoseMailbox(PoseMailboxOptions options) : clock_(std::move(options.clock)) {
+PoseMailbox::PoseMailbox(PoseMailboxOptions options) : clock_(options.clock) {
   if (options.queueCapacity > 0) {
     ring_.resize(std::bit_ceil(options.queueCapacity));
     mask_ = ring_.size() - 1;
   }
-  if (!clock_) {
-    clock_ = [] {
-      return static_cast<int64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                      std::chrono::steady_clock::now().time_since_epoch())
-                                      .count());
-    };
-  }
 }
 
-int64_t PoseMailbox::now() const { return clock_(); }
+int64_t PoseMailbox::now() const { return clock_ ? clock_->nowNs() : steadyNowNs(); }
 
 void PoseMailbox::publish(const Sample& sample) {
   // Newest: fill the back slot, then swap it with the middle. acq_rel: release publishes the slot's contents,

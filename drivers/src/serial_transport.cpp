@@ -3,6 +3,7 @@
 #include "drivers/serial_transport.h"
 
 #include "text.h"
+#include "imps/clock.h"
 
 #include <fcntl.h>
 #include <libserialport.h>
@@ -92,11 +93,6 @@ bool isPseudoTerminal(const std::string& path) {
   if (::stat(path.c_str(), &st) != 0 || !S_ISCHR(st.st_mode)) return false;
   const unsigned major = ::major(st.st_rdev);
   return major >= 136 && major <= 143;
-}
-
-int64_t steadyMs() {
-  return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
 }
 
 }  // namespace
@@ -228,7 +224,7 @@ std::expected<size_t, std::string> SerialTransport::read(std::span<uint8_t> out,
 }
 
 std::expected<void, std::string> SerialTransport::write(std::span<const uint8_t> bytes, int timeoutMs) {
-  const int64_t deadline = steadyMs() + std::max(timeoutMs, 1);
+  const int64_t deadline = (steadyNowNs() / 1'000'000) + std::max(timeoutMs, 1);
   size_t done = 0;
   while (done < bytes.size()) {
     ssize_t n = 0;
@@ -243,7 +239,7 @@ std::expected<void, std::string> SerialTransport::write(std::span<const uint8_t>
     }
     done += static_cast<size_t>(n);
     if (done == bytes.size()) break;
-    const int64_t left = deadline - steadyMs();
+    const int64_t left = deadline - (steadyNowNs() / 1'000'000);
     if (left <= 0) return std::unexpected(cat(impl_->path, ": error: write timed out"));
     pollfd p{impl_->fd, POLLOUT, 0};
     if (::poll(&p, 1, static_cast<int>(std::min<int64_t>(left, 100))) > 0 && (p.revents & (POLLERR | POLLNVAL)))

@@ -17,6 +17,7 @@
 #include "drivers/binary_protocol.h"
 #include "drivers/receive_buffer.h"
 #include "text.h"
+#include "imps/clock.h"
 
 namespace imps::drivers {
 
@@ -26,11 +27,6 @@ std::string usbError(int code) { return libusb_strerror(static_cast<libusb_error
 
 std::string idText(uint16_t vendorId, uint16_t productId) {
   return cat("usb ", hex4(vendorId), ":", hex4(productId));
-}
-
-int64_t steadyUs() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
 }
 
 timeval toTimeval(int64_t us) {
@@ -216,16 +212,16 @@ struct UsbTransport::Impl {
 
   // Runs libusb's event handling until an IN transfer completes, something fails or timeoutMs passes.
   void pump(int timeoutMs) {
-    const int64_t deadline = steadyUs() + int64_t{std::max(timeoutMs, 0)} * 1000;
+    const int64_t deadline = (steadyNowNs() / 1000) + int64_t{std::max(timeoutMs, 0)} * 1000;
     do {
       wake = 0;
-      timeval tv = toTimeval(deadline - steadyUs());
+      timeval tv = toTimeval(deadline - (steadyNowNs() / 1000));
       const int r = libusb_handle_events_timeout_completed(ctx, &tv, &wake);
       if (r < 0 && r != LIBUSB_ERROR_INTERRUPTED && r != LIBUSB_ERROR_TIMEOUT) {
         fail(cat("libusb event handling failed: ", usbError(r)));
         return;
       }
-    } while (received.size() == 0 && failure.empty() && steadyUs() < deadline);
+    } while (received.size() == 0 && failure.empty() && (steadyNowNs() / 1000) < deadline);
   }
 
   bool anyActive() const {
@@ -237,8 +233,8 @@ struct UsbTransport::Impl {
     for (InTransfer& s : in)
       if (s.active) libusb_cancel_transfer(s.transfer);
     // Cancelled transfers come back through event handling; an unplugged device gives them back at once.
-    const int64_t deadline = steadyUs() + 500'000;
-    while (ctx && anyActive() && steadyUs() < deadline) {
+    const int64_t deadline = (steadyNowNs() / 1000) + 500'000;
+    while (ctx && anyActive() && (steadyNowNs() / 1000) < deadline) {
       timeval tv = toTimeval(10'000);
       libusb_handle_events_timeout_completed(ctx, &tv, nullptr);
     }

@@ -74,7 +74,7 @@ std::vector<drivers::Sample> sessionWindow(const sim::Session& session, double w
 // A live device for the interactive flow: the I/O thread and its mailbox.
 // Members are destroyed bottom-up: the session (and its I/O thread) goes before the mailbox and clock it uses.
 struct LiveDevice {
-  sim::SteadyClock clock;
+  imps::SteadyClock clock;
   std::unique_ptr<drivers::PoseMailbox> mailbox;
   std::unique_ptr<drivers::DeviceSession> session;
 

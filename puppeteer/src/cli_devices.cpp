@@ -231,7 +231,7 @@ int runSim(const SimArgs& a) {
   std::fflush(stdout);
 
   catchInterrupts();
-  sim::SteadyClock clock;
+  imps::SteadyClock clock;
   sim::ArmatureFdServer server(sim::SimulatedArmature(*options), pty->master(), clock);
   server.start();
   const auto start = std::chrono::steady_clock::now();
@@ -285,7 +285,7 @@ int runRecord(const RecordArgs& a) {
     }
     cal = std::move(*read);
   }
-  sim::SteadyClock clock;
+  imps::SteadyClock clock;
   auto opener = openerForSpec(*spec, clock, "record");
   if (!opener) return opener.error();
 

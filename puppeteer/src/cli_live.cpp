@@ -463,7 +463,7 @@ int runLive(const LiveArgs& a) {
     }
     return runWithOscOut(a, *pipeline, **source, v);
   }
-  sim::SteadyClock clock;  // the simulated armature's; outlives the source below
+  imps::SteadyClock clock;  // the simulated armature's; outlives the source below
   auto opener = openerForSpec(*spec, clock, "live");
   if (!opener) return opener.error();
   LiveSourceOptions live;

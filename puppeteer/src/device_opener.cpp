@@ -11,7 +11,7 @@
 
 namespace imps::app {
 
-std::expected<drivers::TransportOpener, int> openerForSpec(const drivers::DeviceSpec& spec, sim::Clock& clock,
+std::expected<drivers::TransportOpener, int> openerForSpec(const drivers::DeviceSpec& spec, imps::Clock& clock,
                                                            const char* command) {
   switch (spec.kind) {
     case drivers::DeviceKind::Serial: {

@@ -13,7 +13,7 @@ namespace imps::app {
 // through libusb (with hotplug), `sim:` through the in-process simulated armature
 // (timed by `clock`, which must outlive every transport opened). On failure prints `puppeteer COMMAND: error: …`
 // to stderr and returns the exit code to use (cli.h).
-std::expected<drivers::TransportOpener, int> openerForSpec(const drivers::DeviceSpec& spec, sim::Clock& clock,
+std::expected<drivers::TransportOpener, int> openerForSpec(const drivers::DeviceSpec& spec, imps::Clock& clock,
                                                            const char* command);
 
 }  // namespace imps::app

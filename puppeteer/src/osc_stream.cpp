@@ -7,14 +7,10 @@
 #include <cstring>
 
 #include "cli.h"
+#include "imps/clock.h"
 
 namespace imps::app {
 namespace {
-
-int64_t steadyNowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 std::string countsLine(const char* what, const std::vector<std::pair<const char*, uint64_t>>& counts) {
   std::string out = what;

@@ -31,14 +31,10 @@
 #include "png.h"
 #include "renderer.h"
 #include "snapshot.h"
+#include "imps/clock.h"
 
 namespace imps::app {
 namespace {
-
-int64_t steadyNowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 // Everything the GLFW callbacks (and the scripted input) touch, reached through the window's user pointer.
 struct ViewerState {

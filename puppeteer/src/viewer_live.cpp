@@ -8,14 +8,10 @@
 #include <utility>
 
 #include "cli.h"
+#include "imps/clock.h"
 
 namespace imps::app {
 namespace {
-int64_t steadyNowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
 drivers::PoseMailboxOptions mailboxOptions() {
   drivers::PoseMailboxOptions o;
   o.queueCapacity = 1 << 14;  // 16 s at 1 kHz for the recorder and the calibration window

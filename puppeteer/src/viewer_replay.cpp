@@ -9,6 +9,7 @@
 
 #include "sim/bvh.h"
 #include "sim/bvh_session.h"
+#include "imps/clock.h"
 
 namespace imps::app {
 
@@ -94,13 +95,6 @@ void ReplayThread::run() {
 }  // namespace imps::app
 
 namespace imps::app {
-namespace {
-int64_t steadyNowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-}  // namespace
-
 SampleMapper::SampleMapper(const sim::Session& devices, const Character& character) {
   byName_.emplace(devices, character);
 }

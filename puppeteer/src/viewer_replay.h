@@ -132,7 +132,7 @@ class ReplayThread {
   std::vector<std::unique_ptr<drivers::PoseMailbox>> mailboxes_;
   std::atomic<bool> stop_{false};
   std::atomic<uint64_t> loops_{0};
-  sim::SteadyClock clock_;
+  imps::SteadyClock clock_;
   std::unique_ptr<sim::SessionReplay> replay_;
   std::thread thread_;
 };

@@ -14,7 +14,8 @@
 #include <stdexcept>
 #include <vector>
 
-#include "file_text.h"
+#include "imps/atomic_file.h"
+#include "imps/file_read.h"
 
 namespace imps::sim {
 
@@ -395,11 +396,11 @@ std::expected<BvhClip, std::string> readBvhText(std::string_view text, std::stri
 }
 
 std::expected<BvhClip, std::string> readBvh(const std::filesystem::path& path, std::vector<std::string>* warnings) {
-  auto text = detail::readFileText(path, kMaxBvhFileBytes);
+  auto text = readFileText(path, kMaxBvhFileBytes);
   if (!text)
     return std::unexpected(path.string() + ": error: " +
                            (text.error().starts_with("larger")
-                                ? "cannot read BVH file: " + text.error() + " (the most this program reads)"
+                                ? "cannot read BVH file: " + text.error()
                                 : "cannot open BVH file: " + text.error()));
   return readBvhText(*text, path.string(), warnings);
 }
@@ -456,39 +457,9 @@ std::string writeBvh(const BvhClip& clip) {
 }
 
 std::expected<void, std::string> saveBvh(const std::filesystem::path& path, const BvhClip& clip) {
-  const std::string text = writeBvh(clip);
-  const std::string target = path.string();
-  const std::filesystem::path tmp = path.string() + ".tmp" + std::to_string(::getpid());
-  auto fail = [&](const std::string& what) -> std::expected<void, std::string> {
-    const int err = errno;
-    std::error_code ignored;
-    std::filesystem::remove(tmp, ignored);
-    return std::unexpected(target + ": error: " + what + ": " + std::strerror(err));
-  };
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) return fail("cannot create temporary file " + tmp.string());
-  size_t done = 0;
-  while (done < text.size()) {
-    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) {
-      ::close(fd);
-      return fail("write failed");
-    }
-    done += static_cast<size_t>(n);
-  }
-  if (::fsync(fd) != 0) {
-    ::close(fd);
-    return fail("fsync failed");
-  }
-  if (::close(fd) != 0) return fail("close failed");
-  if (::rename(tmp.c_str(), path.c_str()) != 0) return fail("rename failed");
-  // Make the rename itself durable.
-  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
-  if (const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); dfd >= 0) {
-    (void)::fsync(dfd);
-    ::close(dfd);
-  }
+  std::string error;
+  if (!writeFileAtomically(path.string(), writeBvh(clip), &error))
+    return std::unexpected(path.string() + ": error: " + error);
   return {};
 }
 

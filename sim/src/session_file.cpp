@@ -18,7 +18,8 @@
 #include <thread>
 #include <utility>
 
-#include "file_text.h"
+#include "imps/atomic_file.h"
+#include "imps/file_read.h"
 
 namespace imps::sim {
 
@@ -176,23 +177,6 @@ uint32_t crc32c(std::span<const uint8_t> bytes, uint32_t crc) {
 }
 
 // ---------------------------------------------------------------------------------------------------------------
-// Clocks
-
-int64_t SteadyClock::nowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
-void SteadyClock::sleepUntilNs(int64_t timeNs) {
-  std::this_thread::sleep_until(std::chrono::steady_clock::time_point(std::chrono::nanoseconds(timeNs)));
-}
-
-void ManualClock::sleepUntilNs(int64_t timeNs) {
-  sleeps_.push_back(timeNs);
-  now_ = std::max(now_, timeNs);
-}
-
-// ---------------------------------------------------------------------------------------------------------------
 // Writer
 
 std::expected<SessionWriter, std::string> SessionWriter::create(const std::filesystem::path& path,
@@ -215,7 +199,7 @@ std::expected<SessionWriter, std::string> SessionWriter::create(const std::files
   w.options_ = options;
   w.devices_.assign(devices.begin(), devices.end());
   // O_EXCL: a recording never clobbers an earlier one.
-  w.fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  w.fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);  // less the umask, as fopen
   if (w.fd_ < 0) return std::unexpected(name + ": error: cannot create session file: " + errnoText(errno));
 
   w.buffer_.insert(w.buffer_.end(), kMagic.begin(), kMagic.end());
@@ -429,10 +413,9 @@ std::expected<Session, std::string> readSession(const std::filesystem::path& pat
   if (in.gcount() == static_cast<std::streamsize>(header.size()) &&
       !std::equal(kMagic.begin(), kMagic.end(), header.begin()))
     return readSessionBytes(std::span(reinterpret_cast<const uint8_t*>(header.data()), header.size()), path.string());
-  auto text = detail::readFileText(path, kMaxSessionFileBytes);
+  auto text = readFileText(path, kMaxSessionFileBytes);
   if (!text)
-    return std::unexpected(path.string() + ": error: cannot read session file: " + text.error() +
-                           (text.error().starts_with("larger") ? " (the most this program reads; split the take)" : ""));
+    return std::unexpected(path.string() + ": error: cannot read session file: " + text.error());
   return readSessionBytes(std::span(reinterpret_cast<const uint8_t*>(text->data()), text->size()), path.string());
 }
 
@@ -667,9 +650,8 @@ std::expected<void, std::string> saveSession(const std::filesystem::path& path, 
   if (session.samples.size() != session.sampleDevice.size())
     return std::unexpected(path.string() + ": error: session has " + std::to_string(session.samples.size()) +
                            " samples but " + std::to_string(session.sampleDevice.size()) + " device indices");
-  const std::filesystem::path tmp = path.string() + ".tmp" + std::to_string(::getpid());
+  const std::filesystem::path tmp = temporarySibling(path.string());  // created exclusively by the writer
   std::error_code ignored;
-  std::filesystem::remove(tmp, ignored);
   SessionWriterOptions options;
   options.flushEverySamples = 4096;
   options.flushEveryNs = 0;
@@ -715,11 +697,8 @@ std::expected<void, std::string> saveSession(const std::filesystem::path& path, 
       message.replace(at, tmp.string().size(), path.string());
     return std::unexpected(message);
   }
-  if (::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int err = errno;
-    std::filesystem::remove(tmp, ignored);
-    return std::unexpected(path.string() + ": error: rename failed: " + errnoText(err));
-  }
+  if (std::string error; !commitTemporaryFile(tmp.string(), path.string(), &error))
+    return std::unexpected(path.string() + ": error: " + error);
   return {};
 }
 

@@ -186,10 +186,15 @@ TEST(OscStream, MalformedDatagramsAreCountedAndTheStreamGoesOn) {
 
 TEST(OscStream, LateFramesAreCountedFromTransitDifferences) {
   PoseMailbox mailbox;
-  std::atomic<int64_t> now{0};
+  struct AtomicClock final : Clock {  // set by the test, read on the receiver's thread
+    std::atomic<int64_t> now{0};
+    int64_t nowNs() override { return now.load(); }
+    void sleepUntilNs(int64_t) override {}
+  } clock;
+  auto& now = clock.now;
   OscReceiverOptions o;
   o.lateNs = 20'000'000;
-  o.clock = [&] { return now.load(); };
+  o.clock = &clock;
   auto r = openReceiver(mailbox, nullptr, o);
   ASSERT_TRUE(r);
   RawSender raw(r->port());

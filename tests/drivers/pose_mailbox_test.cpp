@@ -68,14 +68,14 @@ TEST(PoseMailbox, NewestWinsAndIsTakenOnce) {
 }
 
 TEST(PoseMailbox, AgeIsMeasuredOnTheInjectedClock) {
-  int64_t now = 0;
-  PoseMailbox box({.queueCapacity = 0, .clock = [&] { return now; }});
+  ManualClock clock(0);
+  PoseMailbox box({.queueCapacity = 0, .clock = &clock});
   box.publish(stamped(1, 1000));
-  now = 1500;
+  clock.set(1500);
   ASSERT_TRUE(box.takeNewest());
   EXPECT_EQ(box.stats().lastAgeNs, 500);
   box.publish(stamped(2, 1600));
-  now = 1800;
+  clock.set(1800);
   ASSERT_TRUE(box.takeNewest());
   box.publish(stamped(3, 5000));  // arrival after "now": age clamps to 0
   ASSERT_TRUE(box.takeNewest());

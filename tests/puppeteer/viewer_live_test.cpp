@@ -67,7 +67,7 @@ fs::path writeSourceSession(const fs::path& dir, bool moving, size_t samples = 7
 const fs::path kCalibration = fs::path(IMPS_SOURCE_DIR) / "examples/simple_biped.calibration.json";
 
 struct Rig {
-  sim::SteadyClock clock;
+  imps::SteadyClock clock;
   std::unique_ptr<LivePoseSource> source;
   SkeletonCache skeleton;
 

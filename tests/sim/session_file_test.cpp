@@ -369,7 +369,9 @@ TEST(SessionFile, SaveSessionRoundTrips) {
   s.notes = {"n"};
   s.skeleton = SessionSkeleton{"HIERARCHY\n...", 0.25};
   ASSERT_TRUE(saveSession(dir / "out.session", s));
-  ASSERT_TRUE(saveSession(dir / "out.session", s));  // replaces an existing file
+  fs::permissions(dir / "out.session", fs::perms::owner_read | fs::perms::owner_write);
+  ASSERT_TRUE(saveSession(dir / "out.session", s));  // replaces an existing file, keeping its permissions
+  EXPECT_EQ(fs::status(dir / "out.session").permissions(), fs::perms::owner_read | fs::perms::owner_write);
   auto back = readSession(dir / "out.session");
   ASSERT_TRUE(back) << back.error();
   EXPECT_EQ(back->devices, s.devices);

@@ -447,7 +447,7 @@ class FakeUsbArmature {
   }
 
   FakeUsbOptions usb_;
-  sim::SteadyClock clock_;
+  imps::SteadyClock clock_;
   std::mutex mutex_;  // guards everything below except the atomics
   std::condition_variable wake_;
   sim::SimulatedArmature armature_;

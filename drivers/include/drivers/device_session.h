@@ -13,6 +13,7 @@
 #include <thread>
 #include <vector>
 
+#include "imps/clock.h"
 #include "drivers/byte_transport.h"
 #include "drivers/device_spec.h"
 #include "drivers/line_protocol.h"
@@ -52,8 +53,9 @@ struct DeviceSessionOptions {
   int ioWaitMs = 20;              // longest single read wait: bounds how long stop() takes
   LineDecoderOptions lineOptions;  // line protocol decoder settings
   int lineBitsPerChannel = 32;     // line protocol: the bits DeviceInfo reports (lines carry none; spec key bits)
-  // Host clock in ns for Sample::arrivalTimeNs (empty: steady_clock, as PoseMailbox). Timeouts use steady_clock.
-  std::function<int64_t()> clock;
+  // Host clock for Sample::arrivalTimeNs (null: steadyNowNs, as PoseMailbox); must outlive the session and be
+  // safe to read from its I/O thread. Timeouts use the steady clock.
+  Clock* clock = nullptr;
 };
 
 // Options from a parsed spec (protocol, mode, rate, channel count, line bits: a sim: spec's `bits` too, so a

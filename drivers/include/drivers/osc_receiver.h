@@ -13,6 +13,7 @@
 #include <string>
 #include <thread>
 
+#include "imps/clock.h"
 #include "drivers/device_session.h"
 #include "drivers/latest_value.h"
 #include "drivers/osc_codec.h"
@@ -31,8 +32,8 @@ struct OscReceiverOptions {
   // A frame is late when its transit (arrival minus the sender's send time) exceeds the smallest transit seen so
   // far by more than this. The two clocks need not agree: only differences of transit count.
   int64_t lateNs = 20'000'000;
-  // Host clock in ns for arrival times (empty: steady_clock).
-  std::function<int64_t()> clock;
+  // Host clock for arrival times (null: steadyNowNs); must outlive the receiver and be safe to read from its thread.
+  Clock* clock = nullptr;
   // Called on the I/O thread with every pose frame accepted (in order), after it is published. For monitors,
   // tests and benchmarks; must be quick and must not call back into the receiver.
   std::function<void(const OscPose&)> onPose;

@@ -5,10 +5,10 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
-#include <functional>
 #include <optional>
 #include <vector>
 
+#include "imps/clock.h"
 #include "drivers/sample.h"
 
 namespace imps::drivers {
@@ -17,8 +17,9 @@ struct PoseMailboxOptions {
   // Capacity of the in-order queue behind drain(), rounded up to a power of two; 0 disables the queue.
   size_t queueCapacity = 0;
   // Host clock in nanoseconds, the clock Sample::arrivalTimeNs is on; used for the sample age at consumption.
-  // Empty: std::chrono::steady_clock. Inject a fake for deterministic tests and replays.
-  std::function<int64_t()> clock;
+  // Null: steadyNowNs. Inject a fake for deterministic tests and replays; it must outlive the mailbox and be safe
+  // to read from the consuming thread.
+  Clock* clock = nullptr;
 };
 
 // A snapshot of the counters; each field is read atomically but the fields are not one consistent snapshot.
@@ -94,7 +95,7 @@ class PoseMailbox {
   std::atomic<int64_t> lastAgeNs_{0}, maxAgeNs_{0}, totalAgeNs_{0};
   alignas(64) std::atomic<uint64_t> drained_{0};
 
-  std::function<int64_t()> clock_;
+  Clock* clock_;  // null: steadyNowNs
 };
 
 }  // namespace imps::drivers

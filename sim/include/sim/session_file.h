@@ -15,48 +15,13 @@
 #include <vector>
 
 #include "drivers/sample.h"
+#include "imps/clock.h"
 #include "sim/sample_table.h"
 
 namespace imps::sim {
 
 using drivers::DeviceInfo;
 using drivers::Sample;
-
-// ---------------------------------------------------------------------------------------------------------------
-// Clocks
-
-// A source of time in nanoseconds on a monotonic timeline, and a way to wait for a point on it. Replays and the
-// writer's periodic flush read time only through this interface, so tests can run them deterministically.
-class Clock {
- public:
-  virtual ~Clock() = default;
-  // Current time in nanoseconds. Must never decrease.
-  virtual int64_t nowNs() = 0;
-  // Returns once nowNs() >= timeNs (at once if that time has passed).
-  virtual void sleepUntilNs(int64_t timeNs) = 0;
-};
-
-// std::chrono::steady_clock; the same timeline the drivers stamp arrivalTimeNs on. Thread-safe.
-class SteadyClock final : public Clock {
- public:
-  int64_t nowNs() override;
-  void sleepUntilNs(int64_t timeNs) override;
-};
-
-// A clock that moves only when told to: sleepUntilNs() jumps straight to the requested time (never backwards),
-// advance() moves it by hand. Every sleep is recorded so tests can check the schedule. Not thread-safe.
-class ManualClock final : public Clock {
- public:
-  explicit ManualClock(int64_t startNs = 0) : now_(startNs) {}
-  int64_t nowNs() override { return now_; }
-  void sleepUntilNs(int64_t timeNs) override;
-  void advance(int64_t ns) { now_ += ns; }
-  const std::vector<int64_t>& sleeps() const { return sleeps_; }  // every target passed to sleepUntilNs
-
- private:
-  int64_t now_;
-  std::vector<int64_t> sleeps_;
-};
 
 // The largest record payload the format allows (docs/session-format.md); a reader treats a longer length as corruption.
 inline constexpr uint32_t kMaxRecordPayloadBytes = 64u << 20;

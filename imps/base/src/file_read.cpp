@@ -3,6 +3,8 @@
 
 #include <cerrno>
 #include <cstdio>
+#include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <memory>
 
@@ -16,14 +18,31 @@ std::string byteSizeText(size_t bytes) {
   return buf;
 }
 
+std::expected<size_t, std::string> inputLimitBytes(size_t maxBytes) {
+  const char* env = std::getenv("IMPS_MAX_INPUT_MIB");
+  if (env == nullptr) return maxBytes;
+  constexpr uint64_t kMostMiB = uint64_t{1} << 24;  // 16 TiB: beyond any file this machine class reads
+  char* end = nullptr;
+  errno = 0;
+  const unsigned long long mib = std::strtoull(env, &end, 10);
+  if (*env < '0' || *env > '9' || *end != '\0' || errno != 0 || mib == 0 || mib > kMostMiB)
+    return std::unexpected("IMPS_MAX_INPUT_MIB='" + std::string(env) + "' is not a whole number of MiB from 1 to " +
+                           std::to_string(kMostMiB));
+  return size_t(mib) << 20;
+}
+
 std::expected<std::string, std::string> readFileText(const std::filesystem::path& path, size_t maxBytes) {
+  const auto limit = inputLimitBytes(maxBytes);
+  if (!limit) return std::unexpected(limit.error());
+  maxBytes = *limit;
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!file) return std::unexpected(std::strerror(errno));
   std::string text;
   char buffer[1 << 16];
   for (;;) {
     const size_t n = std::fread(buffer, 1, sizeof buffer, file.get());
-    if (n > maxBytes - text.size()) return std::unexpected("larger than the " + byteSizeText(maxBytes) + " limit");
+    if (n > maxBytes - text.size())
+      return std::unexpected("larger than the " + byteSizeText(maxBytes) + " limit (IMPS_MAX_INPUT_MIB=N raises it)");
     text.append(buffer, n);
     if (n < sizeof buffer) {
       if (std::ferror(file.get())) return std::unexpected(std::strerror(errno));

@@ -10,19 +10,55 @@
 #include <cstring>
 
 namespace imps {
+namespace {
+
+bool failWith(std::string* error, const std::string& path, const char* step, int code) {
+  if (error) *error = "cannot save '" + path + "': " + step + ": " + std::strerror(code);
+  return false;
+}
+
+// Step 4 of a save: replace the target in one step, then make the rename itself durable (best effort: the data is
+// safe once renamed).
+bool renameOver(const std::string& temp, const std::string& path, std::string* error) {
+  if (::rename(temp.c_str(), path.c_str()) != 0) {
+    const int code = errno;
+    ::unlink(temp.c_str());
+    return failWith(error, path, "renaming the temporary file over it", code);
+  }
+  const size_t slash = path.find_last_of('/');
+  const std::string directory = slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
+  if (const int dir = ::open(directory.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); dir >= 0) {
+    ::fsync(dir);
+    ::close(dir);
+  }
+  return true;
+}
+
+}  // namespace
+
+std::string temporarySibling(const std::string& path) {
+  static std::atomic<unsigned> counter{0};
+  return path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter.fetch_add(1));
+}
+
+bool commitTemporaryFile(const std::string& temp, const std::string& path, std::string* error) {
+  struct stat existing {};
+  if (::stat(path.c_str(), &existing) == 0 && ::chmod(temp.c_str(), existing.st_mode & 07777) != 0) {
+    const int code = errno;
+    ::unlink(temp.c_str());
+    return failWith(error, path, "setting permissions", code);
+  }
+  return renameOver(temp, path, error);
+}
 
 bool writeFileAtomically(const std::string& path, std::span<const uint8_t> bytes, std::string* error) {
-  auto fail = [&](const char* step, int code) {
-    if (error) *error = "cannot save '" + path + "': " + step + ": " + std::strerror(code);
-    return false;
-  };
+  auto fail = [&](const char* step, int code) { return failWith(error, path, step, code); };
   // 1. A unique sibling: same directory so the rename stays within one file system; O_EXCL so concurrent savers
   // never share one; mode 0666 so the umask applies as it would to a plain fopen().
-  static std::atomic<unsigned> counter{0};
   std::string temp;
   int fd = -1;
   for (int attempt = 0; attempt < 100 && fd < 0; ++attempt) {
-    temp = path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter.fetch_add(1));
+    temp = temporarySibling(path);
     fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd < 0 && errno != EEXIST) break;
   }
@@ -54,19 +90,8 @@ bool writeFileAtomically(const std::string& path, std::span<const uint8_t> bytes
     return fail("closing", code);
   }
 
-  // 4. Replace the target in one step, then make the rename itself durable (best effort: the data is safe).
-  if (::rename(temp.c_str(), path.c_str()) != 0) {
-    const int code = errno;
-    ::unlink(temp.c_str());
-    return fail("renaming the temporary file over it", code);
-  }
-  const size_t slash = path.find_last_of('/');
-  const std::string directory = slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
-  if (const int dir = ::open(directory.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); dir >= 0) {
-    ::fsync(dir);
-    ::close(dir);
-  }
-  return true;
+  // 4. Replace the target in one step, durably.
+  return renameOver(temp, path, error);
 }
 
 bool writeFileAtomically(const std::string& path, std::string_view text, std::string* error) {

@@ -16,4 +16,11 @@ namespace imps {
 bool writeFileAtomically(const std::string& path, std::span<const uint8_t> bytes, std::string* error);
 bool writeFileAtomically(const std::string& path, std::string_view text, std::string* error);
 
+// For a file written in pieces by its own writer (a session): a fresh sibling name for the temporary file,
+// "PATH.tmp-PID-N" (N counts per process), to be created with O_EXCL, written and fsync'ed by the caller; then
+// commitTemporaryFile gives it the target's permissions if the target exists, renames it over `path` and fsyncs
+// the directory. On failure `temp` is removed, `path` is untouched and *error says why, as above.
+std::string temporarySibling(const std::string& path);
+bool commitTemporaryFile(const std::string& temp, const std::string& path, std::string* error);
+
 }  // namespace imps

@@ -10,9 +10,14 @@
 namespace imps {
 
 // The whole contents of `path`, or the reason it cannot be read: the system's error text ("No such file or
-// directory", "Is a directory"), or "larger than the N MiB limit" once more than `maxBytes` bytes were read
-// (without reading further). Reads in 64 KiB chunks.
+// directory", "Is a directory"), or "larger than the N MiB limit (IMPS_MAX_INPUT_MIB=N raises it)" once more than
+// the limit was read (without reading further). The limit is `maxBytes`, the reader's default, unless the
+// environment variable IMPS_MAX_INPUT_MIB gives one in MiB (a positive whole number; anything else is an error
+// naming the variable). Reads in 64 KiB chunks.
 std::expected<std::string, std::string> readFileText(const std::filesystem::path& path, size_t maxBytes);
+
+// The limit readFileText applies for a reader whose default is `maxBytes`, or why IMPS_MAX_INPUT_MIB is unusable.
+std::expected<size_t, std::string> inputLimitBytes(size_t maxBytes);
 
 // "16 MiB", "1.5 GiB": a byte limit for messages.
 std::string byteSizeText(size_t bytes);
