@@ -569,7 +569,7 @@ int Tesselator::settle(const SkeletonCache& skeleton, Mesh& mesh, int maxUpdates
       const auto [lo, hi] = std::minmax_element(counts.end() - 10, counts.end());
       if (double(*hi - *lo) <= 0.01 * double(*hi)) {
         triangulate(mesh);
-        if (stats_.boundaryEdges == 0) {
+        if (stats_.boundaryEdges == 0 && !stats_.fallback) {
           if (o.progress) o.progress(1.0f);
           return u;
         }

@@ -24,6 +24,7 @@
 #include <cstring>
 
 #include "imps/check.h"
+#include "imps/marching_cubes.h"
 #include "imps/parallel.h"
 #include "tesselator_state.h"
 
@@ -712,6 +713,59 @@ size_t repairHoles(Tesselator::State& s, const TesselatorOptions& o, size_t& bou
   return unfilled;
 }
 
+size_t markPinchedVertices(Tesselator::State& s) {
+  const size_t n = s.size();
+  s.heThird.resize(n * kMaxHalfEdges);
+  for (size_t t = 0; t < s.tris.size(); t += 3)
+    for (size_t k = 0; k < 3; ++k) {
+      const uint32_t a = s.tris[t + k], b = s.tris[t + (k + 1) % 3], c = s.tris[t + (k + 2) % 3];
+      const uint32_t* to = &s.heTo[size_t(a) * kMaxHalfEdges];
+      for (size_t q = 0; q < s.heCount[a]; ++q)
+        if (to[q] == b) s.heThird[size_t(a) * kMaxHalfEdges + q] = c;
+    }
+  s.openUp.assign(n, 0);
+  size_t pinched = 0;
+  for (size_t v = 0; v < n; ++v) {
+    const size_t m = s.heCount[v];
+    if (m < 2) continue;
+    const uint32_t* to = &s.heTo[v * kMaxHalfEdges];
+    const uint32_t* third = &s.heThird[v * kMaxHalfEdges];
+    // Around v, the corner of slot k spans to[k] .. third[k]; the next corner is the slot whose to == third[k]. The
+    // corners form one fan iff walking from a corner without a predecessor (or any, if all have one) visits all.
+    auto slotOf = [&](uint32_t target) {
+      size_t q = 0;
+      while (q < m && to[q] != target) ++q;
+      return q;
+    };
+    size_t start = 0;
+    for (size_t k = 0; k < m; ++k) {
+      bool hasPredecessor = false;
+      for (size_t q = 0; q < m; ++q) hasPredecessor |= third[q] == to[k];
+      if (!hasPredecessor) {
+        start = k;
+        break;
+      }
+    }
+    size_t visited = 1;
+    for (size_t cur = slotOf(third[start]); cur < m && cur != start && visited <= m; cur = slotOf(third[cur])) ++visited;
+    if (visited != m) {
+      s.openUp[v] = 1;
+      ++pinched;
+    }
+  }
+  return pinched;
+}
+
+size_t unpinchVertices(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary, size_t& unfilled) {
+  size_t pinched = markPinchedVertices(s);
+  for (int pass = 0; pass < 3 && pinched > 0; ++pass) {
+    removeAround(s, boundary);
+    unfilled = repairHoles(s, o, boundary);
+    pinched = markPinchedVertices(s);
+  }
+  return pinched;
+}
+
 void writeMesh(const Tesselator::State& s, const TesselatorOptions& o, Mesh& mesh) {
   const size_t n = s.size();
   mesh.positions.resize(3 * n);
@@ -726,6 +780,13 @@ void writeMesh(const Tesselator::State& s, const TesselatorOptions& o, Mesh& mes
       }
   });
   mesh.indices = s.tris;
+}
+
+void writeFallbackMesh(const Tesselator::State& s, const TesselatorOptions& o, Mesh& mesh) {
+  MarchingCubesOptions mc;
+  mc.cellSize = o.desiredRadius;
+  mc.threads = o.numThreads;
+  mesh = polygonize(*s.field, mc);
 }
 
 void Tesselator::triangulate(Mesh& mesh) {
@@ -745,12 +806,22 @@ void Tesselator::triangulate(Mesh& mesh) {
   voteTriangles(s, o);    // C
   size_t boundary = assembleTriangles(s, o);  // D
   const size_t assembled = s.tris.size() / 3;
-  const size_t unfilled = repairHoles(s, o, boundary);  // E
-  writeMesh(s, o, mesh);
-  stats_.triangles = s.tris.size() / 3;
-  stats_.filledTriangles = stats_.triangles > assembled ? stats_.triangles - assembled : 0;
-  stats_.boundaryEdges = boundary;
+  size_t unfilled = repairHoles(s, o, boundary);  // E
+  const size_t pinched = unpinchVertices(s, o, boundary, unfilled);  // F
+  stats_.filledTriangles = s.tris.size() / 3 > assembled ? s.tris.size() / 3 - assembled : 0;
   stats_.unfilledLoops = unfilled;
+  stats_.pinchedVertices = pinched;
+  stats_.openEdges = boundary;
+  stats_.fallback = o.closedFallback && (boundary > 0 || pinched > 0);
+  if (stats_.fallback) {  // G: never show a hole (docs/tesselator.md, "The fallback")
+    ++stats_.fallbacks;
+    writeFallbackMesh(s, o, mesh);
+    boundary = 0;
+  } else {
+    writeMesh(s, o, mesh);
+  }
+  stats_.triangles = mesh.triangleCount();
+  stats_.boundaryEdges = boundary;
   stats_.meshMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 

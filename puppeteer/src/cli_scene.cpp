@@ -96,6 +96,7 @@ int runParticleMesh(const MeshArgs& a, const Scene& scene, const SkeletonCache& 
   if (const auto* node = std::get_if<Tesselator3MPNode>(&scene.polygonizer)) options = TesselatorOptions::fromNode(*node);
   if (a.threads > 0) options.numThreads = a.threads;
   options.maxParticles = a.maxParticles;
+  options.closedFallback = false;  // the particles' own triangulation is written, and checked below
   Tesselator tess(options);
   Mesh mesh;
   int updates = a.updates;
@@ -133,9 +134,13 @@ int runParticleMesh(const MeshArgs& a, const Scene& scene, const SkeletonCache& 
                              : a.scene.c_str(),
                  options.maxParticles, double(options.desiredRadius));
   }
-  const bool closed = !a.check || reportTopology(mesh, progress, a.json ? &json : nullptr);
+  // Always checked (a particle mesh is small): a triangulation that is not closed is a failed check, --check or not.
+  const bool closed = reportTopology(mesh, progress, a.json ? &json : nullptr);
   if (a.json) printJson(json);
-  if (!closed) return kExitCheckFailed;
+  if (!closed) {
+    std::fprintf(stderr, "puppeteer mesh: error: the particle mesh is not a closed 2-manifold (written all the same)\n");
+    return kExitCheckFailed;
+  }
   return kExitOk;
 }
 

@@ -76,6 +76,8 @@ struct RenderRow {
   double worstFieldError = 0;  // max |F(v) - iso| over the mesh's vertices (field units)
   double worstOffsetMm = 0;    // max |F(v) - iso| / |grad F(v)| (first-order distance to the surface, mm)
   uint64_t fissions = 0, fusions = 0;
+  size_t fallback = 0;  // 1: the particle triangulation was not closed and manifold; Marching Cubes was shown
+  size_t particleOpenEdges = 0, particlePinchedVertices = 0;  // what the particle triangulation had left
 };
 
 struct Report {
@@ -290,6 +292,9 @@ std::optional<Report> benchScene(const std::string& path, const Motion& motion, 
     row.particles = tess.stats().particles;
     row.fissions = tess.stats().fissions - fissions0;
     row.fusions = tess.stats().fusions - fusions0;
+    row.fallback = tess.stats().fallback ? 1 : 0;
+    row.particleOpenEdges = tess.stats().openEdges;
+    row.particlePinchedVertices = tess.stats().pinchedVertices;
     measureRender(mesh, skel.field(), row);
     r.rows.push_back(row);
   }
@@ -346,15 +351,17 @@ int parseMotion(const std::string& text, Motion& m) {
 std::string csvText(const std::vector<Report>& reports) {
   std::string out =
       "scene,render,seconds,particles,triangles,boundary_edges,nonmanifold_edges,nonmanifold_vertices,"
-      "folded_triangles,worst_f_minus_iso,worst_offset_mm,fissions,fusions\n";
+      "folded_triangles,worst_f_minus_iso,worst_offset_mm,fissions,fusions,fallback,particle_open_edges,"
+      "particle_pinched_vertices\n";
   char line[512];
   for (const Report& r : reports)
     for (size_t f = 0; f < r.rows.size(); ++f) {
       const RenderRow& w = r.rows[f];
-      std::snprintf(line, sizeof line, "%s,%zu,%.4f,%zu,%zu,%zu,%zu,%zu,%zu,%.6g,%.4g,%llu,%llu\n", r.name.c_str(), f,
-                    w.seconds, w.particles, w.triangles, w.boundaryEdges, w.nonManifoldEdges, w.nonManifoldVertices,
-                    w.foldedTriangles, w.worstFieldError, w.worstOffsetMm, (unsigned long long)w.fissions,
-                    (unsigned long long)w.fusions);
+      std::snprintf(line, sizeof line, "%s,%zu,%.4f,%zu,%zu,%zu,%zu,%zu,%zu,%.6g,%.4g,%llu,%llu,%zu,%zu,%zu\n",
+                    r.name.c_str(), f, w.seconds, w.particles, w.triangles, w.boundaryEdges, w.nonManifoldEdges,
+                    w.nonManifoldVertices, w.foldedTriangles, w.worstFieldError, w.worstOffsetMm,
+                    (unsigned long long)w.fissions, (unsigned long long)w.fusions, w.fallback, w.particleOpenEdges,
+                    w.particlePinchedVertices);
       out += line;
     }
   return out;
@@ -383,6 +390,9 @@ Json reportJson(const Report& r) {
               {"worst_offset_mm", r.worst(&RenderRow::worstOffsetMm)},
               {"fissions", [&] { uint64_t n = 0; for (const RenderRow& w : r.rows) n += w.fissions; return n; }()},
               {"fusions", [&] { uint64_t n = 0; for (const RenderRow& w : r.rows) n += w.fusions; return n; }()},
+              {"renders_with_fallback", r.count(&RenderRow::fallback)},
+              {"max_particle_open_edges", r.max(&RenderRow::particleOpenEdges)},
+              {"max_particle_pinched_vertices", r.max(&RenderRow::particlePinchedVertices)},
               {"updates_to_settle", r.settleUpdates},
               {"fissions_per_update_settled", r.fissionsPerUpdateSettled},
               {"fusions_per_update_settled", r.fusionsPerUpdateSettled},
@@ -422,6 +432,7 @@ void printTable(const BenchArgs& a, const std::vector<Report>& reports) {
   row("Non-manifold vertices (max)", [&](const Report& r) { return num(r.max(&RenderRow::nonManifoldVertices)); });
   row("Renders with folds", [&](const Report& r) { return pct(r, r.count(&RenderRow::foldedTriangles)); });
   row("Folded triangles (max)", [&](const Report& r) { return num(r.max(&RenderRow::foldedTriangles)); });
+  row("Renders with MC fallback", [&](const Report& r) { return pct(r, r.count(&RenderRow::fallback)); });
   row("Worst |F-iso| at a vertex", [&](const Report& r) { return fmt("%.3g", r.worst(&RenderRow::worstFieldError)); });
   row("Worst vertex offset (mm)", [&](const Report& r) { return fmt("%.3g", r.worst(&RenderRow::worstOffsetMm)); });
   row("Worst sample dist (mm)", [&](const Report& r) { return fmt("%.2f", r.worstMm); });
