@@ -724,42 +724,81 @@ size_t markPinchedVertices(Tesselator::State& s) {
         if (to[q] == b) s.heThird[size_t(a) * kMaxHalfEdges + q] = c;
     }
   s.openUp.assign(n, 0);
+  s.dropSlot.assign(n * kMaxHalfEdges, 0);
   size_t pinched = 0;
   for (size_t v = 0; v < n; ++v) {
     const size_t m = s.heCount[v];
     if (m < 2) continue;
     const uint32_t* to = &s.heTo[v * kMaxHalfEdges];
     const uint32_t* third = &s.heThird[v * kMaxHalfEdges];
-    // Around v, the corner of slot k spans to[k] .. third[k]; the next corner is the slot whose to == third[k]. The
-    // corners form one fan iff walking from a corner without a predecessor (or any, if all have one) visits all.
-    auto slotOf = [&](uint32_t target) {
-      size_t q = 0;
-      while (q < m && to[q] != target) ++q;
-      return q;
-    };
-    size_t start = 0;
+    // Around v, the corner of slot k spans to[k] .. third[k]; the next corner is the slot whose to == third[k]. Each
+    // slot has at most one successor and one predecessor, so the corners fall into paths and cycles: fans. One fan
+    // (a disk, or a half-disk on the boundary) is a manifold vertex.
+    uint8_t next[kMaxHalfEdges], hasPredecessor[kMaxHalfEdges] = {}, fanOf[kMaxHalfEdges];
     for (size_t k = 0; k < m; ++k) {
-      bool hasPredecessor = false;
-      for (size_t q = 0; q < m; ++q) hasPredecessor |= third[q] == to[k];
-      if (!hasPredecessor) {
-        start = k;
-        break;
+      size_t q = 0;
+      while (q < m && to[q] != third[k]) ++q;
+      next[k] = uint8_t(q);
+      if (q < m) hasPredecessor[q] = 1;
+      fanOf[k] = 0xff;
+    }
+    size_t fans = 0, fanSize[kMaxHalfEdges] = {};
+    for (int cycles = 0; cycles < 2; ++cycles)  // paths from their first corner, then the cycles
+      for (size_t k = 0; k < m; ++k) {
+        if (fanOf[k] != 0xff || (cycles == 0 && hasPredecessor[k])) continue;
+        for (size_t cur = k; cur < m && fanOf[cur] == 0xff; cur = next[cur]) fanOf[cur] = uint8_t(fans), ++fanSize[fans];
+        ++fans;
       }
-    }
-    size_t visited = 1;
-    for (size_t cur = slotOf(third[start]); cur < m && cur != start && visited <= m; cur = slotOf(third[cur])) ++visited;
-    if (visited != m) {
-      s.openUp[v] = 1;
-      ++pinched;
-    }
+    if (fans < 2) continue;
+    s.openUp[v] = 1;
+    ++pinched;
+    const size_t keep = size_t(std::max_element(fanSize, fanSize + fans) - fanSize);
+    for (size_t k = 0; k < m; ++k) s.dropSlot[v * kMaxHalfEdges + k] = fanOf[k] != keep;
   }
   return pinched;
 }
 
+namespace {
+
+// Removes the triangles that s.dropSlot marks at one of their corners (the pinched vertices' smaller fans), with
+// their half-edges, keeping `boundary` and s.openOut up to date as removeAround does.
+void removeSmallerFans(Tesselator::State& s, size_t& boundary) {
+  std::vector<uint8_t>& drop = s.holeUsed;  // per triangle (scratch: the repair rebuilds it)
+  drop.assign(s.tris.size() / 3, 0);
+  for (size_t t = 0; t < s.tris.size(); t += 3)
+    for (size_t k = 0; k < 3; ++k) {
+      const uint32_t a = s.tris[t + k], b = s.tris[t + (k + 1) % 3];
+      const uint32_t* to = &s.heTo[size_t(a) * kMaxHalfEdges];
+      for (size_t q = 0; q < s.heCount[a]; ++q)
+        if (to[q] == b && s.dropSlot[size_t(a) * kMaxHalfEdges + q]) drop[t / 3] = 1;
+    }
+  size_t w = 0;
+  for (size_t t = 0; t < s.tris.size(); t += 3) {
+    const uint32_t c[3] = {s.tris[t], s.tris[t + 1], s.tris[t + 2]};
+    if (!drop[t / 3]) {
+      for (int k = 0; k < 3; ++k) s.tris[w + size_t(k)] = c[k];
+      w += 3;
+      continue;
+    }
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = c[k], b = c[(k + 1) % 3];
+      removeHalfEdge(s, a, b);
+      boundary = hasHalfEdge(s, b, a) ? boundary + 1 : boundary - 1;
+      s.openOut[a] = 1;
+    }
+  }
+  s.tris.resize(w);
+}
+
+}  // namespace
+
 size_t unpinchVertices(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary, size_t& unfilled) {
   size_t pinched = markPinchedVertices(s);
+  // First only the smaller fans go (the vertex keeps its main disk, and the caps the repair lays where they were
+  // are small); should that not do, every triangle around the vertex.
   for (int pass = 0; pass < 3 && pinched > 0; ++pass) {
-    removeAround(s, boundary);
+    if (pass < 2) removeSmallerFans(s, boundary);
+    else removeAround(s, boundary);
     unfilled = repairHoles(s, o, boundary);
     pinched = markPinchedVertices(s);
   }

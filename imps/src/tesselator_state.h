@@ -105,6 +105,7 @@ struct Tesselator::State {
   std::vector<uint32_t> heTo;
   std::vector<uint8_t> heCount;
   std::vector<uint32_t> heThird;  // per half-edge slot a -> heTo: the third corner of its triangle (unpinchVertices)
+  std::vector<uint8_t> dropSlot;  // per half-edge slot: its triangle is in a pinched vertex's smaller fan
   std::vector<uint32_t> holeTo;
   std::vector<uint8_t> holeCount, holeUsed, openUp, openOut;
   std::vector<uint32_t> loop, tris;
@@ -154,11 +155,12 @@ size_t assembleTriangles(Tesselator::State& s, const TesselatorOptions& o);
 // edges without a twin) up to date; returns the loops left unfilled.
 size_t repairHoles(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary);
 // F. pinches: a vertex whose triangles form more than one fan (two disks touching at a point, which the edge-based
-// assembly and repair cannot see) has every triangle around it removed and the holes repaired again (E), up to three
-// times. Returns the pinched vertices left (0: the triangulation is a 2-manifold wherever it is closed).
+// assembly and repair cannot see) loses the triangles of its smaller fans (twice; the third time every triangle
+// around it) and the holes are repaired again (E). Returns the pinched vertices left (0: the triangulation is a 2-manifold wherever it is closed).
 size_t unpinchVertices(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary, size_t& unfilled);
 // Counts the vertices whose triangles do not form a single fan (a disk, or a half-disk on the boundary), marking them
-// in s.openUp. Reads s.tris and the half-edge table.
+// in s.openUp and the half-edge slots of all but their largest fan in s.dropSlot. Reads s.tris and the half-edge
+// table.
 size_t markPinchedVertices(Tesselator::State& s);
 // The output: one vertex per particle (s.vpos, s.nrm, s.vcol clamped to [0, 1]) and s.tris.
 void writeMesh(const Tesselator::State& s, const TesselatorOptions& o, Mesh& mesh);
