@@ -104,7 +104,7 @@ struct Tesselator::State {
   std::vector<uint8_t> candVotes;  // per particle: bit v set if one of its candidates has v votes
   std::vector<uint32_t> heTo;
   std::vector<uint8_t> heCount;
-  std::vector<uint32_t> heThird;  // per half-edge slot a -> heTo: the third corner of its triangle (unpinchVertices)
+  std::vector<uint32_t> heThird;  // per half-edge slot a -> heTo: the third corner of its triangle (kept with heTo)
   std::vector<uint8_t> dropSlot;  // per half-edge slot: its triangle is in a pinched vertex's smaller fan
   std::vector<uint32_t> holeTo;
   std::vector<uint8_t> holeCount, holeUsed, openUp, openOut;
@@ -159,9 +159,8 @@ size_t repairHoles(Tesselator::State& s, const TesselatorOptions& o, size_t& bou
 // around it) and the holes are repaired again (E). Returns the pinched vertices left (0: the triangulation is a 2-manifold wherever it is closed).
 size_t unpinchVertices(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary, size_t& unfilled);
 // Counts the vertices whose triangles do not form a single fan (a disk, or a half-disk on the boundary), marking them
-// in s.openUp and the half-edge slots of all but their largest fan in s.dropSlot. Reads s.tris and the half-edge
-// table.
-size_t markPinchedVertices(Tesselator::State& s);
+// in s.openUp and the half-edge slots of all but their largest fan in s.dropSlot. Parallel; reads the half-edge table.
+size_t markPinchedVertices(Tesselator::State& s, const TesselatorOptions& o);
 // The output: one vertex per particle (s.vpos, s.nrm, s.vcol clamped to [0, 1]) and s.tris.
 void writeMesh(const Tesselator::State& s, const TesselatorOptions& o, Mesh& mesh);
 // G. the fallback output: Marching Cubes of s.field at cell desiredRadius (closed and manifold by construction).
