@@ -85,6 +85,13 @@ struct Tesselator::State {
   uint64_t nextId = 0;
   uint64_t update = 0;
   float eHat = 1.0f;  // desired energy per particle (hexagonal packing at spacing desiredRadius)
+  // Coming to rest on a still field (tesselator.cpp, kStillAfter): whether the field moved before this update, the
+  // updates since it last moved, the particle counts of the last updates, the calm updates so far (0: moving; fission,
+  // fusion and death stop while > 0) and the factor on this update's step and radius rate.
+  bool fieldMoved = true;
+  uint32_t stillUpdates = 0, calm = 0;
+  std::vector<size_t> recentCounts;
+  float stepScale = 1.0f;
 
   // Reorder scratch.
   std::vector<glm::vec3> tmpV;

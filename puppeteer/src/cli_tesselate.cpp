@@ -37,7 +37,7 @@
 namespace imps::app {
 namespace {
 
-constexpr int kSettledUpdates = 30;  // static updates after settling, to measure whether the particles are still
+constexpr int kSettledUpdates = 30;  // stillness is measured over the last 30 of 60 static updates after settling
 
 struct BenchArgs {
   std::vector<std::string> scenes;
@@ -86,7 +86,8 @@ struct Report {
   size_t particles = 0, tris = 0;
   double worstMm = 0;
   int settleUpdates = 0;
-  // Still means still: kSettledUpdates static updates after settling.
+  int updatesToStill = -1;  // updates from seeding until still (see measureSettled); -1: not within the window
+  // Still means still: measured over kSettledUpdates static updates after settling (measureSettled).
   double fissionsPerUpdateSettled = 0, fusionsPerUpdateSettled = 0;
   double settledMaxMotion = 0;      // the largest move of a surviving particle in one update (desiredRadius)
   bool settledMeshIdentical = false;  // every render of the settled window gave the same triangle list
@@ -220,29 +221,43 @@ class Driver {
   double angle_ = 0.0, direction_ = 1.0;
 };
 
-// After settling: kSettledUpdates static updates, each triangulated; fissions, fusions, the largest move of a
-// particle that survives an update (matched by id), and whether the triangle lists stayed the same.
+// After settling: 2 kSettledUpdates static updates, each triangulated. Over the last kSettledUpdates: fissions,
+// fusions, the largest move of a particle that survives an update (matched by id, units of desiredRadius), and
+// whether the triangle lists stayed the same. "Still" from the first update after which every update has no fission
+// or fusion, moves no particle by 1 % of desiredRadius or more and gives the same triangles as the one before.
 void measureSettled(Tesselator& tess, const SkeletonCache& skel, Mesh& mesh, Report& r) {
   const float h = tess.options().desiredRadius;
-  const uint64_t fissions0 = tess.stats().fissions, fusions0 = tess.stats().fusions;
   std::unordered_map<uint64_t, glm::vec3> before;
-  std::vector<uint32_t> firstIndices;
+  std::vector<uint32_t> previous;
+  int stillFrom = -1;
   r.settledMeshIdentical = true;
-  for (int u = 0; u < kSettledUpdates; ++u) {
+  uint64_t fissions = 0, fusions = 0;
+  for (int u = 0; u < 2 * kSettledUpdates; ++u) {
     before.clear();
     const ParticleView p0 = tess.particles();
     for (size_t i = 0; i < p0.size(); ++i) before.emplace(p0.ids[i], p0.positions[i]);
+    const uint64_t fissions0 = tess.stats().fissions, fusions0 = tess.stats().fusions;
     tess.update(skel);
     tess.triangulate(mesh);
     const ParticleView p1 = tess.particles();
+    double motion = 0;
     for (size_t i = 0; i < p1.size(); ++i)
       if (auto it = before.find(p1.ids[i]); it != before.end())
-        r.settledMaxMotion = std::max(r.settledMaxMotion, double(glm::length(p1.positions[i] - it->second) / h));
-    if (u == 0) firstIndices = mesh.indices;
-    else if (mesh.indices != firstIndices) r.settledMeshIdentical = false;
+        motion = std::max(motion, double(glm::length(p1.positions[i] - it->second) / h));
+    const uint64_t fis = tess.stats().fissions - fissions0, fus = tess.stats().fusions - fusions0;
+    const bool same = u > 0 && mesh.indices == previous;
+    const bool still = fis == 0 && fus == 0 && motion < 0.01 && (same || u == 0);
+    stillFrom = still ? (stillFrom < 0 ? u : stillFrom) : -1;
+    if (u >= kSettledUpdates) {
+      fissions += fis, fusions += fus;
+      r.settledMaxMotion = std::max(r.settledMaxMotion, motion);
+      r.settledMeshIdentical = r.settledMeshIdentical && same;
+    }
+    previous = mesh.indices;
   }
-  r.fissionsPerUpdateSettled = double(tess.stats().fissions - fissions0) / kSettledUpdates;
-  r.fusionsPerUpdateSettled = double(tess.stats().fusions - fusions0) / kSettledUpdates;
+  r.fissionsPerUpdateSettled = double(fissions) / kSettledUpdates;
+  r.fusionsPerUpdateSettled = double(fusions) / kSettledUpdates;
+  r.updatesToStill = stillFrom < 0 ? -1 : r.settleUpdates + stillFrom + 1;
 }
 
 std::optional<Report> benchScene(const std::string& path, const Motion& motion, const BenchArgs& a,
@@ -394,6 +409,7 @@ Json reportJson(const Report& r) {
               {"max_particle_open_edges", r.max(&RenderRow::particleOpenEdges)},
               {"max_particle_pinched_vertices", r.max(&RenderRow::particlePinchedVertices)},
               {"updates_to_settle", r.settleUpdates},
+              {"updates_to_still", r.updatesToStill},
               {"fissions_per_update_settled", r.fissionsPerUpdateSettled},
               {"fusions_per_update_settled", r.fusionsPerUpdateSettled},
               {"settled_max_motion", r.settledMaxMotion},
@@ -437,6 +453,7 @@ void printTable(const BenchArgs& a, const std::vector<Report>& reports) {
   row("Worst vertex offset (mm)", [&](const Report& r) { return fmt("%.3g", r.worst(&RenderRow::worstOffsetMm)); });
   row("Worst sample dist (mm)", [&](const Report& r) { return fmt("%.2f", r.worstMm); });
   row("Updates to settle", [&](const Report& r) { return num(size_t(r.settleUpdates)); });
+  row("Updates to still", [&](const Report& r) { return r.updatesToStill < 0 ? std::string("never") : num(size_t(r.updatesToStill)); });
   row("Settled fissions/update", [&](const Report& r) { return fmt("%.2f", r.fissionsPerUpdateSettled); });
   row("Settled fusions/update", [&](const Report& r) { return fmt("%.2f", r.fusionsPerUpdateSettled); });
   row("Settled max motion (dR/upd)", [&](const Report& r) { return fmt("%.3f", r.settledMaxMotion); });

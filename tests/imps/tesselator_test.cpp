@@ -607,6 +607,60 @@ TEST(Tesselator, AnOpenTriangulationFallsBackToMarchingCubes) {
   }
 }
 
+// Issue 15 "still means still": on a static pose the settled biped comes to rest within a bounded number of updates
+// (at the thesis's ~900 particles and at the file's ~2650): then no fission, fusion or death, no particle moves by
+// 1 % of desiredRadius, and every triangulation gives the same triangles. Before the rest schedule a period-2
+// oscillation moved particles ~0.55 desiredRadius per update with ~7 (900) and ~30 (2650) fissions and fusions per
+// update. When a limb moves, the particles move again, and when it stops they come back to rest.
+TEST(Tesselator, AStillBipedComesToRestAndWakesWhenALimbMoves) {
+  for (float particles : {900.0f, 2650.0f}) {
+    Example e = load("simple_biped.wrl");
+    const float scale = std::sqrt(2685.0f / particles), h = e.options.desiredRadius * scale;
+    e.options.desiredRadius *= scale;
+    e.options.queryRadius *= scale;
+    e.options.cubeSize *= scale;
+    SkeletonCache skel(*e.character);
+    Tesselator tess(e.options);
+    Mesh mesh, previous;
+    const int settled = tess.settle(skel, mesh, 300);
+    // Updates until the mesh and the particles stop changing, and how much they do per update once they have.
+    auto stillAfter = [&](int limit) {
+      int still = 0, u = 0;
+      for (; u < limit && still < 10; ++u) {
+        const std::vector<glm::vec3> before(tess.particles().positions.begin(), tess.particles().positions.end());
+        const TesselatorStats s0 = tess.stats();
+        previous = mesh;
+        tess.update(skel);
+        tess.triangulate(mesh);
+        const ParticleView p = tess.particles();
+        float motion = p.size() == before.size() ? 0.0f : h;
+        for (size_t i = 0; i < p.size() && p.size() == before.size(); ++i)
+          motion = std::max(motion, glm::length(p.positions[i] - before[i]));
+        const bool quiet = tess.stats().fissions == s0.fissions && tess.stats().fusions == s0.fusions &&
+                           tess.stats().deaths == s0.deaths && motion < 0.01f * h && mesh == previous;
+        still = quiet ? still + 1 : 0;
+        EXPECT_EQ(analyzeTopology(mesh).closedManifold(), true);
+      }
+      return still == 10 ? u - 10 : -1;
+    };
+    const int rest = stillAfter(100);
+    std::printf("%.0f particles: settled after %d updates, still %d updates later\n", double(particles), settled, rest);
+    ASSERT_GE(rest, 0) << particles << " particles never came to rest";
+    EXPECT_LE(rest, 40);
+    // A limb moves: the particles follow and work again (not frozen), then come back to rest.
+    const TesselatorStats s0 = tess.stats();
+    for (int u = 0; u < 10; ++u) {
+      skel.setRotation("L_UpperArm", glm::angleAxis(0.05f * float(u + 1), glm::vec3(0, 0, 1)));
+      skel.update();
+      tess.update(skel);
+    }
+    EXPECT_GT(tess.stats().fissions + tess.stats().fusions + tess.stats().deaths,
+              s0.fissions + s0.fusions + s0.deaths) << particles;
+    tess.triangulate(mesh);
+    EXPECT_GE(stillAfter(100), 0) << particles << " particles did not come back to rest";
+  }
+}
+
 TEST(Tesselator, FlatFieldWithoutSkeletonAndReset) {
   Example e = load("textured_blobs.wrl");
   SkeletonCache skel(*e.character);
