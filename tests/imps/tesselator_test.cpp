@@ -568,6 +568,13 @@ TEST_P(FastSwingAtThesisFidelity, EveryRenderIsClosedAndManifold) {
     EXPECT_EQ(tess.stats().boundaryEdges, 0u);
     EXPECT_EQ(tess.stats().fallback, tess.stats().openEdges > 0 || tess.stats().pinchedVertices > 0);
     if (!tess.stats().fallback) EXPECT_EQ(mesh.vertexCount(), tess.particles().size());
+    // Every vertex a triangle uses is on the surface: |F - iso| / |grad F| within 0.02 desiredRadius.
+    float worst = 0.0f;
+    for (uint32_t v : mesh.indices) {
+      const FieldSample fs = skel.field().sample(mesh.position(v));
+      worst = std::max(worst, std::fabs(fs.value - skel.field().iso()) / glm::length(fs.gradient));
+    }
+    EXPECT_LT(worst, 0.02f * e.options.desiredRadius) << "render " << f;
     pinched += tess.stats().pinchedVertices;
     fallbacks += tess.stats().fallback ? 1 : 0;
   }
