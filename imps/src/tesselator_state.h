@@ -163,7 +163,8 @@ size_t assembleTriangles(Tesselator::State& s, const TesselatorOptions& o);
 size_t repairHoles(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary);
 // F. pinches: a vertex whose triangles form more than one fan (two disks touching at a point, which the edge-based
 // assembly and repair cannot see) loses the triangles of its smaller fans (twice; the third time every triangle
-// around it) and the holes are repaired again (E). Returns the pinched vertices left (0: the triangulation is a 2-manifold wherever it is closed).
+// around it) and the holes are repaired again (E). Returns the pinched vertices left (0: the triangulation is a
+// 2-manifold wherever it is closed).
 size_t unpinchVertices(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary, size_t& unfilled);
 // Counts the vertices whose triangles do not form a single fan (a disk, or a half-disk on the boundary), marking them
 // in s.openUp and the half-edge slots of all but their largest fan in s.dropSlot. Parallel; reads the half-edge table.

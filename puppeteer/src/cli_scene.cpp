@@ -168,7 +168,8 @@ int runParticleMesh(const MeshArgs& a, const Scene& scene, const SkeletonCache& 
   const std::string uncovered = particleCoverage(mesh, skeleton.field(), options, progress, a.json ? &json : nullptr);
   if (a.json) printJson(json);
   if (!closed) {
-    std::fprintf(stderr, "puppeteer mesh: error: the particle mesh is not a closed 2-manifold (written all the same)\n");
+    std::fprintf(stderr,
+                 "puppeteer mesh: error: the particle mesh is not a closed 2-manifold (written all the same)\n");
     return kExitCheckFailed;
   }
   if (!uncovered.empty()) {

@@ -166,7 +166,8 @@ std::optional<Take> loadTake(const std::string& path, const std::string& map, co
     const auto options = retargetOptionsFor(map, *clip, character);
     if (!options) return std::nullopt;
     auto r = Retargeter::create(*clip, character, *options);
-    if (!r) return std::fprintf(stderr, "puppeteer bench: error: %s: %s\n", path.c_str(), r.error().c_str()), std::nullopt;
+    if (!r)
+      return std::fprintf(stderr, "puppeteer bench: error: %s: %s\n", path.c_str(), r.error().c_str()), std::nullopt;
     take = takeFromClip(*clip, *r, character, selection);
   } else {
     auto c = calibrationForSample(*session, session->samples.size(), &character, path);
@@ -177,7 +178,8 @@ std::optional<Take> loadTake(const std::string& path, const std::string& map, co
              std::nullopt;
     take = takeFromSession(*session, **c, character, selection);
   }
-  if (!take) return std::fprintf(stderr, "puppeteer bench: error: %s: %s\n", path.c_str(), take.error().c_str()), std::nullopt;
+  if (!take)
+    return std::fprintf(stderr, "puppeteer bench: error: %s: %s\n", path.c_str(), take.error().c_str()), std::nullopt;
   return std::move(*take);
 }
 
@@ -453,7 +455,8 @@ void printTable(const BenchArgs& a, const std::vector<Report>& reports) {
   row("Worst vertex offset (mm)", [&](const Report& r) { return fmt("%.3g", r.worst(&RenderRow::worstOffsetMm)); });
   row("Worst sample dist (mm)", [&](const Report& r) { return fmt("%.2f", r.worstMm); });
   row("Updates to settle", [&](const Report& r) { return num(size_t(r.settleUpdates)); });
-  row("Updates to still", [&](const Report& r) { return r.updatesToStill < 0 ? std::string("never") : num(size_t(r.updatesToStill)); });
+  row("Updates to still",
+      [&](const Report& r) { return r.updatesToStill < 0 ? std::string("never") : num(size_t(r.updatesToStill)); });
   row("Settled fissions/update", [&](const Report& r) { return fmt("%.2f", r.fissionsPerUpdateSettled); });
   row("Settled fusions/update", [&](const Report& r) { return fmt("%.2f", r.fusionsPerUpdateSettled); });
   row("Settled max motion (dR/upd)", [&](const Report& r) { return fmt("%.3f", r.settledMaxMotion); });

@@ -557,8 +557,10 @@ TEST_P(FastSwingAtThesisFidelity, EveryRenderIsClosedAndManifold) {
     angle += direction * GetParam() / 60.0f;
     if (angle > 45.0f) angle = 90.0f - angle, direction = -1.0f;
     if (angle < -45.0f) angle = -90.0f - angle, direction = 1.0f;
-    for (size_t k = 0; k < ids.size(); ++k)
-      skel.setRotation(ids[k], rest[k] * glm::angleAxis(glm::radians(angle) * (k % 2 ? -1.0f : 1.0f), glm::vec3(0, 0, 1)));
+    for (size_t k = 0; k < ids.size(); ++k) {
+      const float a = glm::radians(angle) * (k % 2 ? -1.0f : 1.0f);
+      skel.setRotation(ids[k], rest[k] * glm::angleAxis(a, glm::vec3(0, 0, 1)));
+    }
     skel.update();
     tess.frame(skel, mesh);
     const MeshTopology t = analyzeTopology(mesh);
