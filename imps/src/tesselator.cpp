@@ -28,6 +28,12 @@ constexpr float kFusionDistance = 0.35f;  // two particles closer than this fuse
 constexpr float kMaxStep = 0.3f;       // the most a particle moves per update
 constexpr float kMaxNewton = 0.5f;     // the longest Newton projection step
 constexpr float kStrayDistance = 1.0f; // |F - iso| / |grad F| beyond this: the particle left the surface
+// Coming to rest on a still field: after kStillAfter updates of an unchanged field with a particle count stable to
+// 1 % over the last kCountWindow updates, fission, fusion and death stop and the step halves every update; after
+// kCalmUpdates such updates the particles are frozen until the field moves again.
+constexpr uint32_t kStillAfter = 20;
+constexpr uint32_t kCalmUpdates = 12;
+constexpr size_t kCountWindow = 10;
 
 using Clock = std::chrono::steady_clock;
 double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
@@ -224,12 +230,50 @@ void Tesselator::reset() {
   s_->nbrValid = false;
   s_->cacheValid = false;
   s_->lastGeneration = ~0ull;
+  s_->fieldMoved = true;
+  s_->stillUpdates = s_->calm = 0;
+  s_->recentCounts.clear();
+  s_->stepScale = 1.0f;
   stats_ = {};
 }
 
 ParticleView Tesselator::particles() const {
   return {s_->pos, s_->nrm, s_->sigma, s_->owner, s_->id};
 }
+
+namespace {
+
+// Whether the field changed shape since the skeleton's previous update: some joint moved relative to the others.
+// When the particles are not carried by differential transforms (`carried` false), any motion counts.
+bool skeletonMoved(const SkeletonCache& skeleton, bool carried) {
+  const size_t joints = skeleton.character().joints().size();
+  const Rigid first = joints > 0 ? skeleton.differential(0) : Rigid{};
+  if (!carried && (std::fabs(first.rotation.w) < 1.0f - 1e-7f || glm::length(first.translation) > 1e-7f)) return true;
+  for (size_t j = 1; j < joints; ++j) {
+    const Rigid& d = skeleton.differential(int(j));
+    if (std::fabs(glm::dot(d.rotation, first.rotation)) < 1.0f - 1e-7f ||
+        glm::length(d.translation - first.translation) > 1e-6f)
+      return true;
+  }
+  return false;
+}
+
+// The rest schedule (see kStillAfter): counts the still updates and sets s.calm and s.stepScale for this update.
+// Returns whether the particles are frozen (this update does nothing).
+bool comeToRest(Tesselator::State& s) {
+  s.recentCounts.push_back(s.size());
+  if (s.recentCounts.size() > kCountWindow) s.recentCounts.erase(s.recentCounts.begin());
+  s.stillUpdates = s.fieldMoved ? 0 : s.stillUpdates + 1;
+  if (s.stillUpdates == 0) s.calm = 0;
+  const auto [lo, hi] = std::minmax_element(s.recentCounts.begin(), s.recentCounts.end());
+  const bool stable = s.recentCounts.size() == kCountWindow && double(*hi - *lo) <= 0.01 * double(*hi);
+  if (s.size() == 0) s.calm = 0;
+  else if (s.calm > 0 || (s.stillUpdates >= kStillAfter && stable)) ++s.calm;
+  s.stepScale = s.calm > 0 ? std::ldexp(1.0f, -int(std::min(s.calm, kCalmUpdates))) : 1.0f;
+  return s.calm > kCalmUpdates;
+}
+
+}  // namespace
 
 void Tesselator::update(const SkeletonCache& skeleton) {
   State& s = *s_;
@@ -247,6 +291,9 @@ void Tesselator::update(const SkeletonCache& skeleton) {
     s.nbrValid = false;
     s.cacheValid = false;
   }
+  const bool carried = options_.doDifferentialTransforms && s.character->hierarchical();
+  s.fieldMoved =
+      s.lastGeneration == ~0ull || (skeleton.generation() != s.lastGeneration && skeletonMoved(skeleton, carried));
   s.lastGeneration = skeleton.generation();
   s.fieldStamp = skeleton.generation();
   stats_.simulateMs = msSince(t0);
@@ -255,6 +302,7 @@ void Tesselator::update(const SkeletonCache& skeleton) {
 
 void Tesselator::update(const Field& field) {
   s_->character = nullptr;
+  s_->fieldMoved = true;  // a bare field may have changed in place: never at rest
   s_->fieldStamp = ~0ull;
   stats_.simulateMs = 0.0;
   step(field, nullptr);
@@ -458,8 +506,9 @@ void integrateParticles(Tesselator::State& s, const Field& field, const Tesselat
       glm::vec3 step = o.deltaT * s.vel[i];
       const float len = glm::length(step);
       if (len > kMaxStep * h) step *= kMaxStep * h / len;
-      s.pos[i] += step;
-      const float si = std::clamp(s.sigma[i] * invH + o.deltaT * s.sigmaRate[i], kSigmaMin, kSigmaMax);
+      s.pos[i] += s.stepScale * step;
+      const float si =
+          std::clamp(s.sigma[i] * invH + s.stepScale * o.deltaT * s.sigmaRate[i], kSigmaMin, kSigmaMax);
       s.sigma[i] = si * h;
     }
     field.prepare(chunkBox(s.pos, begin, end, 0.0f), scratch);
@@ -492,6 +541,7 @@ void addAndDeleteParticles(Tesselator::State& s, const TesselatorOptions& o, Tes
       ++stats.strays;
       continue;
     }
+    if (s.calm > 0) continue;  // coming to rest: only strays die
     if (fuses(s, i, fuse2)) {
       s.dead[i] = 1;
       ++stats.fusions;
@@ -521,6 +571,15 @@ void Tesselator::step(const Field& field, const SkeletonCache*) {
     s.cacheValid = false;
     seedParticles(s, field, o);
     if (s.size() > 0) ++stats_.reseeds;
+  }
+  if (comeToRest(s)) {  // frozen on a still field: nothing moves, is born or dies (the mesh stays the same)
+    s.field = &field;
+    ++s.update;
+    ++stats_.updates;
+    stats_.particles = s.size();
+    stats_.simulateMs += msSince(t0);
+    stats_.addDeleteMs = 0.0;
+    return;
   }
   // Spatial sort and neighbour list (unless nothing moved since the last triangulation built them).
   if (!s.nbrValid) findNeighbours(s, o);
@@ -569,7 +628,7 @@ int Tesselator::settle(const SkeletonCache& skeleton, Mesh& mesh, int maxUpdates
       const auto [lo, hi] = std::minmax_element(counts.end() - 10, counts.end());
       if (double(*hi - *lo) <= 0.01 * double(*hi)) {
         triangulate(mesh);
-        if (stats_.boundaryEdges == 0) {
+        if (stats_.boundaryEdges == 0 && !stats_.fallback) {
           if (o.progress) o.progress(1.0f);
           return u;
         }

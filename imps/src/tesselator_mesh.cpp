@@ -24,6 +24,7 @@
 #include <cstring>
 
 #include "imps/check.h"
+#include "imps/marching_cubes.h"
 #include "imps/parallel.h"
 #include "tesselator_state.h"
 
@@ -210,9 +211,11 @@ bool addTriangle(Tesselator::State& s, uint32_t a, uint32_t b, uint32_t c, size_
     *boundary = *boundary + (3 - twins) - twins;
     s.openOut[a] = s.openOut[b] = s.openOut[c] = 1;
   }
-  s.heTo[size_t(a) * kMaxHalfEdges + s.heCount[a]++] = b;
-  s.heTo[size_t(b) * kMaxHalfEdges + s.heCount[b]++] = c;
-  s.heTo[size_t(c) * kMaxHalfEdges + s.heCount[c]++] = a;
+  const size_t ka = size_t(a) * kMaxHalfEdges + s.heCount[a]++, kb = size_t(b) * kMaxHalfEdges + s.heCount[b]++,
+               kc = size_t(c) * kMaxHalfEdges + s.heCount[c]++;
+  s.heTo[ka] = b, s.heThird[ka] = c;
+  s.heTo[kb] = c, s.heThird[kb] = a;
+  s.heTo[kc] = a, s.heThird[kc] = b;
   s.tris.push_back(a);
   s.tris.push_back(b);
   s.tris.push_back(c);
@@ -274,11 +277,13 @@ bool fillable(const Tesselator::State& s, const std::vector<uint32_t>& loop) {
 // Removes directed edge a -> b from a's half-edge table (keeping the others' order).
 void removeHalfEdge(Tesselator::State& s, uint32_t a, uint32_t b) {
   uint32_t* to = &s.heTo[size_t(a) * kMaxHalfEdges];
+  uint32_t* third = &s.heThird[size_t(a) * kMaxHalfEdges];
   const size_t n = s.heCount[a];
   size_t k = 0;
   while (k < n && to[k] != b) ++k;
   if (k == n) return;
   std::copy(to + k + 1, to + n, to + k);
+  std::copy(third + k + 1, third + n, third + k);
   --s.heCount[a];
 }
 
@@ -488,7 +493,7 @@ size_t placeUnanimous(Tesselator::State& s, size_t i, uint32_t*& tri) {
   const uint8_t* unanimous = &s.fanUnanimous[i * kMaxFan];
   const size_t m = s.fanCount[i];
   uint32_t* to = &s.heTo[i * kMaxHalfEdges];
-  uint32_t from[kMaxHalfEdges];  // the twins' start vertices: f[q + 1] of each unanimous slot q
+  uint32_t* from = &s.heThird[i * kMaxHalfEdges];  // the twins' start vertices: f[q + 1] of each unanimous slot q
   size_t cnt = 0;
   for (size_t k = 0; k < m; ++k)
     if (unanimous[k]) {
@@ -511,6 +516,49 @@ size_t placeUnanimous(Tesselator::State& s, size_t i, uint32_t*& tri) {
     tri += 3;
   }
   return open;
+}
+
+// Whether vertex v's triangles form more than one fan; if so marks v in s.openUp and the half-edge slots of all but
+// its largest fan in s.dropSlot (writes only v's entries). Around v, the corner of slot k spans heTo .. heThird; the
+// next corner is the slot whose heTo is this one's heThird. Each slot has at most one successor and predecessor, so
+// the corners fall into paths and cycles: fans. One fan (a disk, or a half-disk on the boundary) is manifold.
+size_t markIfPinched(Tesselator::State& s, size_t v) {
+  const size_t m = s.heCount[v];
+  s.openUp[v] = 0;
+  if (m < 2) return 0;
+  const uint32_t* to = &s.heTo[v * kMaxHalfEdges];
+  const uint32_t* third = &s.heThird[v * kMaxHalfEdges];
+  uint8_t next[kMaxHalfEdges], hasPredecessor[kMaxHalfEdges] = {}, fanOf[kMaxHalfEdges];
+  size_t links = 0;
+  for (size_t k = 0; k < m; ++k) {
+    size_t q = 0;
+    while (q < m && to[q] != third[k]) ++q;
+    next[k] = uint8_t(q);
+    if (q < m) hasPredecessor[q] = 1, ++links;
+    fanOf[k] = 0xff;
+  }
+  if (links + 1 == m) {  // one path, or a cycle plus a path: walk from the path's start
+    size_t k = 0;
+    while (hasPredecessor[k]) ++k;
+    size_t visited = 1;
+    for (size_t cur = next[k]; cur < m; cur = next[cur]) ++visited;
+    if (visited == m) return 0;
+  } else if (links == m) {  // cycles only: one iff the walk from slot 0 visits all
+    size_t visited = 1;
+    for (size_t cur = next[0]; cur != 0 && visited <= m; cur = next[cur]) ++visited;
+    if (visited == m) return 0;
+  }
+  size_t fans = 0, fanSize[kMaxHalfEdges] = {};
+  for (int cycles = 0; cycles < 2; ++cycles)  // paths from their first corner, then the cycles
+    for (size_t k = 0; k < m; ++k) {
+      if (fanOf[k] != 0xff || (cycles == 0 && hasPredecessor[k])) continue;
+      for (size_t cur = k; cur < m && fanOf[cur] == 0xff; cur = next[cur]) fanOf[cur] = uint8_t(fans), ++fanSize[fans];
+      ++fans;
+    }
+  const size_t keep = size_t(std::max_element(fanSize, fanSize + fans) - fanSize);
+  for (size_t k = 0; k < m; ++k) s.dropSlot[v * kMaxHalfEdges + k] = fanOf[k] != keep;
+  s.openUp[v] = 1;
+  return 1;
 }
 
 // Walks the hole loop that starts with start's e-th hole edge along unused hole edges into s.loop (marking them
@@ -640,6 +688,7 @@ void voteTriangles(Tesselator::State& s, const TesselatorOptions& o) {
 size_t assembleTriangles(Tesselator::State& s, const TesselatorOptions& o) {
   const size_t n = s.size(), chunks = (n + kChunk - 1) / kChunk;
   s.heTo.resize(n * kMaxHalfEdges);
+  s.heThird.resize(n * kMaxHalfEdges);
   s.heCount.resize(n);
   s.tris.clear();
   bool anyRepeat = false;
@@ -712,6 +761,69 @@ size_t repairHoles(Tesselator::State& s, const TesselatorOptions& o, size_t& bou
   return unfilled;
 }
 
+size_t markPinchedVertices(Tesselator::State& s, const TesselatorOptions& o) {
+  const size_t n = s.size(), chunks = (n + kChunk - 1) / kChunk;
+  s.openUp.resize(n);
+  s.dropSlot.resize(n * kMaxHalfEdges);
+  s.chunkOpen.assign(chunks, 0);
+  parallelFor(chunks, o.numThreads, [&](size_t c) {
+    size_t pinched = 0;
+    for (size_t v = c * kChunk; v < std::min(n, (c + 1) * kChunk); ++v) pinched += markIfPinched(s, v);
+    s.chunkOpen[c] = pinched;
+  });
+  size_t pinched = 0;
+  for (size_t p : s.chunkOpen) pinched += p;
+  return pinched;
+}
+
+namespace {
+
+// Removes the triangles that s.dropSlot marks at one of their corners (the pinched vertices' smaller fans), with
+// their half-edges, keeping `boundary` and s.openOut up to date as removeAround does.
+void removeSmallerFans(Tesselator::State& s, size_t& boundary) {
+  std::vector<uint8_t>& drop = s.holeUsed;  // per triangle (scratch: the repair rebuilds it)
+  drop.assign(s.tris.size() / 3, 0);
+  for (size_t t = 0; t < s.tris.size(); t += 3)
+    for (size_t k = 0; k < 3; ++k) {
+      const uint32_t a = s.tris[t + k], b = s.tris[t + (k + 1) % 3];
+      if (!s.openUp[a]) continue;  // s.dropSlot is written for the pinched vertices only
+      const uint32_t* to = &s.heTo[size_t(a) * kMaxHalfEdges];
+      for (size_t q = 0; q < s.heCount[a]; ++q)
+        if (to[q] == b && s.dropSlot[size_t(a) * kMaxHalfEdges + q]) drop[t / 3] = 1;
+    }
+  size_t w = 0;
+  for (size_t t = 0; t < s.tris.size(); t += 3) {
+    const uint32_t c[3] = {s.tris[t], s.tris[t + 1], s.tris[t + 2]};
+    if (!drop[t / 3]) {
+      for (int k = 0; k < 3; ++k) s.tris[w + size_t(k)] = c[k];
+      w += 3;
+      continue;
+    }
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = c[k], b = c[(k + 1) % 3];
+      removeHalfEdge(s, a, b);
+      boundary = hasHalfEdge(s, b, a) ? boundary + 1 : boundary - 1;
+      s.openOut[a] = 1;
+    }
+  }
+  s.tris.resize(w);
+}
+
+}  // namespace
+
+size_t unpinchVertices(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary, size_t& unfilled) {
+  size_t pinched = markPinchedVertices(s, o);
+  // First only the smaller fans go (the vertex keeps its main disk, and the caps the repair lays where they were
+  // are small); should that not do, every triangle around the vertex.
+  for (int pass = 0; pass < 3 && pinched > 0; ++pass) {
+    if (pass < 2) removeSmallerFans(s, boundary);
+    else removeAround(s, boundary);
+    unfilled = repairHoles(s, o, boundary);
+    pinched = markPinchedVertices(s, o);
+  }
+  return pinched;
+}
+
 void writeMesh(const Tesselator::State& s, const TesselatorOptions& o, Mesh& mesh) {
   const size_t n = s.size();
   mesh.positions.resize(3 * n);
@@ -726,6 +838,13 @@ void writeMesh(const Tesselator::State& s, const TesselatorOptions& o, Mesh& mes
       }
   });
   mesh.indices = s.tris;
+}
+
+void writeFallbackMesh(const Tesselator::State& s, const TesselatorOptions& o, Mesh& mesh) {
+  MarchingCubesOptions mc;
+  mc.cellSize = o.desiredRadius;
+  mc.threads = o.numThreads;
+  mesh = polygonize(*s.field, mc);
 }
 
 void Tesselator::triangulate(Mesh& mesh) {
@@ -745,12 +864,22 @@ void Tesselator::triangulate(Mesh& mesh) {
   voteTriangles(s, o);    // C
   size_t boundary = assembleTriangles(s, o);  // D
   const size_t assembled = s.tris.size() / 3;
-  const size_t unfilled = repairHoles(s, o, boundary);  // E
-  writeMesh(s, o, mesh);
-  stats_.triangles = s.tris.size() / 3;
-  stats_.filledTriangles = stats_.triangles > assembled ? stats_.triangles - assembled : 0;
-  stats_.boundaryEdges = boundary;
+  size_t unfilled = repairHoles(s, o, boundary);  // E
+  const size_t pinched = unpinchVertices(s, o, boundary, unfilled);  // F
+  stats_.filledTriangles = s.tris.size() / 3 > assembled ? s.tris.size() / 3 - assembled : 0;
   stats_.unfilledLoops = unfilled;
+  stats_.pinchedVertices = pinched;
+  stats_.openEdges = boundary;
+  stats_.fallback = o.closedFallback && (boundary > 0 || pinched > 0);
+  if (stats_.fallback) {  // G: never show a hole (docs/tesselator.md, "The fallback")
+    ++stats_.fallbacks;
+    writeFallbackMesh(s, o, mesh);
+    boundary = 0;
+  } else {
+    writeMesh(s, o, mesh);
+  }
+  stats_.triangles = mesh.triangleCount();
+  stats_.boundaryEdges = boundary;
   stats_.meshMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 

@@ -85,6 +85,13 @@ struct Tesselator::State {
   uint64_t nextId = 0;
   uint64_t update = 0;
   float eHat = 1.0f;  // desired energy per particle (hexagonal packing at spacing desiredRadius)
+  // Coming to rest on a still field (tesselator.cpp, kStillAfter): whether the field moved before this update, the
+  // updates since it last moved, the particle counts of the last updates, the calm updates so far (0: moving; fission,
+  // fusion and death stop while > 0) and the factor on this update's step and radius rate.
+  bool fieldMoved = true;
+  uint32_t stillUpdates = 0, calm = 0;
+  std::vector<size_t> recentCounts;
+  float stepScale = 1.0f;
 
   // Reorder scratch.
   std::vector<glm::vec3> tmpV;
@@ -104,6 +111,8 @@ struct Tesselator::State {
   std::vector<uint8_t> candVotes;  // per particle: bit v set if one of its candidates has v votes
   std::vector<uint32_t> heTo;
   std::vector<uint8_t> heCount;
+  std::vector<uint32_t> heThird;  // per half-edge slot a -> heTo: the third corner of its triangle (kept with heTo)
+  std::vector<uint8_t> dropSlot;  // per half-edge slot: its triangle is in a pinched vertex's smaller fan
   std::vector<uint32_t> holeTo;
   std::vector<uint8_t> holeCount, holeUsed, openUp, openOut;
   std::vector<uint32_t> loop, tris;
@@ -152,8 +161,18 @@ size_t assembleTriangles(Tesselator::State& s, const TesselatorOptions& o);
 // cannot close are opened up (the triangles around them removed) for the next round. Keeps `boundary` (directed
 // edges without a twin) up to date; returns the loops left unfilled.
 size_t repairHoles(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary);
+// F. pinches: a vertex whose triangles form more than one fan (two disks touching at a point, which the edge-based
+// assembly and repair cannot see) loses the triangles of its smaller fans (twice; the third time every triangle
+// around it) and the holes are repaired again (E). Returns the pinched vertices left (0: the triangulation is a
+// 2-manifold wherever it is closed).
+size_t unpinchVertices(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary, size_t& unfilled);
+// Counts the vertices whose triangles do not form a single fan (a disk, or a half-disk on the boundary), marking them
+// in s.openUp and the half-edge slots of all but their largest fan in s.dropSlot. Parallel; reads the half-edge table.
+size_t markPinchedVertices(Tesselator::State& s, const TesselatorOptions& o);
 // The output: one vertex per particle (s.vpos, s.nrm, s.vcol clamped to [0, 1]) and s.tris.
 void writeMesh(const Tesselator::State& s, const TesselatorOptions& o, Mesh& mesh);
+// G. the fallback output: Marching Cubes of s.field at cell desiredRadius (closed and manifold by construction).
+void writeFallbackMesh(const Tesselator::State& s, const TesselatorOptions& o, Mesh& mesh);
 
 // ---- The update's phases (tesselator.cpp), in the order Tesselator::step runs them after findNeighbours.
 

@@ -223,6 +223,51 @@ TEST(TesselatorPasses, RepairLeavesLoopsLongerThanMaxHoleLoopOpen) {
   EXPECT_EQ(boundary, openEdges(s));
 }
 
+// F: a vertex whose triangles form two closed fans (a square pyramid and a tetrahedron sharing their apex 0: every
+// edge has its twin, yet the mesh is pinched at 0) is found, the smaller fan's slots are marked, and the pass leaves
+// no pinched vertex, with the larger fan untouched.
+TEST(TesselatorPasses, PinchedVertexLosesItsSmallerFan) {
+  Sphere sphere(600);
+  auto& s = sphere.s;
+  projectVertices(s, sphere.options);
+  const std::vector<uint32_t> pyramid = {0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 4, 1, 1, 4, 3, 1, 3, 2};
+  const std::vector<uint32_t> tetrahedron = {0, 5, 6, 0, 6, 7, 0, 7, 5, 5, 7, 6};
+  const size_t n = s.size();
+  s.heTo.assign(n * kMaxHalfEdges, 0);
+  s.heThird.assign(n * kMaxHalfEdges, 0);
+  s.heCount.assign(n, 0);
+  s.openOut.assign(n, 0);
+  s.tris = pyramid;
+  s.tris.insert(s.tris.end(), tetrahedron.begin(), tetrahedron.end());
+  for (size_t t = 0; t < s.tris.size(); t += 3)
+    for (size_t k = 0; k < 3; ++k) {
+      const uint32_t a = s.tris[t + k], slot = uint32_t(a * kMaxHalfEdges + s.heCount[a]++);
+      s.heTo[slot] = s.tris[t + (k + 1) % 3];
+      s.heThird[slot] = s.tris[t + (k + 2) % 3];
+    }
+  ASSERT_EQ(markPinchedVertices(s, sphere.options), 1u);
+  EXPECT_TRUE(s.openUp[0]);
+  size_t dropped = 0;
+  for (size_t k = 0; k < s.heCount[0]; ++k) {
+    const uint32_t to = s.heTo[k];
+    EXPECT_EQ(bool(s.dropSlot[k]), to >= 5) << "slot to " << to << ": only the tetrahedron's (smaller) fan goes";
+    dropped += s.dropSlot[k];
+  }
+  EXPECT_EQ(dropped, 3u);
+  size_t boundary = 0, unfilled = 0;
+  EXPECT_EQ(unpinchVertices(s, sphere.options, boundary, unfilled), 0u);
+  EXPECT_EQ(markPinchedVertices(s, sphere.options), 0u);
+  std::set<std::tuple<uint32_t, uint32_t, uint32_t>> left;
+  for (size_t t = 0; t < s.tris.size(); t += 3) left.insert({s.tris[t], s.tris[t + 1], s.tris[t + 2]});
+  for (size_t t = 0; t < pyramid.size(); t += 3)
+    EXPECT_TRUE(left.count({pyramid[t], pyramid[t + 1], pyramid[t + 2]})) << "pyramid triangle " << t / 3;
+  for (size_t t = 0; t < s.tris.size(); t += 3) {
+    const uint32_t* c = &s.tris[t];
+    const bool apex = c[0] == 0 || c[1] == 0 || c[2] == 0, tetra = c[0] >= 5 || c[1] >= 5 || c[2] >= 5;
+    EXPECT_FALSE(apex && tetra) << "a tetrahedron triangle at the apex is left";
+  }
+}
+
 TEST(TesselatorPasses, ComputeForcesKeepsVelocitiesTangentAndMarksStrays) {
   Sphere sphere(600);
   auto& s = sphere.s;

@@ -370,6 +370,89 @@ TEST_F(CliTest, ViewRefusesAGridBeyondTheCellLimit) {
   EXPECT_NE(run.err.find("more than the limit of"), std::string::npos) << run.err;
 }
 
+// ---- The particle tesselator's report (issue 15)
+
+// bench checks every render's mesh: on a fast swing, on the project's own small clip (retargeted as replay does) and
+// on a recorded session, each render closed and manifold, reported as JSON and one CSV line per render.
+TEST_F(CliTest, BenchChecksEveryRenderOfASwingAClipAndASession) {
+  const std::vector<std::string> coarse = {"--desired-radius", "0.0432", "--json"};  // ~900 particles
+  struct Case {
+    std::string motion;
+    int renders;
+  } cases[] = {{"swing:720", 12}, {kBvh, 4}, {kWave, 4}};
+  for (const Case& c : cases) {
+    std::vector<std::string> args = {"bench", kBiped, "--motion", c.motion, "--hz", "60", "--renders",
+                                     std::to_string(c.renders), "--csv", at("bench.csv")};
+    args.insert(args.end(), coarse.begin(), coarse.end());
+    const test::ProgramRun run = runProgram(puppeteer(), args);
+    ASSERT_EQ(run.exitCode, kOk) << c.motion << ": " << run.err;
+    const nlohmann::json report = nlohmann::json::parse(run.out);
+    const nlohmann::json& scene = report["scenes"][0];
+    for (const char* key : {"renders", "renders_with_holes", "max_boundary_edges", "renders_with_nonmanifold",
+                            "max_nonmanifold_edges", "max_nonmanifold_vertices", "renders_with_folds",
+                            "fissions_per_update_settled", "worst_f_minus_iso", "renders_with_fallback"})
+      EXPECT_TRUE(scene.contains(key)) << c.motion << ": " << key;
+    EXPECT_EQ(scene["renders"], c.renders) << c.motion;
+    EXPECT_EQ(scene["renders_with_holes"], 0) << c.motion;
+    EXPECT_EQ(scene["renders_with_nonmanifold"], 0) << c.motion;
+    std::ifstream csv(at("bench.csv"));
+    std::string line;
+    std::getline(csv, line);
+    EXPECT_EQ(line.rfind("scene,render,seconds,particles,triangles,boundary_edges,", 0), 0u) << line;
+    int rows = 0;
+    while (std::getline(csv, line)) ++rows;
+    EXPECT_EQ(rows, c.renders) << c.motion;
+  }
+  struct Bad {
+    std::vector<std::string> args;
+    int code;
+    std::string says;
+  } bad[] = {
+      {{"--motion", at("missing.bvh")}, kInvalidInput, "no such file"},
+      {{"--motion", at("garbage.bvh")}, kInvalidInput, "garbage.bvh"},
+      {{"--motion", "swing:fast"}, kUsage, "swing:fast"},
+      {{"--motion", "wobble"}, kUsage, "--motion"},
+      {{"--csv", at("report.txt")}, kUsage, "--csv"},
+      {{"--csv", at("nodir/report.csv")}, kIo, "nodir"},
+      {{"--hz", "0"}, kUsage, "--hz"},
+  };
+  for (const Bad& b : bad) {
+    std::vector<std::string> args = {"bench", kBiped, "--renders", "1"};
+    args.insert(args.end(), b.args.begin(), b.args.end());
+    const test::ProgramRun run = runProgram(puppeteer(), args);
+    EXPECT_EQ(run.exitCode, b.code) << b.args[1] << ": " << run.err;
+    EXPECT_NE(run.err.find(b.says), std::string::npos) << run.err;
+  }
+}
+
+// mesh --polygonizer particles always checks its mesh: a scene where the particles miss a small blob that Marching
+// Cubes finds (twelve metaballs, the default desiredRadius of 0.3 m against radii of 0.15-0.35 m) exits 4 and says
+// so; the mesh is written all the same.
+TEST_F(CliTest, ParticleMeshMissingPartOfTheSurfaceExits4) {
+  write("blobs12.wrl", "#VRML V2.0 utf8\nExponentialBlend {\n  variance 0.25\n  children [\n"
+                       "    Metaball { center 0.939 -1.308 0.851 radius 0.267 }\n"
+                       "    Metaball { center 0.146 -1.031 -0.394 radius 0.176 }\n"
+                       "    Metaball { center 1.202 -0.405 0.604 radius 0.250 }\n"
+                       "    Metaball { center -0.659 -0.226 1.153 radius 0.262 }\n"
+                       "    Metaball { center 0.598 1.372 0.434 radius 0.230 }\n"
+                       "    Metaball { center -1.395 -0.707 -1.069 radius 0.155 }\n"
+                       "    Metaball { center 1.166 0.646 -1.215 radius 0.313 }\n"
+                       "    Metaball { center -0.913 1.281 -0.251 radius 0.189 }\n"
+                       "    Metaball { center 0.302 0.066 1.391 radius 0.337 }\n"
+                       "    Metaball { center -1.275 0.467 0.285 radius 0.214 }\n"
+                       "    Metaball { center 0.016 0.553 -0.792 radius 0.158 }\n"
+                       "    Metaball { center -0.388 -1.448 0.955 radius 0.296 }\n  ]\n}\n");
+  const test::ProgramRun run =
+      runProgram(puppeteer(), {"mesh", at("blobs12.wrl"), "--polygonizer", "particles", "-o", at("blobs12.ply")});
+  EXPECT_EQ(run.exitCode, 4) << run.err;
+  EXPECT_NE(run.err.find("Marching Cubes finds"), std::string::npos) << run.err;
+  EXPECT_TRUE(std::filesystem::exists(at("blobs12.ply")));
+  const test::ProgramRun biped = runProgram(puppeteer(), {"mesh", kBiped, "--polygonizer", "particles", "--updates",
+                                                          "3", "-o", at("biped.ply")});
+  EXPECT_EQ(biped.exitCode, kOk) << biped.err;
+  EXPECT_NE(biped.out.find("closed 2-manifold"), std::string::npos) << biped.out;
+}
+
 // ---- Noise
 
 // Particle runs with more threads than the machine has cores used to print oneTBB's "The number of workers is

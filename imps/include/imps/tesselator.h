@@ -65,6 +65,9 @@ struct TesselatorOptions {
   // desiredRadius too small for the character reaches it; the surface is then sampled more coarsely than asked.
   size_t maxParticles = size_t{1} << 18;
   int maxHoleLoop = 40;          // boundary loops up to this many edges are filled by the hole repair
+  // A triangulation left with a hole or a pinched vertex after repair is replaced by Marching Cubes of the same field
+  // at cell desiredRadius (stats().fallback), so that no hole is ever shown. False: the particle mesh as it is.
+  bool closedFallback = true;
   // Long bakes (settle()), as libfive's BRepSettings: when *cancel becomes true (from any thread) settle() returns
   // after the update under way, with `mesh` empty and stats().cancelled set. Null: never.
   std::atomic<bool>* cancel = nullptr;
@@ -86,6 +89,10 @@ struct TesselatorStats {
   size_t boundaryEdges = 0;  // last triangulate(): edges with one triangle left after hole repair
   size_t filledTriangles = 0;  // last triangulate(): triangles added by the hole repair
   size_t unfilledLoops = 0;    // last triangulate(): boundary loops the repair could not close
+  size_t openEdges = 0;        // last triangulate(): the particle triangulation's edges with one triangle after repair
+  size_t pinchedVertices = 0;  // last triangulate(): its vertices whose triangles form more than one fan
+  bool fallback = false;       // last triangulate(): the mesh is the Marching Cubes fallback (see closedFallback)
+  uint64_t fallbacks = 0;      // triangulations that fell back, since reset
   uint64_t updates = 0;        // total update() calls since reset
   bool cancelled = false;      // the last settle() was stopped by options.cancel
   // Totals since reset.
@@ -125,16 +132,18 @@ class Tesselator {
 
   // Triangulates the current particles into `mesh` (replaced): one vertex per particle, in particle order, projected
   // onto the surface with a Newton step; outward normals; colours blended over colorWidth. Uses the field of the last
-  // update (which must have happened).
+  // update (which must have happened). If that triangulation still has a hole or a pinched vertex after repair and
+  // options().closedFallback is set, `mesh` is instead Marching Cubes of the field at cell desiredRadius (closed and
+  // manifold; not one vertex per particle) and stats().fallback is set.
   void triangulate(Mesh& mesh);
 
   // updatesPerRender updates then one triangulation.
   void frame(const SkeletonCache& skeleton, Mesh& mesh);
 
-  // Runs updates until settled (particle count stable to 1% over 10 updates, and the mesh closed) or maxUpdates;
-  // returns the number of updates run. Leaves the last triangulation in `mesh`. Reports progress and stops on
-  // cancel as the options say (then `mesh` is empty, stats().cancelled is set, and the particles are those of the
-  // last complete update, so a later call goes on from there).
+  // Runs updates until settled (particle count stable to 1% over 10 updates, and the particle triangulation closed
+  // without the fallback) or maxUpdates; returns the number of updates run. Leaves the last triangulation in
+  // `mesh`. Reports progress and stops on cancel as the options say (then `mesh` is empty, stats().cancelled is set,
+  // and the particles are those of the last complete update, so a later call goes on from there).
   int settle(const SkeletonCache& skeleton, Mesh& mesh, int maxUpdates = 400);
 
   ParticleView particles() const;
