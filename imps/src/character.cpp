@@ -38,10 +38,6 @@ TexGen texGenOf(const ShapeNode& shape, const TexGenNode& node) {
   return g;
 }
 
-bool Character::textured() const {
-  return std::any_of(primitives_.begin(), primitives_.end(), [](const CharacterPrimitive& p) { return p.texGen; });
-}
-
 class CharacterBuilder {
  public:
   explicit CharacterBuilder(const Scene& scene) : scene_(scene) {}
@@ -140,7 +136,10 @@ class CharacterBuilder {
                               : "blendParam must be positive for this blend");
     }
     if (s.material) p.color = s.material->diffuseColor;
-    if (s.texGen || s.texture) p.texGen = texGenOf(s, s.texGen.value_or(TexGenNode{}));
+    if (s.texGen || s.texture) {
+      p.texGen = texGenOf(s, s.texGen.value_or(TexGenNode{}));
+      c_.textured_ = true;
+    }
     if (s.texture) p.texture = textureIndex(*s.texture);
     shapeNames_[p.name].push_back(index);
     c_.primitives_.push_back(std::move(p));

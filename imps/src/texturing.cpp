@@ -2,6 +2,8 @@
 #include "imps/texturing.h"
 
 #include <algorithm>
+#include <cmath>
+#include <map>
 #include <vector>
 
 #include "imps/check.h"
@@ -92,6 +94,93 @@ void textureMesh(Mesh& mesh, const SkeletonCache& cache, int threads) {
     images[i] = character.primitives()[i].texture;
   }
   textureMesh(mesh, cache.field(), gens, images, threads);
+}
+
+namespace {
+
+// The layer weighing most in triangle t (summed over its corners), or -1.
+int32_t heaviestLayer(const Mesh& mesh, size_t t) {
+  int32_t layer[6];
+  float weight[6];
+  int count = 0;
+  for (int c = 0; c < 3; ++c) {
+    const uint32_t v = mesh.indices[3 * t + size_t(c)];
+    for (int k = 0; k < 2; ++k) {
+      const int32_t l = mesh.layers[2 * v + size_t(k)];
+      if (l < 0) continue;
+      int i = 0;
+      while (i < count && layer[i] != l) ++i;
+      if (i == count) {
+        layer[count] = l;
+        weight[count++] = 0.0f;
+      }
+      weight[i] += mesh.layerWeights[2 * v + size_t(k)];
+    }
+  }
+  int32_t best = -1;
+  float bestWeight = 0.0f;
+  for (int i = 0; i < count; ++i)
+    if (weight[i] > bestWeight || (weight[i] == bestWeight && best >= 0 && layer[i] < best)) {
+      best = layer[i];
+      bestWeight = weight[i];
+    }
+  return best;
+}
+
+void copyVertex(const Mesh& from, uint32_t v, Mesh& to) {
+  to.positions.insert(to.positions.end(), {from.positions[3 * v], from.positions[3 * v + 1], from.positions[3 * v + 2]});
+  if (!from.normals.empty())
+    to.normals.insert(to.normals.end(), {from.normals[3 * v], from.normals[3 * v + 1], from.normals[3 * v + 2]});
+  if (!from.colors.empty())
+    to.colors.insert(to.colors.end(), {from.colors[3 * v], from.colors[3 * v + 1], from.colors[3 * v + 2]});
+}
+
+}  // namespace
+
+std::vector<TexturedPart> splitByTexture(const Mesh& mesh) {
+  // Triangles by part: the image of their heaviest layer (its generator decides the coordinates).
+  std::map<int32_t, std::vector<std::pair<size_t, int32_t>>> byImage;  // image -> (triangle, layer)
+  for (size_t t = 0; t < mesh.triangleCount(); ++t) {
+    const int32_t layer = mesh.textured() ? heaviestLayer(mesh, t) : -1;
+    const int32_t image = layer >= 0 ? mesh.layerImages[size_t(layer)] : -1;
+    byImage[image].emplace_back(t, image >= 0 ? layer : -1);
+  }
+  std::vector<TexturedPart> parts;
+  for (const auto& [image, triangles] : byImage) {
+    TexturedPart part;
+    part.image = image;
+    std::map<std::pair<uint32_t, int32_t>, uint32_t> shared;  // (vertex, layer) -> part vertex
+    for (const auto& [t, layer] : triangles) {
+      glm::vec2 uv[3];
+      for (int c = 0; c < 3; ++c)
+        uv[c] = layer >= 0 ? mesh.layerGens[size_t(layer)].map(mesh.position(mesh.indices[3 * t + size_t(c)]))
+                           : glm::vec2(0.0f);
+      bool seam = false;
+      for (int c = 1; c < 3; ++c) {
+        const float shift = std::round(uv[c].x - uv[0].x);
+        if (shift != 0.0f) {
+          uv[c].x -= shift;
+          seam = true;
+        }
+      }
+      for (int c = 0; c < 3; ++c) {
+        const uint32_t v = mesh.indices[3 * t + size_t(c)];
+        uint32_t at;
+        const auto found = seam ? shared.end() : shared.find({v, layer});
+        if (found != shared.end()) {
+          at = found->second;
+        } else {
+          at = static_cast<uint32_t>(part.mesh.vertexCount());
+          copyVertex(mesh, v, part.mesh);
+          part.uvs.insert(part.uvs.end(), {uv[c].x, uv[c].y});
+          if (!seam) shared.emplace(std::pair{v, layer}, at);
+        }
+        part.mesh.indices.push_back(at);
+      }
+    }
+    parts.push_back(std::move(part));
+  }
+  return parts;
 }
 
 }  // namespace imps

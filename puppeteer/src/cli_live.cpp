@@ -41,6 +41,7 @@
 #include "session_calibration.h"
 #include "pose_argument.h"
 #include "map_option.h"
+#include "textures.h"
 
 namespace imps::app {
 namespace {
@@ -126,12 +127,19 @@ std::unique_ptr<ViewerPipeline> makePipeline(const LiveArgs& a, int* exitCode) {
     *exitCode = kExitInvalidInput;
     return nullptr;
   }
+  auto textures = loadTextures(loaded->character);
+  if (!textures) {
+    std::fprintf(stderr, "%s\n", textures.error().c_str());
+    *exitCode = kExitInvalidInput;
+    return nullptr;
+  }
   PipelineOptions o;
   const bool fileNamesMc = std::holds_alternative<MarchingCubesNode>(loaded->scene.polygonizer);
   o.polygonizer = a.polygonizer == "mc" || (a.polygonizer.empty() && fileNamesMc) ? Polygonizer::MarchingCubes
                                                                                  : Polygonizer::Particles;
   o.threads = a.threads;
   auto pipeline = std::make_unique<ViewerPipeline>(std::move(loaded->scene), std::move(loaded->character), o);
+  pipeline->setTextures(std::move(*textures));
   for (const std::string& text : a.poses) {
     const auto p = parsePoseArgument(text);
     const int j = p ? pipeline->character().findJoint(p->joint) : -2;

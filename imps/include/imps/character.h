@@ -85,7 +85,7 @@ class Character {
   const std::vector<CharacterPrimitive>& primitives() const { return primitives_; }
   const std::vector<CharacterTexture>& textures() const { return textures_; }
   // Whether any primitive has a texture-coordinate generator (texGen or texture).
-  bool textured() const;
+  bool textured() const { return textured_; }
   const BlendFunction& blend() const { return blend_; }
   float isoValue() const { return iso_; }
   bool hierarchical() const { return hierarchical_; }
@@ -109,6 +109,7 @@ class Character {
   BlendFunction blend_;
   float iso_ = 1.0f;
   bool hierarchical_ = false;
+  bool textured_ = false;
   friend class CharacterBuilder;
 };
 

@@ -29,4 +29,18 @@ void textureMesh(Mesh& mesh, const Field& field, std::span<const TexGen* const> 
 // The same for a posed character: its world-space generators and images (a no-op when it has none).
 void textureMesh(Mesh& mesh, const SkeletonCache& cache, int threads = 0);
 
+// A textured mesh cut for formats with one texture per material (glTF, OBJ): each triangle goes to the part of the
+// layer that weighs most in it (summed over its corners; a triangle without layers, or whose heaviest layer has no
+// image, goes to the untextured part, image -1). Each part has its own vertices (positions, normals and colours
+// copied) with the part's layer's (u, v) from its generator; a triangle spanning a sphere generator's seam gets its
+// own corners with u unwrapped, so no triangle smears the whole image. Parts come in ascending image order, the
+// untextured one first; empty parts are left out. The blend between layers is lost: formats with one texture per
+// material show the heaviest one (the renderers blend).
+struct TexturedPart {
+  int32_t image = -1;
+  Mesh mesh;                  // positions, normals, colors, indices; no layers
+  std::vector<float> uvs;     // 2 per vertex of `mesh`: (u, v), v up
+};
+std::vector<TexturedPart> splitByTexture(const Mesh& mesh);
+
 }  // namespace imps
