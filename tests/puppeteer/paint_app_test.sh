@@ -12,7 +12,7 @@ cp "$src/examples/textured_blobs.wrl" "$src"/examples/textured_blobs_*.png "$wor
 before=$(sha256sum "$work/textured_blobs_checker.png")
 for polygonizer in mc particles; do
   "$xvfb" -a "$puppeteer" view "$work/textured_blobs.wrl" --polygonizer "$polygonizer" --no-hud --width 640 \
-      --height 480 --keys t@2,6@3,s@8 --drag 200,230,260,260@4 --frames 10 --save-as "$work/painted_$polygonizer.wrl" \
+      --height 480 --keys t@2,6@3,s@8 --drag 230,210,280,230@4 --frames 10 --save-as "$work/painted_$polygonizer.wrl" \
       >"$work/out" 2>&1 || { cat "$work/out"; exit 1; }
   grep -q "paint mode" "$work/out" || { cat "$work/out"; echo "FAIL: no paint mode"; exit 1; }
   grep -q "with its painted textures" "$work/out" || { cat "$work/out"; echo "FAIL: nothing painted"; exit 1; }
