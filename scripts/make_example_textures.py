@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Writes the example textures of examples/textured_blobs.wrl (thesis figure 3-4: two metaballs with very different
-textures): a checkerboard wrapped by a TexGenSphere and diagonal stripes projected by a TexGenPlane. Plain Python
+textures): a checkerboard wrapped by a TexGenSphere and diagonal stripes projected by a TexGenPlane; and the blank
+canvases flubber's suit, tie and face were painted on in the app (flubber_blank.png: its skin colour). Plain Python
 (zlib), so the images can be made again anywhere: python3 scripts/make_example_textures.py examples/"""
 import struct
 import sys
@@ -38,3 +39,4 @@ if __name__ == "__main__":
     out = sys.argv[1] if len(sys.argv) > 1 else "examples/"
     write_png(out + "/textured_blobs_checker.png", 512, 256, checker)
     write_png(out + "/textured_blobs_stripes.png", 256, 256, stripes)
+    write_png(out + "/flubber_blank.png", 256, 256, lambda x, y: (178, 231, 137))  # sRGB of linear 0.45 0.8 0.25

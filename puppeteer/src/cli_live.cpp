@@ -61,6 +61,7 @@ struct LiveArgs {
   int msaa = -1;
   std::vector<std::string> poses;
   std::string save;
+  std::vector<int> brush;  // --brush R,G,B
   std::string keys;
   std::vector<std::string> drags;
   bool syncPhases = false;
@@ -105,6 +106,10 @@ void addCommonOptions(CLI::App* cmd, LiveArgs& a) {
                   "parent's frame, on top of its rest rotation; JOINT=TX,TY,TZ: move it by TX,TY,TZ metres in its "
                   "parent's frame (repeatable)");
   cmd->add_option("--save-as", a.save, "Where the s key saves the posed scene (default: SCENE with .posed.wrl)");
+  cmd->add_option("--brush", a.brush, "R,G,B: the painter's starting colour, 0-255 each (t paints; default 200,30,40)")
+      ->expected(3)
+      ->delimiter(',')
+      ->check(CLI::Range(0, 255));
   cmd->add_option("--keys", a.keys,
                   "Scripted key presses KEY@FRAME,... (e.g. \"o@5,k@10,p@20\"; keys a-z 0-9 [ ] F12 Esc Backspace)");
   cmd->add_option("--drag", a.drags,
@@ -178,6 +183,8 @@ ViewerOptions viewerOptions(const LiveArgs& a, const std::string& title) {
   v.title = title;
   v.syncPhases = a.syncPhases;
   v.overlap = a.overlap;
+  if (a.brush.size() == 3)
+    for (int k = 0; k < 3; ++k) v.brushColor[k] = uint8_t(a.brush[size_t(k)]);
   if (!a.save.empty()) {
     v.savePath = a.save;
   } else {

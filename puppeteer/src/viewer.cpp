@@ -369,6 +369,7 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
   s.pipeline = &pipeline;
   s.source = source;
   s.showParticles = options.showParticles;
+  for (int k = 0; k < 3; ++k) s.brush.color[k] = options.brushColor[k];
   glfwGetFramebufferSize(window, &s.width, &s.height);
   glfwSetWindowUserPointer(window, &s);
   glfwSetMouseButtonCallback(window, onMouseButton);
