@@ -142,9 +142,27 @@ TEST_F(PainterTest, SavingWritesThePaintedTexturesUnderNewNamesAndTheSceneReload
   ASSERT_TRUE(reloaded.has_value()) << reloaded.error();
   EXPECT_EQ((*reloaded)[0], images_[0]) << "the saved texture holds the stroke";
   EXPECT_EQ((*reloaded)[1], images_[1]);
-  // Saving again beside an existing painted file of the same name picks a new name.
+  // Painting the saved scene and saving it again: a new file again, the first painted one kept.
+  const std::string first = slurp(dir_ / "out/painted_face.png");
   ASSERT_TRUE(savePaintedScene(*reread, *c, *reloaded, {true, false}, saved, &error)) << error;
-  EXPECT_TRUE(fs::exists(dir_ / "out/painted_face_2.png"));
+  EXPECT_TRUE(fs::exists(dir_ / "out/painted_painted_face.png"));
+  EXPECT_EQ(slurp(dir_ / "out/painted_face.png"), first);
+}
+
+TEST(PaintedTextureNames, NeverTheNameOfOneOfTheScenesTextures) {
+  auto scene = readScene(R"(#VRML V2.0 utf8
+ExponentialBlend { children [
+  Metaball { texture ImageTexture { url "face.png" } }
+  Metaball { center 2 0 0 texture ImageTexture { url "x_face.png" } }
+] }
+)", "/d/s.wrl");
+  ASSERT_TRUE(scene.has_value());
+  auto c = Character::fromScene(*scene);
+  ASSERT_TRUE(c.has_value());
+  // Saved as /d/x.wrl, face.png would become /d/x_face.png: the other texture's file, so the next free name.
+  EXPECT_EQ(paintedTextureNames(*c, {true, false}, "/d/x.wrl"), (std::vector<std::string>{"/d/x_face_2.png", ""}));
+  EXPECT_EQ(paintedTextureNames(*c, {true, true}, "/e/y.wrl"),
+            (std::vector<std::string>{"/e/y_face.png", "/e/y_x_face.png"}));
 }
 
 }  // namespace
