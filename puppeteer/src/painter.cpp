@@ -130,6 +130,9 @@ bool savePaintedScene(Scene scene, const Character& character, const std::vector
       const RgbaImage& image = images[k];
       if (!savePng(image.rgba, image.width, image.height, names[k], error)) return false;
       url = fs::path(names[k]).filename().string();
+    } else if (fs::path(t.url).is_absolute() ||
+               fs::absolute(originalDir).lexically_normal() == savedDir) {
+      continue;  // the url still names the file from where the scene is saved
     } else {
       url = fs::absolute(t.path).lexically_normal().lexically_relative(savedDir).string();
     }

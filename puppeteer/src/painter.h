@@ -52,8 +52,9 @@ std::vector<std::string> paintedTextureNames(const Character& character, const s
 
 // Saves the painted textures (PNG, each atomically) under paintedTextureNames(), then `scene` with every
 // ImageTexture url naming a painted texture's file pointed at the new file (relative to the saved scene), then
-// the scene (atomically) to `scenePath`. Unpainted textures keep their urls, made relative to the saved scene's
-// directory when it differs from the original's. On failure returns false with *error "path: reason" and the
+// the scene (atomically) to `scenePath`. Unpainted textures keep their urls (absolute ones, or when the scene is
+// saved in its own directory), else get their file's path relative to the saved scene's directory. With nothing
+// painted this is the app's plain save: the saved scene still finds its images wherever it is saved. On failure returns false with *error "path: reason" and the
 // scene is not written.
 bool savePaintedScene(Scene scene, const Character& character, const std::vector<RgbaImage>& images,
                       const std::vector<bool>& painted, const std::string& scenePath, std::string* error);

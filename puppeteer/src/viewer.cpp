@@ -542,9 +542,8 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
         s.saveRequested = false;
         std::string error;
         const bool anyPainted = std::find(s.painted.begin(), s.painted.end(), true) != s.painted.end();
-        const bool saved = anyPainted ? savePaintedScene(pipeline.posedScene(), pipeline.character(),
-                                                         pipeline.textures(), s.painted, options.savePath, &error)
-                                      : saveSceneFile(pipeline.posedScene(), options.savePath, &error);
+        const bool saved = savePaintedScene(pipeline.posedScene(), pipeline.character(), pipeline.textures(),
+                                            s.painted, options.savePath, &error);
         report(s, saved ? "saved " + options.savePath + (anyPainted ? " with its painted textures" : "")
                         : "save failed: " + error);
       }

@@ -149,6 +149,31 @@ TEST_F(PainterTest, SavingWritesThePaintedTexturesUnderNewNamesAndTheSceneReload
   EXPECT_EQ(slurp(dir_ / "out/painted_face.png"), first);
 }
 
+// The app's plain `s` (nothing painted) into another directory: the saved scene still finds its images; in the
+// scene's own directory the urls stay as written.
+TEST_F(PainterTest, APlainSaveElsewhereKeepsTheImagesReachable) {
+  fs::create_directories(dir_ / "elsewhere");
+  std::string error;
+  ASSERT_TRUE(savePaintedScene(scene_, *character_, images_, {}, (dir_ / "elsewhere/moved.wrl").string(), &error))
+      << error;
+  auto moved = readSceneFile((dir_ / "elsewhere/moved.wrl").string());
+  ASSERT_TRUE(moved.has_value());
+  auto c = Character::fromScene(*moved);
+  ASSERT_TRUE(c.has_value());
+  EXPECT_EQ(c->textures()[0].url, "../face.png");
+  auto images = loadTextures(*c);
+  ASSERT_TRUE(images.has_value()) << images.error();
+  EXPECT_EQ(*images, images_);
+  ASSERT_TRUE(savePaintedScene(scene_, *character_, images_, {}, (dir_ / "same.wrl").string(), &error)) << error;
+  auto same = readSceneFile((dir_ / "same.wrl").string());
+  ASSERT_TRUE(same.has_value());
+  EXPECT_EQ(same->sceneGraph() != nullptr, true);
+  auto cs = Character::fromScene(*same);
+  ASSERT_TRUE(cs.has_value());
+  EXPECT_EQ(cs->textures()[0].url, "face.png");
+  EXPECT_EQ(fs::directory_iterator(dir_ / "elsewhere") != fs::directory_iterator(), true);
+}
+
 TEST(PaintedTextureNames, NeverTheNameOfOneOfTheScenesTextures) {
   auto scene = readScene(R"(#VRML V2.0 utf8
 ExponentialBlend { children [
