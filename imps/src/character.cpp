@@ -2,6 +2,7 @@
 #include "imps/character.h"
 
 #include <algorithm>
+#include <filesystem>
 #include <map>
 
 namespace imps {
@@ -24,6 +25,17 @@ BlendFunction BlendFunction::fromNode(const BlendNode& node) {
     case BlendKind::Elliptical: b.defaultParam = node.blendRange; break;
   }
   return b;
+}
+
+TexGen texGenOf(const ShapeNode& shape, const TexGenNode& node) {
+  TexGen g;
+  g.type = node.kind == TexGenKind::Plane ? TexGenType::Plane : TexGenType::Sphere;
+  const glm::vec3 centre = shape.kind == ShapeKind::LineSeg ? 0.5f * (shape.point1 + shape.point2) : shape.center;
+  g.origin = centre + node.translation;
+  g.rotation = toQuat(node.rotation);
+  g.width = node.width;
+  g.height = node.height;
+  return g;
 }
 
 class CharacterBuilder {
@@ -124,8 +136,24 @@ class CharacterBuilder {
                               : "blendParam must be positive for this blend");
     }
     if (s.material) p.color = s.material->diffuseColor;
+    if (s.texGen || s.texture) {
+      p.texGen = texGenOf(s, s.texGen.value_or(TexGenNode{}));
+      c_.textured_ = true;
+    }
+    if (s.texture) p.texture = textureIndex(*s.texture);
     shapeNames_[p.name].push_back(index);
     c_.primitives_.push_back(std::move(p));
+  }
+
+  // The entry of Character::textures() for this url, added on first use.
+  int textureIndex(const ImageTextureNode& t) {
+    namespace fs = std::filesystem;
+    const fs::path url(t.url);
+    const std::string path = url.is_absolute() ? url.string() : (fs::path(scene_.fileName).parent_path() / url).string();
+    for (size_t k = 0; k < c_.textures_.size(); ++k)
+      if (c_.textures_[k].path == path) return static_cast<int>(k);
+    c_.textures_.push_back({t.url, path, t.loc});
+    return static_cast<int>(c_.textures_.size() - 1);
   }
 
   // The nearest ancestor joint (excluding j) that directly holds primitives; -1 if none.

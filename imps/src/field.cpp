@@ -625,6 +625,42 @@ FieldSample Field::sample(const glm::vec3& x, FieldScratch& scratch) const {
   return out;
 }
 
+void Field::contributions(const glm::vec3& x, FieldScratch& scratch,
+                          std::vector<std::pair<uint32_t, float>>& out) const {
+  out.clear();
+  const auto& cand = scratch.candidates;
+  const size_t sets = scratch.setCount();
+  if (sets == 0) return;
+  // sample()'s terms and winning set (the first maximum), without the gradient.
+  const bool additive = blend_.additive();
+  thread_local std::vector<float> t;
+  t.assign(cand.size(), additive ? 0.0f : -1.0f);
+  for (size_t k = 0; k < cand.size(); ++k) {
+    const uint32_t i = cand[k];
+    if (!supportBoxes_[i].contains(x)) continue;
+    const float d = kernelDistance(primitives_[i], x.x, x.y, x.z);
+    if (d <= supportSkip_[i]) t[k] = kernelTerm(blend_, params_[i], d);
+  }
+  size_t best = 0;
+  float bestValue = -1.0f;
+  for (size_t s = 0; s < sets; ++s) {
+    float v = additive ? 0.0f : -1.0f;
+    for (uint32_t m = scratch.setOffsets[s]; m < scratch.setOffsets[s + 1]; ++m)
+      v = additive ? v + t[scratch.setMembers[m]] : foldElliptical(v, t[scratch.setMembers[m]]);
+    if (!additive) v = v > -1.0f ? std::max(1.0f + v, 0.0f) : 0.0f;
+    if (v > bestValue) {
+      bestValue = v;
+      best = s;
+    }
+  }
+  for (uint32_t m = scratch.setOffsets[best]; m < scratch.setOffsets[best + 1]; ++m) {
+    const uint32_t k = scratch.setMembers[m];
+    const float w = additive ? t[k] : t[k] + 1.0f;
+    if (w > 0.0f) out.emplace_back(cand[k], w);
+  }
+  std::sort(out.begin(), out.end());
+}
+
 void Field::samples(std::span<const glm::vec3> points, std::span<FieldSample> out, FieldScratch& scratch) const {
   IMPS_CHECK_EQ(points.size(), out.size());
   const size_t n = points.size();

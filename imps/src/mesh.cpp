@@ -177,6 +177,14 @@ void appendMesh(Mesh& target, const Mesh& source) {
   }
   target.indices.reserve(target.indices.size() + source.indices.size());
   for (const uint32_t i : source.indices) target.indices.push_back(i + static_cast<uint32_t>(offset));
+  if (target.textured() && source.textured() && target.layerGens == source.layerGens &&
+      target.layerImages == source.layerImages) {
+    target.layers.insert(target.layers.end(), source.layers.begin(), source.layers.end());
+    target.layerWeights.insert(target.layerWeights.end(), source.layerWeights.begin(), source.layerWeights.end());
+    target.texcoords.insert(target.texcoords.end(), source.texcoords.begin(), source.texcoords.end());
+  } else {
+    target.clearTextures();
+  }
 }
 
 }  // namespace imps

@@ -11,8 +11,14 @@ bool Material::operator==(const Material& o) const {
          transparency == o.transparency && useOf == o.useOf;
 }
 
+bool TexGenNode::operator==(const TexGenNode& o) const {
+  if (kind != o.kind || translation != o.translation || rotation != o.rotation) return false;
+  return kind == TexGenKind::Sphere || (width == o.width && height == o.height);
+}
+
 bool ShapeNode::operator==(const ShapeNode& o) const {
-  if (kind != o.kind || name != o.name || blendParam != o.blendParam || material != o.material || useOf != o.useOf)
+  if (kind != o.kind || name != o.name || blendParam != o.blendParam || material != o.material || useOf != o.useOf ||
+      texGen != o.texGen || texture != o.texture)
     return false;
   switch (kind) {
     case ShapeKind::Metaball: return center == o.center && radius == o.radius;

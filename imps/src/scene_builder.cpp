@@ -28,11 +28,15 @@ enum class NodeType {
   LineSeg,
   Material,
   BlendGroup,
+  TexGenSphere,
+  TexGenPlane,
+  ImageTexture,
 };
 
-constexpr std::array<const char*, 12> kNodeTypeNames = {
+constexpr std::array<const char*, 15> kNodeTypeNames = {
     "Tesselator3MP", "MarchingCubes", "ExponentialBlend", "BlancSchlickBlend", "EllipticalBlend", "UniformHash",
-    "RigidTransform", "Metaball", "Ellipsoid", "LineSeg", "Material", "BlendGroup"};
+    "RigidTransform", "Metaball", "Ellipsoid", "LineSeg", "Material", "BlendGroup", "TexGenSphere", "TexGenPlane",
+    "ImageTexture"};
 
 // What a node-valued field accepts, as a mask of node classes.
 enum NodeClass : unsigned {
@@ -43,11 +47,16 @@ enum NodeClass : unsigned {
   kHashClass = 1u << 4,
   kPolygonizerClass = 1u << 5,
   kBlendGroupClass = 1u << 6,
+  kTexGenClass = 1u << 7,
+  kTextureClass = 1u << 8,
   kSceneGraphClasses = kShapeClass | kTransformClass | kBlendClass,
 };
 
 enum class FieldType { Bool, Int, Float, Vec3, Color, Rotation, Strings, Node, Nodes };
-enum class Constraint { None, Positive, NonNegative, AtLeastOne, BitsPerDim, UnitInterval, Threads, Resolution };
+enum class Constraint {
+  None, Positive, NonNegative, AtLeastOne, BitsPerDim, UnitInterval, Threads, Resolution,
+  OneString,  // Strings: exactly one, not empty
+};
 
 // Bounds on sizes a scene asks for (the command line's --threads and --res take the same ranges; kMaxThreads is
 // imps/parallel.h's).
@@ -151,11 +160,18 @@ const FieldSpec kBlendParamField = {"blendParam", FieldType::Float, Constraint::
 const FieldSpec kMaterialField = {"material", FieldType::Node, Constraint::None, nullptr, kMaterialClass,
                                   "a Material"};
 
+const FieldSpec kTexGenField = {"texGen", FieldType::Node, Constraint::None, nullptr, kTexGenClass,
+                                "a TexGenSphere or TexGenPlane"};
+const FieldSpec kTextureField = {"texture", FieldType::Node, Constraint::None, nullptr, kTextureClass,
+                                 "an ImageTexture"};
+
 const std::vector<FieldSpec> kMetaballFields = {
     {"center", FieldType::Vec3, Constraint::None, IMPS_SET(ShapeNode, center, v), 0, ""},
     {"radius", FieldType::Float, Constraint::Positive, IMPS_SET(ShapeNode, radius, f), 0, ""},
     kBlendParamField,
     kMaterialField,
+    kTexGenField,
+    kTextureField,
 };
 
 const std::vector<FieldSpec> kEllipsoidFields = {
@@ -164,6 +180,8 @@ const std::vector<FieldSpec> kEllipsoidFields = {
     {"radii", FieldType::Vec3, Constraint::Positive, IMPS_SET(ShapeNode, radii, v), 0, ""},
     kBlendParamField,
     kMaterialField,
+    kTexGenField,
+    kTextureField,
 };
 
 const std::vector<FieldSpec> kLineSegFields = {
@@ -173,6 +191,25 @@ const std::vector<FieldSpec> kLineSegFields = {
     {"radius2", FieldType::Float, Constraint::Positive, IMPS_SET(ShapeNode, radius2, f), 0, ""},
     kBlendParamField,
     kMaterialField,
+    kTexGenField,
+    kTextureField,
+};
+
+const std::vector<FieldSpec> kTexGenSphereFields = {
+    {"translation", FieldType::Vec3, Constraint::None, IMPS_SET(TexGenNode, translation, v), 0, ""},
+    {"rotation", FieldType::Rotation, Constraint::None, IMPS_SET(TexGenNode, rotation, r), 0, ""},
+};
+
+const std::vector<FieldSpec> kTexGenPlaneFields = {
+    {"translation", FieldType::Vec3, Constraint::None, IMPS_SET(TexGenNode, translation, v), 0, ""},
+    {"rotation", FieldType::Rotation, Constraint::None, IMPS_SET(TexGenNode, rotation, r), 0, ""},
+    {"width", FieldType::Float, Constraint::Positive, IMPS_SET(TexGenNode, width, f), 0, ""},
+    {"height", FieldType::Float, Constraint::Positive, IMPS_SET(TexGenNode, height, f), 0, ""},
+};
+
+const std::vector<FieldSpec> kImageTextureFields = {
+    {"url", FieldType::Strings, Constraint::OneString,
+     [](NodeData& n, const Value& x) { std::get<ImageTextureNode>(n).url = x.strings.front(); }, 0, ""},
 };
 
 const std::vector<FieldSpec> kMaterialFields = {
@@ -205,6 +242,9 @@ const std::vector<FieldSpec>& fieldsOf(NodeType type) {
     case NodeType::LineSeg: return kLineSegFields;
     case NodeType::Material: return kMaterialFields;
     case NodeType::BlendGroup: return kBlendGroupFields;
+    case NodeType::TexGenSphere: return kTexGenSphereFields;
+    case NodeType::TexGenPlane: return kTexGenPlaneFields;
+    case NodeType::ImageTexture: return kImageTextureFields;
   }
   return kMaterialFields;
 }
@@ -236,6 +276,9 @@ NodeData emptyNode(NodeType type) {
     case NodeType::LineSeg: return withKind<ShapeNode>(ShapeKind::LineSeg);
     case NodeType::Material: return Material{};
     case NodeType::BlendGroup: return BlendGroupNode{};
+    case NodeType::TexGenSphere: return withKind<TexGenNode>(TexGenKind::Sphere);
+    case NodeType::TexGenPlane: return withKind<TexGenNode>(TexGenKind::Plane);
+    case NodeType::ImageTexture: return ImageTextureNode{};
   }
   return {};
 }
@@ -250,6 +293,8 @@ unsigned classOf(const NodeData& node) {
     case 6: return kShapeClass;
     case 7: return kMaterialClass;
     case 8: return kBlendGroupClass;
+    case 9: return kTexGenClass;
+    case 10: return kTextureClass;
     default: return 0;
   }
 }
@@ -502,7 +547,8 @@ std::string constraintBroken(const FieldSpec& spec, int i, const std::array<floa
   for (size_t k = 0; k < n; ++k) {
     const double x = isInt ? double(i) : double(numbers[k]);
     switch (spec.constraint) {
-      case Constraint::None: break;
+      case Constraint::None:
+      case Constraint::OneString: break;
       case Constraint::Positive: ok = ok && x > 0.0; break;
       case Constraint::NonNegative: ok = ok && x >= 0.0; break;
       case Constraint::AtLeastOne: ok = ok && x >= 1.0; break;
@@ -522,7 +568,8 @@ std::string constraintBroken(const FieldSpec& spec, int i, const std::array<floa
     case Constraint::UnitInterval: rule = "be between 0 and 1"; break;
     case Constraint::Threads: rule = "be between 0 and " + std::to_string(kMaxThreads) + " (0: all cores)"; break;
     case Constraint::Resolution: rule = "be between 0 and " + std::to_string(kMaxResolution) + " cells (0: unset)"; break;
-    case Constraint::None: break;
+    case Constraint::None:
+    case Constraint::OneString: break;
   }
   if (n > 1) rule += " in every component";
   return rule;
@@ -587,12 +634,19 @@ void SceneBuilder::storeField(Frame& frame, const FieldSpec& spec, const SourceL
     for (const Token& t : value.items)
       if (t.kind != TokenKind::String) return mismatch(describe(t));
     if (!value.bracketed && value.items.size() > 1) return mismatch(std::to_string(value.items.size()) + " strings");
+    if (spec.constraint == Constraint::OneString && (value.items.size() != 1 || value.items.front().text.empty())) {
+      sink_.error(loc, "field '" + fieldName + "' of " + typeName + " must be one non-empty string, found " +
+                           (value.items.size() == 1 ? std::string("an empty string")
+                                                    : std::to_string(value.items.size()) + " strings"));
+      return;
+    }
     Value v;
     for (const Token& t : value.items) {
       v.strings.push_back(t.text);
       frame.memberLocs.push_back(SourceLoc{fileName_, t.line, t.column});
     }
     spec.set(frame.data, v);
+    if (auto* texture = std::get_if<ImageTextureNode>(&frame.data)) texture->loc = frame.memberLocs.front();
     return;
   }
   if (value.bracketed) return mismatch("a list");
@@ -684,7 +738,12 @@ void SceneBuilder::deliver(Finished child) {
   } else if (auto* x = std::get_if<TransformNode>(&p)) {
     x->children.push_back(toSceneNode(std::move(child.node)));
   } else if (auto* s = std::get_if<ShapeNode>(&p)) {
-    s->material = std::get<Material>(std::move(child.node));
+    if (field == "material") s->material = std::get<Material>(std::move(child.node));
+    if (field == "texGen") {
+      s->texGen = std::get<TexGenNode>(std::move(child.node));
+      s->texGen->loc = child.loc;
+    }
+    if (field == "texture") s->texture = std::get<ImageTextureNode>(std::move(child.node));
   }
 }
 

@@ -42,7 +42,7 @@ class SceneBuilder final : public ParserTarget {
 
   // The node under construction; monostate for a node that is being skipped after an error.
   using NodeData = std::variant<std::monostate, Tesselator3MPNode, MarchingCubesNode, BlendNode, UniformHash,
-                                TransformNode, ShapeNode, Material, BlendGroupNode>;
+                                TransformNode, ShapeNode, Material, BlendGroupNode, TexGenNode, ImageTextureNode>;
   struct FieldSpec;
 
  private:

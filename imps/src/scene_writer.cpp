@@ -215,6 +215,28 @@ class Writer {
       nodeField("material");
       material(*s.material);
     }
+    if (s.texGen) {
+      nodeField("texGen");
+      texGen(*s.texGen);
+    }
+    if (s.texture) {
+      nodeField("texture");
+      open("", "", "ImageTexture");
+      field("url", quoted(s.texture->url));
+      close();
+    }
+    close();
+  }
+
+  void texGen(const TexGenNode& g) {
+    const bool plane = g.kind == TexGenKind::Plane;
+    open("", "", plane ? "TexGenPlane" : "TexGenSphere");
+    field("translation", vec3(g.translation));
+    field("rotation", rotation(g.rotation));
+    if (plane) {
+      field("width", number(g.width));
+      field("height", number(g.height));
+    }
     close();
   }
 

@@ -13,6 +13,11 @@ SkeletonCache::SkeletonCache(const Character& character) : character_(&character
     colors[i] = character.primitives()[i].color;
     prims[i] = character.primitives()[i].local;
   }
+  if (character.textured()) {
+    texGens_.resize(n);
+    hasTexGen_.resize(n);
+    for (size_t i = 0; i < n; ++i) hasTexGen_[i] = character.primitives()[i].texGen.has_value();
+  }
   field_ = Field(std::move(prims), std::move(params), std::move(colors), character.blend(), character.blendSets(),
                  character.isoValue());
   resetPose();
@@ -69,6 +74,11 @@ void SkeletonCache::update() {
     prims[i] = j >= 0 ? cp[i].local.transformed(world_[j].rotation, world_[j].translation) : cp[i].local;
   }
   field_.setPrimitives(std::move(prims));
+  for (size_t i = 0; i < texGens_.size(); ++i) {
+    if (!hasTexGen_[i]) continue;
+    const int j = cp[i].joint;
+    texGens_[i] = j >= 0 ? cp[i].texGen->transformed(world_[j].rotation, world_[j].translation) : *cp[i].texGen;
+  }
   ++generation_;
 }
 

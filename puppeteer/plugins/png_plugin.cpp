@@ -48,3 +48,45 @@ extern "C" __attribute__((visibility("default"))) int imps_png_encode(int width,
 }
 
 extern "C" __attribute__((visibility("default"))) void imps_png_free(uint8_t* png) { std::free(png); }
+
+// Reads any image OpenImageIO knows (PNG, JPEG, EXR, ...) as RGBA8, rows from the top: grey gets copied to
+// RGB, a missing alpha is opaque, other types are converted by OpenImageIO (floats clamped to [0, 1]). On success
+// returns 0 and sets *rgba (malloc'd; release with imps_png_free), *width and *height; on failure returns -1 and
+// writes a message into error.
+extern "C" __attribute__((visibility("default"))) int imps_image_read(const char* path, int* width, int* height,
+                                                                     uint8_t** rgba, char* error, size_t errorSize) {
+  std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(path);
+  if (!in) {
+    std::string message = OIIO::geterror();
+    copyError(message.empty() ? "not an image OpenImageIO can read" : message, error, errorSize);
+    return -1;
+  }
+  const OIIO::ImageSpec& spec = in->spec();
+  const int w = spec.width, h = spec.height, channels = spec.nchannels;
+  if (w <= 0 || h <= 0 || channels <= 0 || int64_t(w) * h > (int64_t(1) << 28)) {
+    copyError("unsupported image size " + std::to_string(w) + " x " + std::to_string(h), error, errorSize);
+    return -1;
+  }
+  std::vector<uint8_t> pixels(size_t(w) * size_t(h) * size_t(channels));
+  if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, pixels.data())) {
+    copyError("cannot decode: " + in->geterror(), error, errorSize);
+    return -1;
+  }
+  *rgba = static_cast<uint8_t*>(std::malloc(size_t(w) * size_t(h) * 4));
+  if (!*rgba) {
+    copyError("out of memory", error, errorSize);
+    return -1;
+  }
+  for (size_t p = 0; p < size_t(w) * size_t(h); ++p) {
+    const uint8_t* s = pixels.data() + p * size_t(channels);
+    uint8_t* d = *rgba + 4 * p;
+    const bool grey = channels < 3;
+    d[0] = s[0];
+    d[1] = grey ? s[0] : s[1];
+    d[2] = grey ? s[0] : s[2];
+    d[3] = channels == 2 ? s[1] : channels >= 4 ? s[3] : 255;
+  }
+  *width = w;
+  *height = h;
+  return 0;
+}

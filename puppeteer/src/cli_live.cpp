@@ -41,6 +41,7 @@
 #include "session_calibration.h"
 #include "pose_argument.h"
 #include "map_option.h"
+#include "textures.h"
 
 namespace imps::app {
 namespace {
@@ -60,6 +61,7 @@ struct LiveArgs {
   int msaa = -1;
   std::vector<std::string> poses;
   std::string save;
+  std::vector<int> brush;  // --brush R,G,B
   std::string keys;
   std::vector<std::string> drags;
   bool syncPhases = false;
@@ -104,6 +106,10 @@ void addCommonOptions(CLI::App* cmd, LiveArgs& a) {
                   "parent's frame, on top of its rest rotation; JOINT=TX,TY,TZ: move it by TX,TY,TZ metres in its "
                   "parent's frame (repeatable)");
   cmd->add_option("--save-as", a.save, "Where the s key saves the posed scene (default: SCENE with .posed.wrl)");
+  cmd->add_option("--brush", a.brush, "R,G,B: the painter's starting colour, 0-255 each (t paints; default 200,30,40)")
+      ->expected(3)
+      ->delimiter(',')
+      ->check(CLI::Range(0, 255));
   cmd->add_option("--keys", a.keys,
                   "Scripted key presses KEY@FRAME,... (e.g. \"o@5,k@10,p@20\"; keys a-z 0-9 [ ] F12 Esc Backspace)");
   cmd->add_option("--drag", a.drags,
@@ -126,12 +132,19 @@ std::unique_ptr<ViewerPipeline> makePipeline(const LiveArgs& a, int* exitCode) {
     *exitCode = kExitInvalidInput;
     return nullptr;
   }
+  auto textures = loadTextures(loaded->character);
+  if (!textures) {
+    std::fprintf(stderr, "%s\n", textures.error().c_str());
+    *exitCode = kExitInvalidInput;
+    return nullptr;
+  }
   PipelineOptions o;
   const bool fileNamesMc = std::holds_alternative<MarchingCubesNode>(loaded->scene.polygonizer);
   o.polygonizer = a.polygonizer == "mc" || (a.polygonizer.empty() && fileNamesMc) ? Polygonizer::MarchingCubes
                                                                                  : Polygonizer::Particles;
   o.threads = a.threads;
   auto pipeline = std::make_unique<ViewerPipeline>(std::move(loaded->scene), std::move(loaded->character), o);
+  pipeline->setTextures(std::move(*textures));
   for (const std::string& text : a.poses) {
     const auto p = parsePoseArgument(text);
     const int j = p ? pipeline->character().findJoint(p->joint) : -2;
@@ -170,6 +183,8 @@ ViewerOptions viewerOptions(const LiveArgs& a, const std::string& title) {
   v.title = title;
   v.syncPhases = a.syncPhases;
   v.overlap = a.overlap;
+  if (a.brush.size() == 3)
+    for (int k = 0; k < 3; ++k) v.brushColor[k] = uint8_t(a.brush[size_t(k)]);
   if (!a.save.empty()) {
     v.savePath = a.save;
   } else {

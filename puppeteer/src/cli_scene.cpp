@@ -14,9 +14,12 @@
 #include "imps/parallel.h"
 #include "imps/skeleton_cache.h"
 #include "imps/tesselator.h"
+#include "imps/texturing.h"
 #include "json_output.h"
 #include "progress.h"
 #include "snapshot.h"
+#include "textured_export.h"
+#include "textures.h"
 
 namespace imps::app {
 namespace {
@@ -120,7 +123,8 @@ std::string particleCoverage(const Mesh& mesh, const Field& field, const Tessela
 }
 
 // --polygonizer particles: the tesselator run until settled (or --updates N), its triangulation written.
-int runParticleMesh(const MeshArgs& a, const Scene& scene, const SkeletonCache& skeleton, Progress& progress) {
+int runParticleMesh(const MeshArgs& a, const Scene& scene, const SkeletonCache& skeleton,
+                    const std::vector<RgbaImage>& images, Progress& progress) {
   TesselatorOptions options;
   if (const auto* node = std::get_if<Tesselator3MPNode>(&scene.polygonizer)) options = TesselatorOptions::fromNode(*node);
   if (a.threads > 0) options.numThreads = a.threads;
@@ -140,8 +144,9 @@ int runParticleMesh(const MeshArgs& a, const Scene& scene, const SkeletonCache& 
     updates = tess.settle(skeleton, mesh);
   }
   progress.phase("writing " + a.output);
+  textureMesh(mesh, skeleton, options.numThreads);
   std::string error;
-  if (!writeMesh(mesh, a.output, &error)) {
+  if (!writeTexturedMesh(mesh, skeleton.character(), images, a.output, &error)) {
     progress.done();
     std::fprintf(stderr, "puppeteer mesh: error: %s\n", error.c_str());
     return kExitIoError;
@@ -185,6 +190,11 @@ int runMesh(const MeshArgs& a) {
   if (!loaded) return kExitInvalidInput;
   const Scene& scene = loaded->scene;
   const Character& character = loaded->character;
+  const auto images = loadTextures(character);
+  if (!images) {
+    std::fprintf(stderr, "%s\n", images.error().c_str());
+    return kExitInvalidInput;
+  }
 
   // Resolution: the command line, else the scene's MarchingCubes node, else 64 cells along the longest side.
   MarchingCubesOptions options;
@@ -204,18 +214,19 @@ int runMesh(const MeshArgs& a) {
   options.maxCells = a.maxCells;
   SkeletonCache skeleton(character);
   Progress progress("mesh");
-  if (a.polygonizer == "particles") return runParticleMesh(a, scene, skeleton, progress);
+  if (a.polygonizer == "particles") return runParticleMesh(a, scene, skeleton, *images, progress);
   if (gridRefused("mesh", skeleton.field(), options,
                   resolutionSource(a.cell, a.res, std::get_if<MarchingCubesNode>(&scene.polygonizer))))
     return a.cell > 0.0f || a.res > 0 ? kExitUsage : kExitInvalidInput;  // the command line's value, or the file's
   MarchingCubesStats stats;
   followPolygonizing(progress, options);
-  const Mesh mesh = polygonize(skeleton.field(), options, &stats);
+  Mesh mesh = polygonize(skeleton.field(), options, &stats);
+  textureMesh(mesh, skeleton, options.threads);
 
   progress.phase("writing " + std::to_string(mesh.triangleCount()) + " triangles to " + a.output);
   std::string error;
   const auto writeStart = std::chrono::steady_clock::now();
-  if (!writeMesh(mesh, a.output, &error)) {
+  if (!writeTexturedMesh(mesh, character, *images, a.output, &error)) {
     progress.done();
     std::fprintf(stderr, "puppeteer mesh: error: %s\n", error.c_str());
     return kExitIoError;
@@ -341,6 +352,11 @@ int runRender(const RenderArgs& a) {
   auto loaded = loadScene(a.scene);
   if (!loaded) return kExitInvalidInput;
   const Character& character = loaded->character;
+  const auto textures = loadTextures(character);
+  if (!textures) {
+    std::fprintf(stderr, "%s\n", textures.error().c_str());
+    return kExitInvalidInput;
+  }
   SkeletonCache skeleton(character);
   MarchingCubesOptions options;
   options.cellSize = a.cell;
@@ -350,9 +366,11 @@ int runRender(const RenderArgs& a) {
     return kExitUsage;
   Progress progress("render");
   followPolygonizing(progress, options);
-  const Mesh mesh = polygonize(skeleton.field(), options);
+  Mesh mesh = polygonize(skeleton.field(), options);
+  textureMesh(mesh, skeleton);
   progress.phase("rendering " + std::to_string(mesh.triangleCount()) + " triangles");
   SnapshotOptions snap;
+  snap.textures = &*textures;
   snap.width = a.width;
   snap.height = a.height;
   const glm::vec3 direction = a.view == "front" ? glm::vec3(0, 0, 1) : a.view == "side" ? glm::vec3(1, 0, 0)

@@ -24,7 +24,7 @@ Hud::~Hud() {
 
 std::string keyHelp(bool deviceKeys) {
   return std::string("drag: handle/limb/orbit  w e x move/turn/scale  ctrl+z undo  ctrl+shift+z redo  r reset  "
-                     "s save  p particles  m MC  ") +
+                     "s save  t paint  p particles  m MC  ") +
          (deviceKeys ? "o record  k calibrate  " : "") + "F12 shot  Esc quit";
 }
 

@@ -3,6 +3,9 @@
 
 #include <imgui.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include <string>
 
 namespace imps::app {
@@ -87,6 +90,19 @@ void drawModellerMenu(const ViewerPipeline& pipeline, const Modeller& modeller, 
     ImGui::SameLine();
     ImGui::TextDisabled("%zu / %zu", modeller.history().undoCount(), modeller.history().redoCount());
     ImGui::PopItemWidth();
+  }
+  ImGui::End();
+}
+
+void drawBrushWindow(Brush& brush) {
+  ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_FirstUseEver);
+  if (ImGui::Begin("Brush", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
+    float rgb[3] = {brush.color[0] / 255.0f, brush.color[1] / 255.0f, brush.color[2] / 255.0f};
+    if (ImGui::ColorPicker3("colour", rgb, ImGuiColorEditFlags_NoSidePreview | ImGuiColorEditFlags_PickerHueWheel))
+      for (int k = 0; k < 3; ++k) brush.color[k] = uint8_t(std::lround(std::clamp(rgb[k], 0.0f, 1.0f) * 255.0f));
+    int size = brush.size == 0 ? 10 : brush.size;
+    if (ImGui::SliderInt("size", &size, 1, 10)) brush.size = size % 10;
+    ImGui::Text("radius %.0f texels (keys 1-9, 0 largest)", double(brush.radiusTexels()));
   }
   ImGui::End();
 }

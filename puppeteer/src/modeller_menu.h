@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "modeller.h"
+#include "painter.h"
 #include "viewer_pipeline.h"
 
 namespace imps::app {
@@ -22,5 +23,9 @@ struct MenuSettings {
 // one edit from press to release, shown live.
 void drawModellerMenu(const ViewerPipeline& pipeline, const Modeller& modeller, MenuSettings& settings,
                       std::vector<std::function<void(ViewerPipeline&, Modeller&)>>& actions);
+
+// The painter's brush window (paint mode, `t`): a colour chooser and the size (keys 1-9 and 0 set it too). Call
+// inside an ImGui frame.
+void drawBrushWindow(Brush& brush);
 
 }  // namespace imps::app

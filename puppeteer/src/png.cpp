@@ -16,10 +16,12 @@ namespace {
 
 using EncodeFn = int (*)(int, int, const uint8_t*, uint8_t**, size_t*, char*, size_t);
 using FreeFn = void (*)(uint8_t*);
+using ReadFn = int (*)(const char*, int*, int*, uint8_t**, char*, size_t);
 
 struct Plugin {
   EncodeFn encode = nullptr;
   FreeFn release = nullptr;
+  ReadFn read = nullptr;
   std::string error;
 };
 
@@ -44,7 +46,8 @@ const Plugin& plugin() {
       }
       p.encode = reinterpret_cast<EncodeFn>(dlsym(handle, "imps_png_encode"));
       p.release = reinterpret_cast<FreeFn>(dlsym(handle, "imps_png_free"));
-      if (p.encode && p.release) return;
+      p.read = reinterpret_cast<ReadFn>(dlsym(handle, "imps_image_read"));
+      if (p.encode && p.release && p.read) return;
       tried += "; " + path + ": not an IMPS PNG plugin";
     }
     p.encode = nullptr;
@@ -54,6 +57,29 @@ const Plugin& plugin() {
 }
 
 }  // namespace
+
+std::optional<std::vector<uint8_t>> encodePng(const std::vector<uint8_t>& rgba, int width, int height,
+                                              std::string* error) {
+  const Plugin& p = plugin();
+  if (!p.encode) {
+    if (error) *error = p.error;
+    return std::nullopt;
+  }
+  if (width <= 0 || height <= 0 || rgba.size() != size_t(width) * size_t(height) * 4) {
+    if (error) *error = "no pixels to encode";
+    return std::nullopt;
+  }
+  uint8_t* png = nullptr;
+  size_t size = 0;
+  char message[512] = "";
+  if (p.encode(width, height, rgba.data(), &png, &size, message, sizeof message) != 0) {
+    if (error) *error = message;
+    return std::nullopt;
+  }
+  std::vector<uint8_t> bytes(png, png + size);
+  p.release(png);
+  return bytes;
+}
 
 bool savePng(const std::vector<uint8_t>& rgba, int width, int height, const std::string& path, std::string* error) {
   auto fail = [&](const std::string& reason) {
@@ -73,6 +99,26 @@ bool savePng(const std::vector<uint8_t>& rgba, int width, int height, const std:
   std::vector<uint8_t> bytes(png, png + size);
   p.release(png);
   return writeFileAtomically(path, bytes, error);
+}
+
+bool readImage(const std::string& path, RgbaImage& image, std::string* error) {
+  const Plugin& p = plugin();
+  if (!p.encode) {
+    if (error) *error = p.error;
+    return false;
+  }
+  uint8_t* rgba = nullptr;
+  int width = 0, height = 0;
+  char message[512] = "";
+  if (p.read(path.c_str(), &width, &height, &rgba, message, sizeof message) != 0) {
+    if (error) *error = message;
+    return false;
+  }
+  image.width = width;
+  image.height = height;
+  image.rgba.assign(rgba, rgba + size_t(width) * size_t(height) * 4);
+  p.release(rgba);
+  return true;
 }
 
 }  // namespace imps::app

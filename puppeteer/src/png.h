@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -13,5 +14,22 @@ namespace imps::app {
 // *error (if non-null) to "path: reason" — including when the encoder plugin (libimps_png.so, looked up beside
 // the executable, then in the build tree, or at $IMPS_PNG_PLUGIN) cannot be loaded.
 bool savePng(const std::vector<uint8_t>& rgba, int width, int height, const std::string& path, std::string* error);
+
+// The PNG bytes of width x height RGBA8 pixels (rows from the top), or nullopt with *error set to the reason.
+std::optional<std::vector<uint8_t>> encodePng(const std::vector<uint8_t>& rgba, int width, int height,
+                                              std::string* error);
+
+// An RGBA8 image, rows from the top.
+struct RgbaImage {
+  int width = 0;
+  int height = 0;
+  std::vector<uint8_t> rgba;  // width * height * 4
+  bool operator==(const RgbaImage&) const = default;
+};
+
+// Reads an image file OpenImageIO knows (PNG, JPEG, EXR, ...) through the same plugin: grey becomes RGB, a missing
+// alpha is opaque, float images are clamped to [0, 1]. On failure returns false and sets *error (if non-null) to
+// the reason (without the path).
+bool readImage(const std::string& path, RgbaImage& image, std::string* error);
 
 }  // namespace imps::app

@@ -11,6 +11,8 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
+#include "textures.h"
+
 namespace imps::app {
 namespace {
 
@@ -58,6 +60,72 @@ void main() {
   float diffuse = max(dot(n, uLight), 0.0);
   float rim = pow(1.0 - clamp(n.z, 0.0, 1.0), 3.0);
   vec3 c = vColor * (uAmbient + (1.0 - uAmbient) * diffuse) + vec3(uRim * rim);
+  fragColor = vec4(srgb(c), 1.0);
+}
+)";
+
+// Textured meshes (mesh.h's layers) are drawn from unshared corners: each triangle's up to three heaviest layers,
+// their image slots (flat: the same at the three corners), (u, v) and weights.
+const char* const kTexturedVertex = R"(#version 330 core
+layout(location = 0) in vec3 aPosition;
+layout(location = 1) in vec3 aNormal;
+layout(location = 2) in vec3 aColor;
+layout(location = 3) in ivec3 aSlots;
+layout(location = 4) in vec4 aUv01;
+layout(location = 5) in vec2 aUv2;
+layout(location = 6) in vec3 aWeights;
+uniform mat4 uView;
+uniform mat4 uProjection;
+out vec3 vNormal;
+out vec3 vColor;
+out vec3 vViewPosition;
+flat out ivec3 vSlots;
+out vec4 vUv01;
+out vec2 vUv2;
+out vec3 vWeights;
+void main() {
+  vec4 p = uView * vec4(aPosition, 1.0);
+  vViewPosition = p.xyz;
+  vNormal = mat3(uView) * aNormal;
+  vColor = aColor;
+  vSlots = aSlots;
+  vUv01 = aUv01;
+  vUv2 = aUv2;
+  vWeights = aWeights;
+  gl_Position = uProjection * p;
+}
+)";
+
+const char* const kTexturedFragment = "#version 330 core\n" IMPS_GLSL_SRGB R"(
+in vec3 vNormal;
+in vec3 vColor;
+in vec3 vViewPosition;
+flat in ivec3 vSlots;
+in vec4 vUv01;
+in vec2 vUv2;
+in vec3 vWeights;
+uniform sampler2DArray uTextures;  // sRGB images, rows from the top: v = 1 is the first row
+uniform vec3 uLight;
+uniform float uAmbient;
+uniform float uRim;
+uniform int uHasNormals;
+out vec4 fragColor;
+vec3 texel(int slot, vec2 uv) {
+  return slot < 0 ? vec3(1.0) : texture(uTextures, vec3(uv.x, 1.0 - uv.y, float(slot))).rgb;
+}
+void main() {
+  vec3 faceNormal = normalize(cross(dFdx(vViewPosition), dFdy(vViewPosition)));
+  vec3 n = uHasNormals != 0 ? vNormal : faceNormal;
+  float len = length(n);
+  n = len > 0.0 ? n / len : faceNormal;
+  vec3 toEye = -vViewPosition;
+  if (dot(n, toEye) < 0.0) n = -n;
+  float diffuse = max(dot(n, uLight), 0.0);
+  float rim = pow(1.0 - clamp(n.z, 0.0, 1.0), 3.0);
+  vec3 w = max(vWeights, vec3(0.0));
+  vec3 factor = vec3(max(0.0, 1.0 - w.x - w.y - w.z)) + w.x * texel(vSlots.x, vUv01.xy) +
+                w.y * texel(vSlots.y, vUv01.zw) + w.z * texel(vSlots.z, vUv2);
+  vec3 c = vColor * factor * (uAmbient + (1.0 - uAmbient) * diffuse) + vec3(uRim * rim);
   fragColor = vec4(srgb(c), 1.0);
 }
 )";
@@ -116,6 +184,17 @@ void main() {
   gl_Position = vec4(aPixel.x / uWindow.x * 2.0 - 1.0, 1.0 - aPixel.y / uWindow.y * 2.0, 0.0, 1.0);
 }
 )";
+
+// One corner of a textured triangle (the textured VAO's interleaved layout).
+struct TexturedCorner {
+  float position[3];
+  float normal[3];
+  float color[3];
+  int32_t slots[3];
+  float uv01[4];
+  float uv2[2];
+  float weights[3];
+};
 
 // Compiles and links one program; returns 0 and appends to `error` on failure.
 GLuint buildProgram(const char* vertex, const char* fragment, const char* name, std::string& error) {
@@ -207,6 +286,22 @@ Renderer::Renderer() {
   glBindBuffer(GL_ARRAY_BUFFER, pointBuffer_);
   glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
   glEnableVertexAttribArray(0);
+
+  texturedProgram_ = buildProgram(kTexturedVertex, kTexturedFragment, "textured mesh", error_);
+  glGenVertexArrays(1, &texturedVao_);
+  glGenBuffers(1, &texturedBuffer_);
+  glBindVertexArray(texturedVao_);
+  glBindBuffer(GL_ARRAY_BUFFER, texturedBuffer_);
+  const auto stride = static_cast<GLsizei>(sizeof(TexturedCorner));
+  auto at = [](size_t offset) { return reinterpret_cast<const void*>(offset); };
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, stride, at(offsetof(TexturedCorner, position)));
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, stride, at(offsetof(TexturedCorner, normal)));
+  glVertexAttribPointer(2, 3, GL_FLOAT, GL_FALSE, stride, at(offsetof(TexturedCorner, color)));
+  glVertexAttribIPointer(3, 3, GL_INT, stride, at(offsetof(TexturedCorner, slots)));
+  glVertexAttribPointer(4, 4, GL_FLOAT, GL_FALSE, stride, at(offsetof(TexturedCorner, uv01)));
+  glVertexAttribPointer(5, 2, GL_FLOAT, GL_FALSE, stride, at(offsetof(TexturedCorner, uv2)));
+  glVertexAttribPointer(6, 3, GL_FLOAT, GL_FALSE, stride, at(offsetof(TexturedCorner, weights)));
+  for (GLuint a = 0; a < 7; ++a) glEnableVertexAttribArray(a);
   glBindVertexArray(0);
 }
 
@@ -217,11 +312,71 @@ Renderer::~Renderer() {
   glDeleteVertexArrays(3, arrays);
   glDeleteBuffers(1, &overlayBuffer_);
   glDeleteVertexArrays(1, &overlayVao_);
-  for (GLuint p : {meshProgram_, pointProgram_, backgroundProgram_, overlayProgram_})
+  for (GLuint p : {meshProgram_, pointProgram_, backgroundProgram_, overlayProgram_, texturedProgram_})
     if (p) glDeleteProgram(p);
+  glDeleteBuffers(1, &texturedBuffer_);
+  glDeleteVertexArrays(1, &texturedVao_);
+  if (textureArray_) glDeleteTextures(1, &textureArray_);
+}
+
+void Renderer::uploadTextures(const std::vector<RgbaImage>& images) {
+  if (textureArray_) glDeleteTextures(1, &textureArray_);
+  textureArray_ = 0;
+  textureLayers_ = 0;
+  int width = 1, height = 1;
+  for (const RgbaImage& image : images) {
+    width = std::max(width, image.width);
+    height = std::max(height, image.height);
+  }
+  if (images.empty()) return;
+  glGenTextures(1, &textureArray_);
+  glBindTexture(GL_TEXTURE_2D_ARRAY, textureArray_);
+  glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_SRGB8_ALPHA8, width, height, GLsizei(images.size()), 0, GL_RGBA,
+               GL_UNSIGNED_BYTE, nullptr);
+  std::vector<uint8_t> resampled(size_t(width) * size_t(height) * 4);
+  for (size_t layer = 0; layer < images.size(); ++layer) {
+    const RgbaImage& image = images[layer];
+    const uint8_t* pixels = image.rgba.data();
+    if (image.width != width || image.height != height) {
+      // Bilinear resampling in the image's own (sRGB) bytes: good enough for a texture that is then mipmapped.
+      for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+          uint8_t* d = &resampled[(size_t(y) * size_t(width) + size_t(x)) * 4];
+          if (image.width <= 0 || image.height <= 0) {
+            std::fill_n(d, 4, uint8_t(255));
+            continue;
+          }
+          const float sx = std::clamp((float(x) + 0.5f) * float(image.width) / float(width) - 0.5f, 0.0f, float(image.width - 1));
+          const float sy = std::clamp((float(y) + 0.5f) * float(image.height) / float(height) - 0.5f, 0.0f, float(image.height - 1));
+          const int x0 = int(sx), y0 = int(sy), x1 = std::min(x0 + 1, image.width - 1), y1 = std::min(y0 + 1, image.height - 1);
+          const float ax = sx - float(x0), ay = sy - float(y0);
+          for (int ch = 0; ch < 4; ++ch) {
+            auto p = [&](int i, int j) { return float(image.rgba[(size_t(j) * size_t(image.width) + size_t(i)) * 4 + size_t(ch)]); };
+            const float v = (1 - ay) * ((1 - ax) * p(x0, y0) + ax * p(x1, y0)) + ay * ((1 - ax) * p(x0, y1) + ax * p(x1, y1));
+            d[ch] = uint8_t(std::clamp(v + 0.5f, 0.0f, 255.0f));
+          }
+        }
+      pixels = resampled.data();
+    }
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, GLint(layer), width, height, 1, GL_RGBA, GL_UNSIGNED_BYTE, pixels);
+  }
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_REPEAT);
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_REPEAT);
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glGenerateMipmap(GL_TEXTURE_2D_ARRAY);
+  glBindTexture(GL_TEXTURE_2D_ARRAY, 0);
+  textureLayers_ = int32_t(images.size());
 }
 
 void Renderer::uploadMesh(const Mesh& mesh) {
+  texturedCount_ = 0;
+  if (mesh.textured()) {
+    uploadTexturedMesh(mesh);
+    indexCount_ = 0;
+    return;
+  }
   glBindVertexArray(meshVao_);
   orphanAndFill(GL_ARRAY_BUFFER, positionBuffer_, mesh.positions.data(), mesh.positions.size() * sizeof(float));
   meshHasNormals_ = !mesh.normals.empty();
@@ -241,6 +396,48 @@ void Renderer::uploadMesh(const Mesh& mesh) {
   orphanAndFill(GL_ELEMENT_ARRAY_BUFFER, indexBuffer_, mesh.indices.data(), mesh.indices.size() * sizeof(uint32_t));
   indexCount_ = static_cast<int32_t>(mesh.indices.size());
   glBindVertexArray(0);
+}
+
+void Renderer::uploadTexturedMesh(const Mesh& mesh) {
+  thread_local std::vector<TexturedCorner> corners;
+  corners.resize(mesh.indices.size());
+  TriangleLayers layers;
+  const bool hasNormals = !mesh.normals.empty(), hasColors = !mesh.colors.empty();
+  meshHasNormals_ = hasNormals;
+  for (size_t t = 0; t < mesh.triangleCount(); ++t) {
+    const uint32_t* v = &mesh.indices[3 * t];
+    layers.gather(mesh, v[0], v[1], v[2]);
+    // The three heaviest layers (summed over the corners), heaviest first.
+    const int count = std::clamp(layers.count, 0, TriangleLayers::kMax);
+    int order[TriangleLayers::kMax] = {0, 1, 2, 3, 4, 5};
+    auto total = [&](int i) { return layers.weight[i].x + layers.weight[i].y + layers.weight[i].z; };
+    std::sort(order, order + count, [&](int a, int b) { return total(a) > total(b); });
+    for (int k = 0; k < 3; ++k) {
+      TexturedCorner& c = corners[3 * t + size_t(k)];
+      const glm::vec3 p = mesh.position(v[k]);
+      const glm::vec3 n = hasNormals ? mesh.normal(v[k]) : glm::vec3(0.0f);
+      const glm::vec3 col = hasColors ? mesh.color(v[k]) : look_.defaultColor;
+      std::memcpy(c.position, &p, sizeof c.position);
+      std::memcpy(c.normal, &n, sizeof c.normal);
+      std::memcpy(c.color, &col, sizeof c.color);
+      float uv[6] = {};
+      for (int s = 0; s < 3; ++s) {
+        const bool used = s < count;
+        const int i = used ? order[s] : 0;
+        const int32_t image = used ? layers.image[i] : -1;
+        c.slots[s] = image >= 0 && image < textureLayers_ ? image : -1;
+        c.weights[s] = used ? layers.weight[i][k] : 0.0f;
+        uv[2 * s] = used ? layers.uv[i][k].x : 0.0f;
+        uv[2 * s + 1] = used ? layers.uv[i][k].y : 0.0f;
+      }
+      std::memcpy(c.uv01, uv, sizeof c.uv01);
+      std::memcpy(c.uv2, uv + 4, sizeof c.uv2);
+    }
+  }
+  glBindVertexArray(texturedVao_);
+  orphanAndFill(GL_ARRAY_BUFFER, texturedBuffer_, corners.data(), corners.size() * sizeof(TexturedCorner));
+  glBindVertexArray(0);
+  texturedCount_ = static_cast<int32_t>(corners.size());
 }
 
 void Renderer::uploadParticles(std::span<const glm::vec3> positions) {
@@ -278,6 +475,21 @@ void Renderer::draw(const Camera& camera, int width, int height, bool particles)
       projectionMatrix(camera, static_cast<float>(width) / static_cast<float>(std::max(1, height)), sceneRadius_);
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
+  if (texturedCount_ > 0) {
+    glUseProgram(texturedProgram_);
+    setMatrices(texturedProgram_, view, projection);
+    const glm::vec3 light = glm::normalize(look_.lightDirection);
+    glUniform3fv(glGetUniformLocation(texturedProgram_, "uLight"), 1, glm::value_ptr(light));
+    glUniform1f(glGetUniformLocation(texturedProgram_, "uAmbient"), look_.ambient);
+    glUniform1f(glGetUniformLocation(texturedProgram_, "uRim"), look_.rim);
+    glUniform1i(glGetUniformLocation(texturedProgram_, "uHasNormals"), meshHasNormals_ ? 1 : 0);
+    glUniform1i(glGetUniformLocation(texturedProgram_, "uTextures"), 0);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, textureArray_);
+    glBindVertexArray(texturedVao_);
+    glDrawArrays(GL_TRIANGLES, 0, texturedCount_);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, 0);
+  }
   if (indexCount_ > 0) {
     glUseProgram(meshProgram_);
     setMatrices(meshProgram_, view, projection);

@@ -12,6 +12,7 @@
 #include <glm/vec3.hpp>
 
 #include "imps/mesh.h"
+#include "png.h"
 #include "snapshot.h"
 
 namespace imps::app {
@@ -36,7 +37,14 @@ class Renderer {
   const std::string& error() const { return error_; }
 
   // Uploads the mesh (buffers orphaned and refilled every call, so the driver never stalls on the previous frame).
+  // A textured mesh (mesh.h's layers) is drawn from unshared corners carrying each triangle's three heaviest
+  // layers (textures.h's TriangleLayers; a fourth or later layer of one triangle, which needs four primitives
+  // blending there, is dropped and its weight left untextured); an untextured one costs what it did before.
   void uploadMesh(const Mesh& mesh);
+  // Uploads the images textured meshes name (mesh.layerImages index them) as one mipmapped, repeating sRGB texture
+  // array: every image is resampled (bilinear) to the largest width and height among them. Replaces any earlier
+  // upload; an empty list removes them (layers then draw white).
+  void uploadTextures(const std::vector<RgbaImage>& images);
   // Uploads particle positions (world space, metres) to draw as points.
   void uploadParticles(std::span<const glm::vec3> positions);
 
@@ -60,6 +68,7 @@ class Renderer {
   void setSceneRadius(float radius) { sceneRadius_ = radius; }
 
  private:
+  void uploadTexturedMesh(const Mesh& mesh);
   std::string error_;
   unsigned meshProgram_ = 0, pointProgram_ = 0, backgroundProgram_ = 0, overlayProgram_ = 0;
   unsigned meshVao_ = 0, pointVao_ = 0, backgroundVao_ = 0, overlayVao_ = 0, overlayBuffer_ = 0;
@@ -67,6 +76,9 @@ class Renderer {
   unsigned positionBuffer_ = 0, normalBuffer_ = 0, colorBuffer_ = 0, indexBuffer_ = 0, pointBuffer_ = 0;
   int32_t indexCount_ = 0, pointCount_ = 0;
   bool meshHasNormals_ = false, meshHasColors_ = false;
+  unsigned texturedProgram_ = 0, texturedVao_ = 0, texturedBuffer_ = 0, textureArray_ = 0;
+  int32_t texturedCount_ = 0;  // corners of the textured mesh (0: the mesh is drawn indexed, untextured)
+  int32_t textureLayers_ = 0;
   float sceneRadius_ = 2.0f;
   SnapshotOptions look_;
 };

@@ -4,6 +4,8 @@
 // (perspective-correct interpolation).
 #include "snapshot.h"
 
+#include "textures.h"
+
 #include "png.h"
 
 
@@ -101,6 +103,13 @@ std::vector<uint8_t> renderMesh(const Mesh& mesh, const SnapshotOptions& options
   const glm::vec3 light = glm::normalize(options.lightDirection);
   const bool hasNormals = !mesh.normals.empty();
   const bool hasColors = !mesh.colors.empty();
+  const bool textured = mesh.textured();
+  TriangleLayers layers;
+  auto imageOf = [&](int i) -> const RgbaImage* {
+    const int32_t img = layers.image[i];
+    return options.textures && img >= 0 && size_t(img) < options.textures->size() ? &(*options.textures)[size_t(img)]
+                                                                                   : nullptr;
+  };
 
   // Pass 1: background gradient and empty depth buffer (depth stored as 1 / distance: larger is nearer).
   const size_t sampleCount = static_cast<size_t>(sw) * static_cast<size_t>(sh);
@@ -133,6 +142,7 @@ std::vector<uint8_t> renderMesh(const Mesh& mesh, const SnapshotOptions& options
     const uint32_t i0 = mesh.indices[3 * t], i1 = mesh.indices[3 * t + 1], i2 = mesh.indices[3 * t + 2];
     const ScreenVertex &a = screen[i0], &b = screen[i1], &c = screen[i2];
     if (!a.visible || !b.visible || !c.visible) continue;
+    if (textured) layers.gather(mesh, i0, i1, i2);
     const Edge e0(screen.data(), i1, i2), e1(screen.data(), i2, i0), e2(screen.data(), i0, i1);
     const double area = e0.at(a.x, a.y);
     if (area == 0.0 || !std::isfinite(area)) continue;
@@ -174,8 +184,21 @@ std::vector<uint8_t> renderMesh(const Mesh& mesh, const SnapshotOptions& options
           const float length = glm::length(interpolated);
           if (length > 0.0f) n = interpolated * (facing / length);
         }
-        const glm::vec3 albedo =
+        glm::vec3 albedo =
             hasColors ? q0 * mesh.color(i0) + q1 * mesh.color(i1) + q2 * mesh.color(i2) : options.defaultColor;
+        if (textured && layers.count > 0) {
+          glm::vec3 factor(0.0f);
+          float total = 0.0f;
+          for (int i = 0; i < layers.count; ++i) {
+            const float w = q0 * layers.weight[i][0] + q1 * layers.weight[i][1] + q2 * layers.weight[i][2];
+            if (!(w > 0.0f)) continue;
+            total += w;
+            const glm::vec2 uv = q0 * layers.uv[i][0] + q1 * layers.uv[i][1] + q2 * layers.uv[i][2];
+            const RgbaImage* image = imageOf(i);
+            factor += w * (image ? sampleTexture(*image, uv.x, uv.y) : glm::vec3(1.0f));
+          }
+          albedo *= factor + glm::vec3(std::max(0.0f, 1.0f - total));
+        }
         // Shade in camera space: x right, y up, z towards the viewer.
         const glm::vec3 nc(glm::dot(n, frame.right), glm::dot(n, frame.up), -glm::dot(n, frame.forward));
         const float diffuse = std::max(glm::dot(nc, light), 0.0f);

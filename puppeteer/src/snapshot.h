@@ -9,6 +9,7 @@
 #include <glm/vec3.hpp>
 
 #include "imps/mesh.h"
+#include "png.h"
 
 namespace imps::app {
 
@@ -55,11 +56,16 @@ struct SnapshotOptions {
   // Background: a vertical gradient from top to bottom.
   glm::vec3 backgroundTop{0.80f, 0.80f, 0.82f};
   glm::vec3 backgroundBottom{0.52f, 0.52f, 0.54f};
+  // The images a textured mesh's layers name (mesh.layerImages index them; textures.h's loadTextures). Null, or a
+  // layer without an image: that layer is white. Not owned; must outlive the call.
+  const std::vector<RgbaImage>* textures = nullptr;
 };
 
 // Renders `mesh` and returns width * height RGBA8 pixels, rows from the top, alpha 255. Triangles are z-buffered,
 // drawn two-sided (back faces are lit as if they faced the camera), with perspective-correct interpolation of the
-// vertex normals and colours (face normals when the mesh has none). Triangles reaching behind the camera's near
+// vertex normals and colours (face normals when the mesh has none). A textured mesh's colours are modulated by its
+// layers' textures: (1 - sum of weights) + sum of weight * texel, each layer's weight interpolated and its (u, v)
+// taken from its generator at the corners (unwrapped across a sphere's seam). Triangles reaching behind the camera's near
 // plane are skipped, not clipped. An empty mesh gives just the background. Thread-safe (no shared state).
 // Returns an empty vector when width, height or supersampling are not positive.
 std::vector<uint8_t> renderMesh(const Mesh& mesh, const SnapshotOptions& options);

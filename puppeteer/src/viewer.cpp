@@ -28,6 +28,7 @@
 #include "manipulator.h"
 #include "modeller.h"
 #include "modeller_menu.h"
+#include "painter.h"
 #include "png.h"
 #include "renderer.h"
 #include "snapshot.h"
@@ -54,6 +55,15 @@ struct ViewerState {
   bool resetRequested = false;
   bool saveRequested = false;
   std::string message;
+  // 3D painting (`t`; painter.h): the brush, whether a stroke is on, which textures changed since the last upload
+  // and since the start (saved under new names), and the modeller's state to restore when painting ends.
+  bool painting = false;
+  Brush brush;
+  bool stroking = false;
+  int dabs = 0;
+  std::vector<bool> painted;
+  bool texturesDirty = false;
+  bool modellerWasEnabled = true;
 };
 
 ViewerState& state(GLFWwindow* w) { return *static_cast<ViewerState*>(glfwGetWindowUserPointer(w)); }
@@ -70,15 +80,59 @@ void report(ViewerState& s, std::string message) {
   s.message = std::move(message);
 }
 
+// One brush dab where the ray through window pixel (x, y) meets the current mesh (painter.h).
+void paintAt(ViewerState& s, double x, double y) {
+  const Mesh& mesh = s.pipeline->mesh();
+  const auto hit = intersectMesh(mesh, pickRay(currentView(s), glm::vec2(float(x), float(y))));
+  if (!hit) return;
+  const int image = paintDab(mesh, *hit, s.brush, s.pipeline->mutableTextures());
+  if (image < 0) return;
+  s.painted.resize(s.pipeline->textures().size());
+  s.painted[size_t(image)] = true;
+  s.texturesDirty = true;
+  ++s.dabs;
+}
+
+// Dabs along the cursor's path from the last position, one every two pixels, so a fast stroke has no gaps.
+void paintAlong(ViewerState& s, double x, double y) {
+  const double length = std::hypot(x - s.lastX, y - s.lastY);
+  const int steps = std::max(1, int(std::ceil(length / 2.0)));
+  for (int i = 1; i <= steps; ++i) {
+    const double t = double(i) / double(steps);
+    paintAt(s, s.lastX + t * (x - s.lastX), s.lastY + t * (y - s.lastY));
+  }
+}
+
+void togglePainting(ViewerState& s) {
+  s.painting = !s.painting;
+  if (s.painting) {
+    s.modellerWasEnabled = s.modeller->enabled();
+    s.modeller->setEnabled(false);  // manipulators hide while painting
+  } else {
+    s.modeller->setEnabled(s.modellerWasEnabled);
+  }
+  report(s, s.painting ? "paint mode (brush size " + std::to_string(s.brush.size) + ")" : "paint mode off");
+}
+
 // Left press at (x, y): the modeller grabs a handle or a bone (modeller.h); elsewhere (or any other button): orbit.
+// In paint mode a left press starts a stroke instead.
 void pressButton(ViewerState& s, int button, double x, double y, bool shift) {
   s.lastX = x, s.lastY = y;
+  if (s.painting && button == GLFW_MOUSE_BUTTON_LEFT) {
+    s.orbiting = false;
+    s.stroking = true;
+    s.dabs = 0;
+    paintAt(s, x, y);
+    return;
+  }
   s.orbiting = button != GLFW_MOUSE_BUTTON_LEFT ||
                !s.modeller->press(currentView(s), glm::vec2(float(x), float(y)), shift);
 }
 
 void moveCursor(ViewerState& s, double x, double y) {
-  if (s.orbiting) {
+  if (s.stroking) {
+    paintAlong(s, x, y);
+  } else if (s.orbiting) {
     s.orbit.yaw -= float(x - s.lastX) * 0.008f;
     s.orbit.pitch = std::clamp(s.orbit.pitch + float(y - s.lastY) * 0.008f, -1.5f, 1.5f);
   } else if (s.modeller->dragging()) {
@@ -90,6 +144,10 @@ void moveCursor(ViewerState& s, double x, double y) {
 
 void releaseButton(ViewerState& s) {
   s.orbiting = false;
+  if (s.stroking) {
+    s.stroking = false;
+    report(s, "painted " + std::to_string(s.dabs) + " dabs (brush size " + std::to_string(s.brush.size) + ")");
+  }
   if (s.modeller->dragging()) report(s, s.modeller->release());
 }
 
@@ -126,6 +184,7 @@ void handleKey(GLFWwindow* w, ViewerState& s, int key, int mods) {
   }
   switch (key) {
     case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(w, GLFW_TRUE); break;
+    case GLFW_KEY_T: togglePainting(s); break;
     case GLFW_KEY_R: s.resetRequested = true; break;
     case GLFW_KEY_S: s.saveRequested = true; break;
     case GLFW_KEY_P: s.showParticles = !s.showParticles; break;
@@ -153,9 +212,19 @@ void handleKey(GLFWwindow* w, ViewerState& s, int key, int mods) {
       m.selectJoint(joints > 0 ? (std::max(m.selectedJoint(), 0) + joints - 1) % joints : -1);
       break;
     case GLFW_KEY_RIGHT_BRACKET: m.selectJoint(joints > 0 ? (m.selectedJoint() + 1) % joints : -1); break;
-    case GLFW_KEY_0: m.selectJoint(-1); break;
+    case GLFW_KEY_0:
+      if (s.painting) {
+        s.brush.size = 0;
+        report(s, "brush size 0 (largest)");
+      } else {
+        m.selectJoint(-1);
+      }
+      break;
     default:
-      if (key >= GLFW_KEY_1 && key <= GLFW_KEY_9 && key - GLFW_KEY_1 < joints) m.selectJoint(key - GLFW_KEY_1);
+      if (s.painting && key >= GLFW_KEY_1 && key <= GLFW_KEY_9) {
+        s.brush.size = key - GLFW_KEY_0;
+        report(s, "brush size " + std::to_string(s.brush.size));
+      } else if (key >= GLFW_KEY_1 && key <= GLFW_KEY_9 && key - GLFW_KEY_1 < joints) m.selectJoint(key - GLFW_KEY_1);
       break;
   }
 }
@@ -296,6 +365,7 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
   s.pipeline = &pipeline;
   s.source = source;
   s.showParticles = options.showParticles;
+  for (int k = 0; k < 3; ++k) s.brush.color[k] = options.brushColor[k];
   glfwGetFramebufferSize(window, &s.width, &s.height);
   glfwSetWindowUserPointer(window, &s);
   glfwSetMouseButtonCallback(window, onMouseButton);
@@ -313,6 +383,7 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
       glfwDestroyWindow(window);
       return kExitIoError;
     }
+    renderer->uploadTextures(pipeline.textures());
     std::unique_ptr<Hud> hud = options.hud ? std::make_unique<Hud>(window) : nullptr;
     s.hud = hud.get();
 
@@ -410,6 +481,10 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
         uploadedVersion = pipeline.meshVersion();
       }
       if (drawParticles) renderer->uploadParticles(pipeline.tesselator().particles().positions);
+      if (s.texturesDirty) {
+        renderer->uploadTextures(pipeline.textures());
+        s.texturesDirty = false;
+      }
       lap(kUpload);
       // What the HUD and the hashes say about this mesh, read before the worker rewrites it.
       const TesselatorStats& ts = pipeline.tesselator().stats();
@@ -450,7 +525,10 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
         info.message = s.message;
         menu.showParticles = s.showParticles;
         info.deviceKeys = source && source->handlesDeviceKeys();
-        hud->draw(info, [&] { drawModellerMenu(pipeline, modeller, menu, menuActions); });
+        hud->draw(info, [&] {
+          drawModellerMenu(pipeline, modeller, menu, menuActions);
+          if (s.painting) drawBrushWindow(s.brush);
+        });
         s.showParticles = menu.showParticles;
         renderer->setPointSize(menu.pointSize);
       }
@@ -459,8 +537,11 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
       if (s.saveRequested) {
         s.saveRequested = false;
         std::string error;
-        report(s, saveSceneFile(pipeline.posedScene(), options.savePath, &error) ? "saved " + options.savePath
-                                                                                  : "save failed: " + error);
+        const bool anyPainted = std::find(s.painted.begin(), s.painted.end(), true) != s.painted.end();
+        const bool saved = savePaintedScene(pipeline.posedScene(), pipeline.character(), pipeline.textures(),
+                                            s.painted, options.savePath, &error);
+        report(s, saved ? "saved " + options.savePath + (anyPainted ? " with its painted textures" : "")
+                        : "save failed: " + error);
       }
       const bool lastFrame = headless && frame + 1 >= options.frames;
       if (s.screenshotRequested || (lastFrame && !options.screenshot.empty())) {

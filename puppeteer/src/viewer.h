@@ -57,6 +57,7 @@ struct ViewerOptions {
   int msaaSamples = -1;
   bool vsync = true;          // ignored (off) when frames > 0
   std::string savePath;       // target of the `s` key
+  uint8_t brushColor[3] = {200, 30, 40};  // the painter's starting colour (sRGB bytes; `t`, docs/app.md)
   bool printMeshHashes = false;  // print "frame N hash H triangles T" per frame to stdout
   // glFinish after every phase so the per-phase times include the GL's deferred work (profiling; slower).
   bool syncPhases = false;

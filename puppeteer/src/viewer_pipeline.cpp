@@ -8,6 +8,8 @@
 #include <utility>
 #include <variant>
 
+#include "imps/texturing.h"
+
 namespace imps::app {
 namespace {
 
@@ -55,10 +57,12 @@ void ViewerPipeline::frame() {
     } else {
       tesselator_->frame(*skeleton_, mesh_);
     }
+    textureMesh(mesh_, *skeleton_, tesselator_->options().numThreads);
     ++meshVersion_;
   } else if (!mcValid_ || mcGeneration_ != skeleton_->generation()) {
     // Marching Cubes is a function of the pose alone: an unchanged skeleton gives the same mesh.
     marchingCubes_.polygonize(skeleton_->field(), mcOptions_, mesh_, &mcStats_);
+    textureMesh(mesh_, *skeleton_, mcOptions_.threads);
     mcGeneration_ = skeleton_->generation();
     mcValid_ = true;
     ++meshVersion_;

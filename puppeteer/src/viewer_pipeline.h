@@ -14,6 +14,7 @@
 #include "imps/scene.h"
 #include "imps/skeleton_cache.h"
 #include "imps/tesselator.h"
+#include "png.h"
 #include "scene_edit.h"
 
 namespace imps::app {
@@ -47,6 +48,12 @@ class ViewerPipeline {
   // the pose changed): updatesPerRender particle updates and a triangulation, or one Marching Cubes pass.
   void frame();
   const Mesh& mesh() const { return mesh_; }
+  // The character's texture images (textures.h's loadTextures, in Character::textures() order), which the mesh's
+  // layers name. Set once after construction; the renderer uploads them.
+  const std::vector<RgbaImage>& textures() const { return textures_; }
+  void setTextures(std::vector<RgbaImage> images) { textures_ = std::move(images); }
+  // The painter's access (painter.h): call only while no worker polygonizes (the images are not read there).
+  std::vector<RgbaImage>& mutableTextures() { return textures_; }
   // Incremented whenever frame() rewrites mesh(): the renderer re-uploads only a new mesh. Marching Cubes skips its
   // pass (and keeps the version) while the skeleton cache's generation has not changed.
   uint64_t meshVersion() const { return meshVersion_; }
@@ -82,6 +89,7 @@ class ViewerPipeline {
 
  private:
   Scene scene_;
+  std::vector<RgbaImage> textures_;
   std::unique_ptr<Character> character_;  // stable address: the skeleton cache points to it
   std::unique_ptr<SkeletonCache> skeleton_;
   std::unique_ptr<Tesselator> tesselator_;

@@ -236,7 +236,7 @@ TEST(SceneReaderErrors, UnknownNodeTypeAndField) {
             "t.wrl:3:3: error: unknown field 'radus' in Metaball; did you mean 'radius'?\n");
   EXPECT_EQ(errorsOf(kHeader + "Metaball { colour 1 }"),
             "t.wrl:2:12: error: unknown field 'colour' in Metaball (its fields are: center, radius, blendParam, "
-            "material)\n");
+            "material, texGen, texture)\n");
   EXPECT_EQ(errorsOf(kHeader + "Metaball { materal Material { } }"),
             "t.wrl:2:12: error: unknown field 'materal' in Metaball; did you mean 'material'?\n");
 }
@@ -590,6 +590,67 @@ TEST(SceneReaderErrors, SeveralErrorsInOneRunAndTheCap) {
   ASSERT_FALSE(capped.has_value());
   EXPECT_EQ(capped.error().errorCount(), 50);
   EXPECT_EQ(capped.error().all().back().str(), "t.wrl:52:19: note: too many errors; stopping here");
+}
+
+TEST(SceneReader, TexGenAndImageTextureOnEveryShape) {
+  const Scene scene = sceneOf(kHeader + R"(EllipticalBlend { children [
+  Metaball { texGen TexGenSphere { translation 0 1 0 rotation 0 1 0 1.5 } texture ImageTexture { url "skin.png" } }
+  Ellipsoid { texGen TexGenPlane { width 0.5 height 0.25 } }
+  LineSeg { texture ImageTexture { url [ "dir/tie.jpg" ] } }
+] }
+)");
+  const auto& children = std::get<BlendNode>(*scene.root).children;
+  const auto& ball = std::get<ShapeNode>(children[0]);
+  ASSERT_TRUE(ball.texGen && ball.texture);
+  EXPECT_EQ(ball.texGen->kind, TexGenKind::Sphere);
+  EXPECT_EQ(ball.texGen->translation, glm::vec3(0, 1, 0));
+  EXPECT_EQ(ball.texGen->rotation, (Rotation{{0, 1, 0}, 1.5f}));
+  EXPECT_EQ(ball.texture->url, "skin.png");
+  EXPECT_EQ(ball.texture->loc.line, 3);  // the url string
+  EXPECT_EQ(ball.texture->loc.column, 102);
+  const auto& ellipsoid = std::get<ShapeNode>(children[1]);
+  ASSERT_TRUE(ellipsoid.texGen);
+  EXPECT_FALSE(ellipsoid.texture);
+  EXPECT_EQ(ellipsoid.texGen->kind, TexGenKind::Plane);
+  EXPECT_EQ(ellipsoid.texGen->width, 0.5f);
+  EXPECT_EQ(ellipsoid.texGen->height, 0.25f);
+  const auto& line = std::get<ShapeNode>(children[2]);
+  EXPECT_FALSE(line.texGen);
+  ASSERT_TRUE(line.texture);
+  EXPECT_EQ(line.texture->url, "dir/tie.jpg");
+  // Defaults.
+  const TexGenNode plane = std::get<ShapeNode>(std::get<BlendNode>(*sceneOf(kHeader +
+      "ExponentialBlend { children [ Metaball { texGen TexGenPlane { } } ] }").root).children[0]).texGen.value();
+  EXPECT_EQ(plane.translation, glm::vec3(0));
+  EXPECT_EQ(plane.rotation, Rotation{});
+  EXPECT_EQ(plane.width, 2.0f);
+  EXPECT_EQ(plane.height, 2.0f);
+}
+
+TEST(SceneReaderErrors, TexGenAndImageTexture) {
+  const std::string f = "t.wrl";
+  EXPECT_EQ(errorsOf(kHeader + "Metaball { texGen TexGenPlane { width 0 height -1 } }"),
+            f + ":2:39: error: field 'width' of TexGenPlane must be > 0, found 0\n" +
+            f + ":2:48: error: field 'height' of TexGenPlane must be > 0, found -1\n");
+  EXPECT_EQ(errorsOf(kHeader + "Metaball { texGen TexGenSphere { width 1 } }"),
+            f + ":2:34: error: unknown field 'width' in TexGenSphere (its fields are: translation, rotation)\n");
+  EXPECT_EQ(errorsOf(kHeader + "Metaball { texture ImageTexture { url [ \"a.png\" \"b.png\" ] } }"),
+            f + ":2:41: error: field 'url' of ImageTexture must be one non-empty string, found 2 strings\n");
+  EXPECT_EQ(errorsOf(kHeader + "Metaball { texture ImageTexture { url \"\" } }"),
+            f + ":2:39: error: field 'url' of ImageTexture must be one non-empty string, found an empty string\n");
+  EXPECT_EQ(errorsOf(kHeader + "Metaball { texture ImageTexture { url 3 } }"),
+            f + ":2:39: error: expected a string or a list of strings for field 'url' of ImageTexture, found '3'\n");
+  EXPECT_EQ(errorsOf(kHeader + "Metaball { texture TexGenSphere { } }"),
+            f + ":2:20: error: a TexGenSphere node is not allowed in field 'texture' of Metaball (it takes an "
+                "ImageTexture)\n");
+  EXPECT_EQ(errorsOf(kHeader + "Metaball { texGen Material { } }"),
+            f + ":2:19: error: a Material node is not allowed in field 'texGen' of Metaball (it takes a "
+                "TexGenSphere or TexGenPlane)\n");
+  EXPECT_EQ(errorsOf(kHeader + "Metaball { texGen TexGenSphre { } }"),
+            f + ":2:19: error: unknown node type 'TexGenSphre'; did you mean 'TexGenSphere'?\n");
+  EXPECT_EQ(errorsOf(kHeader + "ImageTexture { url \"a.png\" }"),
+            f + ":2:1: error: a ImageTexture node cannot be at top level (a file holds one polygonizer or scene "
+                "graph root, plus BlendGroups)\n");
 }
 
 TEST(SceneReaderErrors, UnreadableFile) {

@@ -107,6 +107,30 @@ TEST(SceneWriter, RoundTripsEveryTestScene) {
   }
 }
 
+TEST(SceneWriter, TexGensAndTexturesRoundTrip) {
+  const Scene scene = readOrFail(R"(#VRML V2.0 utf8
+DEF Body RigidTransform { children [
+  Metaball { radius 0.5 texGen TexGenSphere { translation 0 0.25 0 rotation 0 1 0 3.1415927 }
+             texture ImageTexture { url "suit \"1\".png" } }
+  DEF Head RigidTransform { translation 0 1 0 children [
+    Ellipsoid { texGen TexGenPlane { translation 0 0 1 width 0.7 height 0.3 } texture ImageTexture { url "/abs/face.exr" } }
+    LineSeg { texture ImageTexture { url "tie.jpg" } }
+  ] }
+] }
+)");
+  expectRoundTrip(scene);
+  const std::string text = writeScene(scene);
+  EXPECT_NE(text.find("      texGen TexGenSphere {\n        translation 0 0.25 0\n        rotation 0 1 0 3.1415927\n"
+                      "      }\n      texture ImageTexture {\n        url \"suit \\\"1\\\".png\"\n      }\n"),
+            std::string::npos) << text;
+  EXPECT_NE(text.find("texGen TexGenPlane {\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("width 0.7\n"), std::string::npos) << text;
+  // A different generator is a different scene.
+  Scene moved = scene;
+  std::get<ShapeNode>(std::get<TransformNode>(*moved.root).children[0]).texGen->translation.y = 0.5f;
+  EXPECT_NE(moved, scene);
+}
+
 TEST(SceneWriter, UseIsWrittenAsUseAndDefOnce) {
   auto scene = readSceneFile(scenePath("flat_exponential.wrl"));
   ASSERT_TRUE(scene.has_value());

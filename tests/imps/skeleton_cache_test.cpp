@@ -80,6 +80,42 @@ TEST(SkeletonCache, DifferentialTransformsCarryParticlesWithTheirPrimitives) {
   expectNear(cache.primitiveDifferential(1).apply(moved), particle, 1e-4f);
 }
 
+// Thesis 3.9: the generator is centred on its primitive and follows it through the skeleton cache, so a point fixed
+// to the forearm keeps its texture coordinates however the arm is posed.
+TEST(SkeletonCache, TexGensFollowTheirPrimitives) {
+  auto scene = readScene(R"(#VRML V2.0 utf8
+DEF SHOULDER RigidTransform { children [
+  DEF UPPER LineSeg { point1 0 0 0 point2 1 0 0 radius1 0.2 radius2 0.2 }
+  DEF ELBOW RigidTransform { translation 1 0 0 children [
+    DEF FORE LineSeg { point1 0 0 0 point2 1 0 0 radius1 0.15 radius2 0.15
+                       texGen TexGenSphere { translation 0 0.1 0 } texture ImageTexture { url "fore.png" } }
+  ] }
+] }
+)", "/scenes/arm.wrl");
+  ASSERT_TRUE(scene.has_value()) << scene.error().str();
+  auto c = Character::fromScene(*scene);
+  ASSERT_TRUE(c.has_value()) << c.error().str();
+  ASSERT_TRUE(c->textured());
+  EXPECT_FALSE(c->primitives()[0].texGen);
+  ASSERT_EQ(c->textures().size(), 1u);
+  EXPECT_EQ(c->textures()[0].path, "/scenes/fore.png");  // relative to the scene file
+  EXPECT_EQ(c->primitives()[1].texture, 0);
+  SkeletonCache cache(*c);
+  EXPECT_EQ(cache.texGen(0), nullptr);
+  ASSERT_NE(cache.texGen(1), nullptr);
+  expectNear(cache.texGen(1)->origin, {1.5f, 0.1f, 0});  // the forearm's midpoint, moved up by the translation
+  const glm::vec3 point(1.7f, 0.15f, 0.05f);
+  const glm::vec2 before = cache.texGen(1)->map(point);
+  cache.setRotation("SHOULDER", glm::angleAxis(0.3f, glm::vec3(0, 1, 0)));
+  cache.setRotation("ELBOW", glm::angleAxis(-1.2f, glm::vec3(0, 0, 1)));
+  cache.update();
+  const glm::vec3 moved = cache.primitiveDifferential(1).apply(point);
+  const glm::vec2 after = cache.texGen(1)->map(moved);
+  EXPECT_NEAR(after.x, before.x, 1e-5f);
+  EXPECT_NEAR(after.y, before.y, 1e-5f);
+  EXPECT_GT(glm::length(moved - point), 0.1f);
+}
+
 TEST(SkeletonCache, SetPoseReportsUnknownJoints) {
   const Character c = arm();
   SkeletonCache cache(c);

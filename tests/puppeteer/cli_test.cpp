@@ -41,6 +41,7 @@ class CliTest : public ::testing::Test {
     dir_ = fs::temp_directory_path() / ("imps_cli_test_" + std::to_string(::getpid()));
     fs::create_directories(dir_);
     write("bad.wrl", "#VRML V2.0 utf8\nMetaball {\n  radius -2\n}\n");
+    write("notex.wrl", "#VRML V2.0 utf8\nMetaball {\n  texture ImageTexture { url \"gone.png\" }\n}\n");
     write("garbage.session", "this is not a session file\n");
     write("garbage.bvh", "HIERARCHY\nROOT {\n");
     write("bad.rig.json", "{\n  \"version\": 1,\n  \"joints\": [ { \"joint\": \"L_Elbo\" } ]\n}\n");
@@ -123,6 +124,22 @@ TEST_F(CliTest, AnInputFileWithErrorsIsAnInputErrorForEveryCommand) {
   });
   EXPECT_FALSE(fs::exists(at("m.ply")));
   EXPECT_FALSE(fs::exists(at("c.json")));
+}
+
+// docs/scene-format.md, *Texturing*: a missing image is an input error at its url, for the commands that draw.
+TEST_F(CliTest, AMissingTextureImageIsAnInputError) {
+  const std::string message = "notex.wrl:3:30: error: cannot read texture 'gone.png' (" + at("gone.png") +
+                              "): No such file or directory";
+  expectAll({
+      {"render", {"render", at("notex.wrl"), "-o", at("r.png")}, kInvalidInput, message},
+      {"view", {"view", at("notex.wrl")}, kInvalidInput, message},
+  });
+  EXPECT_FALSE(fs::exists(at("r.png")));
+  // A textured example renders.
+  const auto run = runProgram(puppeteer(), {"render", kSource + "/examples/textured_blobs.wrl", "--width", "64",
+                                            "--height", "64", "-o", at("blobs.png")});
+  EXPECT_EQ(run.exitCode, kOk) << run.err;
+  EXPECT_TRUE(fs::exists(at("blobs.png")));
 }
 
 TEST_F(CliTest, AnUnknownOptionIsAUsageErrorForEveryCommand) {

@@ -13,7 +13,7 @@ TEST(Hud, KeyHelpOffersRecordAndCalibrateOnlyWithALiveDevice) {
   EXPECT_EQ(view.find("k calibrate"), std::string::npos) << view;
   EXPECT_NE(live.find("o record"), std::string::npos) << live;
   EXPECT_NE(live.find("k calibrate"), std::string::npos) << live;
-  for (const char* key : {"r reset", "s save", "p particles", "m MC", "F12 shot", "Esc quit"}) {
+  for (const char* key : {"r reset", "s save", "t paint", "p particles", "m MC", "F12 shot", "Esc quit"}) {
     EXPECT_NE(view.find(key), std::string::npos) << key;
     EXPECT_NE(live.find(key), std::string::npos) << key;
   }

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <expected>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -23,6 +24,7 @@
 #include "imps/field.h"
 #include "imps/primitives.h"
 #include "imps/scene.h"
+#include "imps/texgen.h"
 
 namespace imps {
 
@@ -53,7 +55,24 @@ struct CharacterPrimitive {
   Primitive local;   // in the joint's frame (world frame when joint == -1)
   float blendParam = 0.0f;
   glm::vec3 color{0.8f};
+  // Texturing (thesis 3.9): the primitive's texture-coordinate generator in the joint's frame (set when the shape
+  // has a texGen or a texture; a texture alone gets a default TexGenSphere), and its image, an index into
+  // Character::textures() (-1: none, the surface keeps its colour).
+  std::optional<TexGen> texGen;
+  int texture = -1;
 };
+
+// An image a primitive's ImageTexture names: the url as written, and the path to read (relative urls resolved
+// against the scene file's directory). Primitives naming the same path share one entry.
+struct CharacterTexture {
+  std::string url;
+  std::string path;
+  SourceLoc loc;  // the url in the scene file
+};
+
+// The joint-local generator of a shape's TexGenSphere / TexGenPlane: centred on the shape (a LineSeg's midpoint),
+// moved by its translation and turned by its rotation, in the joint's frame.
+TexGen texGenOf(const ShapeNode& shape, const TexGenNode& node);
 
 class Character {
  public:
@@ -64,6 +83,9 @@ class Character {
 
   const std::vector<Joint>& joints() const { return joints_; }
   const std::vector<CharacterPrimitive>& primitives() const { return primitives_; }
+  const std::vector<CharacterTexture>& textures() const { return textures_; }
+  // Whether any primitive has a texture-coordinate generator (texGen or texture).
+  bool textured() const { return textured_; }
   const BlendFunction& blend() const { return blend_; }
   float isoValue() const { return iso_; }
   bool hierarchical() const { return hierarchical_; }
@@ -81,11 +103,13 @@ class Character {
  private:
   std::vector<Joint> joints_;
   std::vector<CharacterPrimitive> primitives_;
+  std::vector<CharacterTexture> textures_;
   BlendGraph graph_{{}, 0};
   BlendSets sets_;
   BlendFunction blend_;
   float iso_ = 1.0f;
   bool hierarchical_ = false;
+  bool textured_ = false;
   friend class CharacterBuilder;
 };
 

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <span>
+#include <utility>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -97,6 +98,10 @@ class Field {
                      std::span<float> out, FieldScratch& scratch) const;
   float value(const glm::vec3& x, FieldScratch& scratch) const;
   FieldSample sample(const glm::vec3& x, FieldScratch& scratch) const;
+  // The blend weights at x that sample() blends colours with: every member of the winning set with a positive
+  // weight (its term; the term + 1 under the elliptical fold), as (primitive, weight) pairs, primitives ascending,
+  // into `out` (cleared first). Empty where F is nothing. x must be inside the prepared region.
+  void contributions(const glm::vec3& x, FieldScratch& scratch, std::vector<std::pair<uint32_t, float>>& out) const;
   // sample() at many points at once, vectorised; identical results.
   void samples(std::span<const glm::vec3> points, std::span<FieldSample> out, FieldScratch& scratch) const;
 

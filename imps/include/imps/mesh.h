@@ -8,6 +8,8 @@
 
 #include <glm/vec3.hpp>
 
+#include "imps/texgen.h"
+
 namespace imps {
 
 // An indexed triangle mesh. Vertex attributes are interleaved per attribute, not per vertex:
@@ -19,6 +21,18 @@ struct Mesh {
   std::vector<float> normals;
   std::vector<float> colors;
   std::vector<uint32_t> indices;
+  // Textures (filled by textureMesh, imps/texturing.h; all empty when no primitive has a generator). A *layer* is
+  // one textured primitive: layerGens[l] is its generator in the mesh's space and layerImages[l] its image (an index
+  // into Character::textures(); -1: a generator without an image, which renders white). Each vertex blends up to
+  // two layers: layers[2v], layers[2v+1] (-1: unused) with weights layerWeights[2v], layerWeights[2v+1] >= 0 whose
+  // sum is at most 1 (the rest is untextured: the colour alone). texcoords[2v..2v+1] is the (u, v) of the vertex's
+  // first layer (0, 0 without one). A renderer gets any layer's coordinates anywhere from its generator
+  // (layerGens[l].map(position)), which is how a triangle whose corners name different layers is drawn seamlessly.
+  std::vector<TexGen> layerGens;
+  std::vector<int32_t> layerImages;
+  std::vector<int32_t> layers;
+  std::vector<float> layerWeights;
+  std::vector<float> texcoords;
 
   size_t vertexCount() const { return positions.size() / 3; }
   size_t triangleCount() const { return indices.size() / 3; }
@@ -30,7 +44,16 @@ struct Mesh {
     normals.clear();
     colors.clear();
     indices.clear();
+    clearTextures();
   }
+  void clearTextures() {
+    layerGens.clear();
+    layerImages.clear();
+    layers.clear();
+    layerWeights.clear();
+    texcoords.clear();
+  }
+  bool textured() const { return !layers.empty(); }
   bool operator==(const Mesh&) const = default;
 };
 
@@ -71,7 +94,8 @@ struct MeshBounds {
 MeshBounds bounds(const Mesh& mesh);
 
 // Appends `source` to `target`, offsetting its indices. normals (and colors) of the result are kept only if both
-// meshes have them, or if `target` is empty; otherwise they are dropped so the Mesh invariant holds.
+// meshes have them, or if `target` is empty; otherwise they are dropped so the Mesh invariant holds. Texture
+// layers are kept only when `target` is empty (copied) or both meshes have the same layers; otherwise dropped.
 void appendMesh(Mesh& target, const Mesh& source);
 
 }  // namespace imps

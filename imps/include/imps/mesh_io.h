@@ -51,4 +51,32 @@ std::optional<std::vector<uint8_t>> encodeObj(const Mesh& mesh, std::string* err
 std::optional<std::vector<uint8_t>> encodePly(const Mesh& mesh, std::string* error);
 std::optional<std::vector<uint8_t>> encodeGlb(const Mesh& mesh, std::string* error);
 
+// An encoded image a textured mesh's layers name (mesh.layerImages index a list of these): PNG or JPEG bytes.
+struct MeshImage {
+  std::string name;      // file name for OBJ's .mtl and the glTF image's name, e.g. "skin.png"
+  std::string mimeType;  // "image/png" or "image/jpeg"
+  std::vector<uint8_t> bytes;
+};
+
+// Textured glTF 2.0 binary (issue 11): the mesh cut by splitByTexture (texturing.h) into one triangle primitive per
+// image, each with its own POSITION, NORMAL, COLOR_0 and (textured parts) TEXCOORD_0 (glTF's v = 1 - ours), and a
+// material whose pbrMetallicRoughness.baseColorTexture is the image, embedded in the BIN chunk (one image per
+// texture, no atlas; sampler REPEAT, trilinear). COLOR_0 multiplies the texture as the renderers modulate the
+// colour. The untextured part gets a plain material. An untextured mesh, or no images, gives encodeGlb(mesh).
+// Fails (nullopt, *error) like encodeGlb, and when a layer names an image outside `images`.
+std::optional<std::vector<uint8_t>> encodeTexturedGlb(const Mesh& mesh, const std::vector<MeshImage>& images,
+                                                      std::string* error);
+bool writeTexturedGlb(const Mesh& mesh, const std::vector<MeshImage>& images, const std::string& path,
+                      std::string* error);
+
+// Textured Wavefront OBJ: the OBJ text (`v`, `vt` u v, `vn`, `usemtl`, `f a/a/a …`, one group per splitByTexture
+// part, `mtllib` naming `mtlName`) and the .mtl text (one `newmtl` per part; `map_Kd` the image's name for
+// textured parts). The caller writes the images beside them under their names.
+struct TexturedObj {
+  std::vector<uint8_t> obj;
+  std::vector<uint8_t> mtl;
+};
+std::optional<TexturedObj> encodeTexturedObj(const Mesh& mesh, const std::vector<MeshImage>& images,
+                                             const std::string& mtlName, std::string* error);
+
 }  // namespace imps

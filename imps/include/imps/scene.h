@@ -40,6 +40,30 @@ struct Material {
   bool operator==(const Material& o) const;
 };
 
+// A texture-coordinate generator (thesis 3.9: ImTexGenSphere, ImTexGenPlane): `TexGenSphere` or `TexGenPlane`.
+// Its frame is centred on its primitive (a Metaball's or Ellipsoid's center, a LineSeg's midpoint) and axis-aligned
+// with the primitive's joint, then moved by `translation` and turned by `rotation` (both in the joint's frame); it
+// follows the primitive through the skeleton cache. The mappings are imps/texgen.h's.
+enum class TexGenKind { Sphere, Plane };
+struct TexGenNode {
+  TexGenKind kind = TexGenKind::Sphere;
+  glm::vec3 translation{0.0f, 0.0f, 0.0f};
+  Rotation rotation;
+  // TexGenPlane: the projected slide's size in metres along the generator's local x (u) and y (v); each > 0.
+  float width = 2.0f;
+  float height = 2.0f;
+  SourceLoc loc;  // not compared
+  bool operator==(const TexGenNode& o) const;
+};
+
+// VRML 2 `ImageTexture { url "file.png" }`: an image (PNG, JPEG, EXR, ...) whose path is relative to the scene
+// file's directory (or absolute). Exactly one url.
+struct ImageTextureNode {
+  std::string url;
+  SourceLoc loc;  // of the url string; not compared
+  bool operator==(const ImageTextureNode& o) const { return url == o.url; }
+};
+
 enum class ShapeKind { Metaball, Ellipsoid, LineSeg };
 
 // An implicit primitive: `Metaball`, `Ellipsoid` or `LineSeg` node. Only the fields of its kind are meaningful;
@@ -63,6 +87,10 @@ struct ShapeNode {
   // hardness > 0 for BlancSchlickBlend, blend range > 0 for EllipticalBlend. Unset: the blend's default.
   std::optional<float> blendParam;
   std::optional<Material> material;
+  // Texturing (thesis 3.9; docs/scene-format.md): the image that modulates the surface colour near this primitive,
+  // and the generator of its texture coordinates. A texture without texGen uses a TexGenSphere with the defaults.
+  std::optional<TexGenNode> texGen;
+  std::optional<ImageTextureNode> texture;
   std::string useOf;  // see Material::useOf
   SourceLoc loc;      // not compared
   bool operator==(const ShapeNode& o) const;

@@ -52,6 +52,9 @@ class SkeletonCache {
   // Differential transform for the particles owned by primitive i (identity for joint-less primitives).
   Rigid primitiveDifferential(size_t i) const;
   const Field& field() const { return field_; }
+  // Primitive i's texture-coordinate generator in world space (it follows the primitive's joint), or null when the
+  // primitive has none.
+  const TexGen* texGen(size_t i) const { return texGens_.empty() || !hasTexGen_[i] ? nullptr : &texGens_[i]; }
   // Incremented by every update().
   uint64_t generation() const { return generation_; }
 
@@ -59,6 +62,8 @@ class SkeletonCache {
   const Character* character_;
   std::vector<Rigid> local_, world_, differential_;
   Field field_;
+  std::vector<TexGen> texGens_;   // empty when no primitive has a generator
+  std::vector<uint8_t> hasTexGen_;
   uint64_t generation_ = 0;
 };
 

@@ -1,0 +1,127 @@
+// Texture images (puppeteer/src/textures.h) and textured software rendering (snapshot.h): loading beside the scene,
+// the error for a missing image, bilinear repeating sampling, and layers modulating the rendered colour.
+#include "textures.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "imps/marching_cubes.h"
+#include "imps/scene_reader.h"
+#include "imps/skeleton_cache.h"
+#include "imps/texturing.h"
+#include "snapshot.h"
+
+namespace imps::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A w x h image whose left half is `left` and right half `right` (bytes).
+RgbaImage halves(int w, int h, glm::u8vec3 left, glm::u8vec3 right) {
+  RgbaImage image{w, h, std::vector<uint8_t>(size_t(w) * size_t(h) * 4)};
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const glm::u8vec3 c = x < w / 2 ? left : right;
+      uint8_t* p = &image.rgba[(size_t(y) * size_t(w) + size_t(x)) * 4];
+      p[0] = c.r, p[1] = c.g, p[2] = c.b, p[3] = 255;
+    }
+  return image;
+}
+
+class TexturesTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("imps_textures_test_" + std::to_string(::getpid()));
+    fs::create_directories(dir_ / "maps");
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  Character character(const std::string& url) {
+    const std::string text = "#VRML V2.0 utf8\nExponentialBlend { children [\n  Metaball { texture ImageTexture { url \"" +
+                             url + "\" } }\n] }\n";
+    auto scene = readScene(text, (dir_ / "s.wrl").string());
+    EXPECT_TRUE(scene.has_value());
+    auto c = Character::fromScene(*scene);
+    EXPECT_TRUE(c.has_value());
+    return std::move(*c);
+  }
+  fs::path dir_;
+};
+
+TEST_F(TexturesTest, ImagesAreReadRelativeToTheSceneFile) {
+  const RgbaImage image = halves(8, 4, {255, 0, 0}, {0, 0, 255});
+  std::string error;
+  ASSERT_TRUE(savePng(image.rgba, image.width, image.height, (dir_ / "maps/skin.png").string(), &error)) << error;
+  const auto loaded = loadTextures(character("maps/skin.png"));
+  ASSERT_TRUE(loaded.has_value()) << loaded.error();
+  ASSERT_EQ(loaded->size(), 1u);
+  EXPECT_EQ((*loaded)[0], image);
+}
+
+TEST_F(TexturesTest, AMissingOrUnreadableImageIsAnErrorNamingTheFileAndItsPlaceInTheScene) {
+  const std::string scene = (dir_ / "s.wrl").string();
+  auto missing = loadTextures(character("maps/none.png"));
+  ASSERT_FALSE(missing.has_value());
+  EXPECT_EQ(missing.error(), scene + ":3:41: error: cannot read texture 'maps/none.png' (" +
+                                 (dir_ / "maps/none.png").string() + "): No such file or directory");
+  std::ofstream(dir_ / "maps/junk.png") << "not an image";
+  auto junk = loadTextures(character("maps/junk.png"));
+  ASSERT_FALSE(junk.has_value());
+  EXPECT_NE(junk.error().find(scene + ":3:41: error: cannot read texture 'maps/junk.png' ("), std::string::npos)
+      << junk.error();
+  EXPECT_TRUE(loadTextures(character("maps")).error().ends_with("): Is a directory"));
+}
+
+TEST(SampleTexture, BilinearRepeatingAndVUp) {
+  // Top row white, bottom row black (rows from the top): v = 1 is the top.
+  RgbaImage image{1, 2, {255, 255, 255, 255, 0, 0, 0, 255}};
+  EXPECT_NEAR(sampleTexture(image, 0.5f, 0.75f).g, 1.0f, 1e-6f);  // the top texel's centre
+  EXPECT_NEAR(sampleTexture(image, 0.5f, 0.25f).g, 0.0f, 1e-6f);  // the bottom one's
+  EXPECT_NEAR(sampleTexture(image, 0.5f, 0.5f).g, 0.5f, 1e-6f);   // half way (linear bytes: 0 and 1)
+  EXPECT_NEAR(sampleTexture(image, 7.5f, -2.25f).g, 1.0f, 1e-6f);  // repeats: v = -2.25 is v = 0.75
+  EXPECT_EQ(sampleTexture(RgbaImage{}, 0.3f, 0.3f), glm::vec3(1.0f));  // no image: white
+}
+
+// A metaball with a slide projected on its front, left half red and right half blue, rendered from the front: the
+// texture modulates the surface colour where the layer weighs in, and without the images the surface is plain.
+TEST(TexturedSnapshot, LayersModulateTheColourWithTheirImages) {
+  auto scene = readScene(R"(#VRML V2.0 utf8
+ExponentialBlend { children [
+  Metaball { radius 1 material Material { diffuseColor 1 1 1 }
+             texGen TexGenPlane { width 2 height 2 } texture ImageTexture { url "x.png" } }
+] }
+)", "s.wrl");
+  ASSERT_TRUE(scene.has_value());
+  auto c = Character::fromScene(*scene);
+  ASSERT_TRUE(c.has_value());
+  SkeletonCache cache(*c);
+  MarchingCubesOptions o;
+  o.cellSize = 0.05f;
+  Mesh mesh = polygonize(cache.field(), o);
+  textureMesh(mesh, cache);
+  const std::vector<RgbaImage> images = {halves(16, 16, {255, 0, 0}, {0, 0, 255})};
+  SnapshotOptions options;
+  options.width = options.height = 64;
+  options.camera = Camera{.eye = {0, 0, 5}, .target = {0, 0, 0}, .up = {0, 1, 0}, .verticalFov = 0.6f};
+  options.rim = 0.0f;
+  options.textures = &images;
+  const std::vector<uint8_t> textured = renderMesh(mesh, options);
+  auto pixel = [](const std::vector<uint8_t>& p, int x, int y) { return &p[(size_t(y) * 64 + size_t(x)) * 4]; };
+  const uint8_t* left = pixel(textured, 24, 32);
+  const uint8_t* right = pixel(textured, 40, 32);
+  EXPECT_GT(left[0], 100);
+  EXPECT_LT(left[2], 10);
+  EXPECT_GT(right[2], 100);
+  EXPECT_LT(right[0], 10);
+  options.textures = nullptr;  // layers without images are white: the plain white surface
+  const std::vector<uint8_t> plain = renderMesh(mesh, options);
+  EXPECT_GT(pixel(plain, 24, 32)[2], 100);
+  EXPECT_EQ(pixel(plain, 24, 32)[0], pixel(plain, 24, 32)[2]);
+  mesh.clearTextures();  // and an untextured mesh renders as before
+  EXPECT_EQ(renderMesh(mesh, options), plain);
+}
+
+}  // namespace
+}  // namespace imps::app
