@@ -1,5 +1,7 @@
 // `puppeteer mesh` and `puppeteer check`: scene files to meshes, and scene validation.
 #include "cli.h"
+#include "cli_world.h"
+#include "clip_pose.h"
 
 #include <CLI/CLI.hpp>
 
@@ -251,6 +253,7 @@ Json checkJson(const std::string& path, const Character& c) {
 }
 
 int runCheck(const std::string& path, bool json) {
+  if (isWorldFile(path)) return runWorldCheck(path, json);  // a VRML 97 world or clip (docs/world-format.md)
   auto loaded = loadScene(path);
   if (!loaded) return kExitInvalidInput;
   const Character& character = loaded->character;
@@ -293,6 +296,8 @@ struct RenderArgs {
   std::string view = "three-quarter";
   size_t maxCells = MarchingCubesOptions{}.maxCells;
   bool json = false;
+  std::string clip, clipName, map = "names";  // --clip: pose the character from a VRML clip at --at seconds
+  double at = 0.0;
 };
 
 // Renders the scene's Marching Cubes mesh in software to a PNG: a quick look without a GPU or a display.
@@ -302,6 +307,15 @@ int runRender(const RenderArgs& a) {
   if (!loaded) return kExitInvalidInput;
   const Character& character = loaded->character;
   SkeletonCache skeleton(character);
+  if (!a.clip.empty()) {
+    auto driver = ClipDriver::load(a.clip, a.clipName, a.map, character);
+    if (!driver) {
+      std::fputs(driver.error().c_str(), stderr);
+      return kExitInvalidInput;
+    }
+    driver->apply(a.at, skeleton);
+    skeleton.update();
+  }
   MarchingCubesOptions options;
   options.cellSize = a.cell;
   options.resolution = a.res;
@@ -380,6 +394,13 @@ void addSceneCommands(CLI::App& app, Commands& commands) {
       ->check(CLI::PositiveNumber);
   renderCmd->add_option("--view", render->view, "Camera direction")->check(CLI::IsMember({"three-quarter", "front", "side", "top"}));
   renderCmd->add_flag("--json", render->json, "Print the report as JSON (for scripts)");
+  auto* renderClip = renderCmd->add_option("--clip", render->clip, "Pose the character from a VRML 97 clip file "
+                                                                   "(docs/world-format.md)")->check(inputFile());
+  renderCmd->add_option("--at", render->at, "With --clip: the time into the clip, seconds (looping)")
+      ->check(nonNegativeNumber())->needs(renderClip);
+  renderCmd->add_option("--clip-name", render->clipName, "With --clip: the TimeSensor to play (default: the first)")
+      ->needs(renderClip);
+  renderCmd->add_option("--map", render->map, "With --clip: names or a joint map FILE.json")->needs(renderClip);
   commands.push_back({renderCmd, [render] { return runRender(*render); }});
 }
 
