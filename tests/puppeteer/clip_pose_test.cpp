@@ -6,12 +6,14 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
 
 #include "imps/marching_cubes.h"
 #include "imps/scene_reader.h"
+#include "imps/vrml_props.h"
 #include "subprocess.h"
 
 namespace imps::app {
@@ -125,6 +127,30 @@ TEST(ClipPoseSource, FixedStepsAdvanceOneFrameEach) {
   expectNear(skeleton.local(character.findJoint("BEAN_TOP")).translation, {0, 0.4f, 0});
 }
 
+TEST(ClipDriver, AHatOnAJointFollowsItThroughTheJump) {
+  const Character character = characterOf(kBeanito);
+  auto driver = ClipDriver::load(kJump, "", "names", character);
+  ASSERT_TRUE(driver.has_value()) << driver.error();
+  auto hatFile = readVrmlFile(kSource + "/examples/beanito_hat.wrl");
+  ASSERT_TRUE(hatFile.has_value());
+  const std::vector<Prop> hat = readProps(*hatFile);
+  ASSERT_EQ(hat.size(), 3u);  // brim, crown, band
+  const int top = character.findJoint("BEAN_TOP");
+  auto hatBottomAt = [&](double seconds) {
+    SkeletonCache skeleton(character);
+    driver->apply(seconds, skeleton);
+    skeleton.update();
+    return bounds(transformed(hat[0].mesh, skeleton.world(top))).min.y - skeleton.world(top).translation.y;
+  };
+  // At the apex (key 0.55) the brim is as far above BEAN_TOP as at rest, give or take the tilt: it moved with it.
+  EXPECT_NEAR(hatBottomAt(0.0), hatBottomAt(0.55 * 1.2), 0.06f);
+  SkeletonCache apex(character);
+  driver->apply(0.55 * 1.2, apex);
+  apex.update();
+  // The clip's keys at 0.55: BEAN_BOTTOM at y 0.55 turned 0.25 rad about z, BEAN_TOP 0.62 above it.
+  EXPECT_NEAR(apex.world(top).translation.y, 0.55f + 0.62f * std::cos(0.25f), 1e-5f);
+}
+
 // ---- The commands, run as a user would ----
 
 fs::path puppeteer() { return IMPS_PUPPETEER_BINARY; }
@@ -169,6 +195,16 @@ TEST(WorldCommands, RenderPosesTheCharacterFromTheClip) {
   EXPECT_EQ(run.exitCode, 0) << run.err;
   EXPECT_TRUE(fs::exists(out));
   fs::remove(out);
+  const auto withHat = test::runProgram(puppeteer(), {"render", kBeanito, "--prop",
+                                                      kSource + "/examples/beanito_hat.wrl@BEAN_TOP", "--res", "24",
+                                                      "--width", "64", "--height", "64", "-o", out.string()});
+  EXPECT_EQ(withHat.exitCode, 0) << withHat.err;
+  fs::remove(out);
+  const auto noJoint = test::runProgram(puppeteer(), {"render", kBeanito, "--prop",
+                                                      kSource + "/examples/beanito_hat.wrl@HEAD", "-o", out.string()});
+  EXPECT_EQ(noJoint.exitCode, 1);
+  EXPECT_NE(noJoint.err.find("the scene has no joint 'HEAD'"), std::string::npos) << noJoint.err;
+  EXPECT_FALSE(fs::exists(out));
   const auto wrong = test::runProgram(puppeteer(), {"render", kBeanito, "--clip", kDance, "-o", out.string()});
   EXPECT_EQ(wrong.exitCode, 1);
   EXPECT_NE(wrong.err.find("drives no joint"), std::string::npos) << wrong.err;
