@@ -67,6 +67,7 @@ struct LiveArgs {
   bool syncPhases = false;
   bool overlap = false;
   std::vector<std::string> oscOut;  // live, replay: --osc-out targets
+  std::vector<std::string> props;   // --prop FILE.wrl[@JOINT]
   // replay
   std::string session;
   std::string rig, calibration;
@@ -84,6 +85,9 @@ struct LiveArgs {
 };
 
 void addCommonOptions(CLI::App* cmd, LiveArgs& a) {
+  cmd->add_option("--prop", a.props,
+                  "Polygonal props from a VRML 97 file, FILE.wrl@JOINT to attach them to a joint (repeatable; "
+                  "docs/world-format.md)");
   cmd->add_option("--frames", a.frames, "Render this many frames, then exit (headless use; 0 = until closed)")
       ->check(nonNegativeNumber());
   cmd->add_option("--screenshot", a.screenshot, "With --frames: save the last frame to this PNG file");
@@ -158,6 +162,18 @@ std::unique_ptr<ViewerPipeline> makePipeline(const LiveArgs& a, int* exitCode) {
     return nullptr;
   }
   return pipeline;
+}
+
+// --prop specs loaded for `character`; nullopt after printing the errors.
+std::optional<std::vector<AttachedProp>> propsFor(const LiveArgs& a, const Character& character) {
+  std::string warnings;
+  auto props = loadProps(a.props, character, &warnings);
+  std::fputs(warnings.c_str(), stderr);
+  if (!props) {
+    std::fputs(props.error().c_str(), stderr);
+    return std::nullopt;
+  }
+  return std::move(*props);
 }
 
 ViewerOptions viewerOptions(const LiveArgs& a, const std::string& title) {
@@ -239,6 +255,13 @@ int runView(const LiveArgs& a) {
   auto pipeline = makePipeline(a, &code);
   if (!pipeline) return code;
   ViewerOptions v = viewerOptions(a, "IMPS Puppeteer: " + a.scene);
+  if (!a.props.empty() && a.overlap) {
+    std::fprintf(stderr, "puppeteer: error: --prop cannot be combined with --overlap\n");
+    return kExitUsage;
+  }
+  auto props = propsFor(a, pipeline->character());
+  if (!props) return kExitInvalidInput;
+  v.props = std::move(*props);
   v.script = std::move(*script);
   return runViewer(*pipeline, nullptr, v);
 }
@@ -359,6 +382,13 @@ int runClip(const LiveArgs& a, const std::string& command) {
   // Headless runs (--frames) advance a fixed 1/60 s per frame, so a screenshot shows a known moment.
   ClipPoseSource source(std::move(*driver), a.speed, a.frames > 0 ? 1.0 / 60.0 : 0.0, name);
   ViewerOptions v = viewerOptions(a, "IMPS Puppeteer: " + command + " " + name);
+  if (!a.props.empty() && a.overlap) {
+    std::fprintf(stderr, "puppeteer: error: --prop cannot be combined with --overlap\n");
+    return kExitUsage;
+  }
+  auto props = propsFor(a, pipeline->character());
+  if (!props) return kExitInvalidInput;
+  v.props = std::move(*props);
   v.script = std::move(*script);
   return runWithOscOut(a, *pipeline, source, v);
 }
@@ -448,6 +478,13 @@ int runReplay(const LiveArgs& given) {
   else
     source = std::make_unique<ReplayPoseSource>(*session, std::move(*mapper), a.speed, name);
   ViewerOptions v = viewerOptions(a, "IMPS Puppeteer: replay " + name);
+  if (!a.props.empty() && a.overlap) {
+    std::fprintf(stderr, "puppeteer: error: --prop cannot be combined with --overlap\n");
+    return kExitUsage;
+  }
+  auto props = propsFor(a, pipeline->character());
+  if (!props) return kExitInvalidInput;
+  v.props = std::move(*props);
   v.script = std::move(*script);
   return runWithOscOut(a, *pipeline, *source, v);
 }
@@ -495,6 +532,13 @@ int runLive(const LiveArgs& a) {
     if (!mapper) return kExitInvalidInput;
   }
   ViewerOptions v = viewerOptions(a, "IMPS Puppeteer: live " + a.device);
+  if (!a.props.empty() && a.overlap) {
+    std::fprintf(stderr, "puppeteer: error: --prop cannot be combined with --overlap\n");
+    return kExitUsage;
+  }
+  auto props = propsFor(a, pipeline->character());
+  if (!props) return kExitInvalidInput;
+  v.props = std::move(*props);
   v.script = std::move(*script);
   if (spec->kind == drivers::DeviceKind::Osc) {
     if (!a.record.empty()) {

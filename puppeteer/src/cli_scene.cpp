@@ -2,7 +2,7 @@
 #include "cli.h"
 #include "cli_world.h"
 #include "clip_pose.h"
-#include "imps/vrml_props.h"
+#include "prop_attachment.h"
 
 #include <CLI/CLI.hpp>
 
@@ -302,31 +302,6 @@ struct RenderArgs {
   std::vector<std::string> props;  // --prop FILE.wrl[@JOINT]: polygonal props, attached to a joint or in the world
 };
 
-// Appends the props of every `--prop FILE.wrl[@JOINT]` to `mesh`: a prop on a joint is in the joint's frame and
-// follows its posed world transform. False after printing the errors (a bad file, an unknown joint).
-bool addProps(const std::vector<std::string>& specs, const SkeletonCache& skeleton, Mesh& mesh) {
-  for (const std::string& spec : specs) {
-    const size_t at = spec.rfind('@');
-    const std::string path = at == std::string::npos ? spec : spec.substr(0, at);
-    const std::string joint = at == std::string::npos ? std::string() : spec.substr(at + 1);
-    int j = -1;
-    if (!joint.empty() && (j = skeleton.character().findJoint(joint)) < 0) {
-      std::fprintf(stderr, "puppeteer: error: --prop %s: the scene has no joint '%s'\n", spec.c_str(), joint.c_str());
-      return false;
-    }
-    Diagnostics warnings;
-    auto file = readVrmlFile(path, &warnings);
-    if (!file) {
-      std::fputs(file.error().str().c_str(), stderr);
-      return false;
-    }
-    const std::vector<Prop> props = readProps(*file, &warnings);
-    std::fputs(warnings.str().c_str(), stderr);
-    for (const Prop& p : props) appendMesh(mesh, j >= 0 ? transformed(p.mesh, skeleton.world(j)) : p.mesh);
-  }
-  return true;
-}
-
 // Renders the scene's Marching Cubes mesh in software to a PNG: a quick look without a GPU or a display.
 int runRender(const RenderArgs& a) {
   if (int rc = checkOutputPath("render", "-o", a.output, {".png"}); rc != kExitOk) return rc;
@@ -352,10 +327,15 @@ int runRender(const RenderArgs& a) {
   Progress progress("render");
   followPolygonizing(progress, options);
   Mesh mesh = polygonize(skeleton.field(), options);
-  if (!addProps(a.props, skeleton, mesh)) {
+  std::string propWarnings;
+  auto props = loadProps(a.props, character, &propWarnings);
+  std::fputs(propWarnings.c_str(), stderr);
+  if (!props) {
     progress.done();
+    std::fputs(props.error().c_str(), stderr);
     return kExitInvalidInput;
   }
+  appendPosedProps(mesh, *props, skeleton);
   progress.phase("rendering " + std::to_string(mesh.triangleCount()) + " triangles");
   SnapshotOptions snap;
   snap.width = a.width;
