@@ -1,6 +1,7 @@
 // `puppeteer check` for VRML 97 worlds and clips (see cli_world.h).
 #include "cli_world.h"
 
+#include <cctype>
 #include <cstdio>
 #include <set>
 #include <string_view>
@@ -24,6 +25,23 @@ struct PropInfo {
 };
 
 constexpr size_t kMaxListedProps = 1000;
+
+// The node types only the IMPS scene dialect has (docs/scene-format.md).
+constexpr std::string_view kImpsNodes[] = {"Tesselator3MP", "MarchingCubes", "RigidTransform", "Metaball", "LineSeg",
+                                           "Ellipsoid", "ExponentialBlend", "BlancSchlickBlend", "EllipticalBlend",
+                                           "BlendGroup", "UniformHash"};
+
+bool isNameChar(char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_' || c == '-'; }
+
+// Does `text` contain `word` as a whole name (not inside a longer one)?
+bool namesWord(std::string_view text, std::string_view word) {
+  for (size_t at = text.find(word); at != std::string_view::npos; at = text.find(word, at + 1)) {
+    const bool before = at == 0 || !isNameChar(text[at - 1]);
+    const bool after = at + word.size() == text.size() || !isNameChar(text[at + word.size()]);
+    if (before && after) return true;
+  }
+  return false;
+}
 
 std::string numbersText(const VrmlField* f) {
   std::string out;
@@ -119,8 +137,8 @@ bool isWorldFile(const std::string& path) {
     text = std::move(*inflated);
   }
   if (!text.starts_with("#VRML") && !text.starts_with("\xEF\xBB\xBF#VRML")) return false;
-  for (std::string_view node : {"Tesselator3MP", "MarchingCubes", "RigidTransform"})
-    if (text.find(node) != std::string::npos) return false;
+  for (std::string_view node : kImpsNodes)
+    if (namesWord(text, node)) return false;
   return true;
 }
 

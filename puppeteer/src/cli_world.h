@@ -6,9 +6,10 @@
 
 namespace imps::app {
 
-// Whether `path` is a VRML 97 world or clip file rather than an IMPS character scene: a .wrl/.wrz/.gz file whose
-// text (decompressed) names none of the IMPS scene nodes Tesselator3MP, MarchingCubes or RigidTransform. A file that
-// cannot be read is not a world (the scene reader then reports why).
+// Whether `path` is a VRML 97 world or clip file rather than an IMPS character scene: a .wrl/.wrz/.gz file starting
+// `#VRML` whose text (decompressed) names none of the IMPS-only node types (Tesselator3MP, MarchingCubes,
+// RigidTransform, Metaball, LineSeg, Ellipsoid, the blends, BlendGroup, UniformHash) as a whole word, comments
+// included. A file that cannot be read is not a world (the scene reader then reports why).
 bool isWorldFile(const std::string& path);
 
 // `puppeteer check WORLD [--json]`: reads the world and its clips, prints the clips (TimeSensor, duration, loop,

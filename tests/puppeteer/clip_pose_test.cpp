@@ -171,6 +171,16 @@ TEST(WorldCommands, CheckListsClipsAndProps) {
   EXPECT_NE(json.out.find("\"timeSensor\": \"JUMP\""), std::string::npos) << json.out;
 }
 
+TEST(WorldCommands, AnImpsSceneIsNeverTakenForAWorld) {
+  const fs::path scene = fs::temp_directory_path() / ("not_world_" + std::to_string(::getpid()) + ".wrl");
+  std::ofstream(scene) << "#VRML V2.0 utf8\nMetaball {\n  radius -2\n}\n";
+  const auto run = test::runProgram(puppeteer(), {"check", scene.string()});
+  fs::remove(scene);
+  EXPECT_EQ(run.exitCode, 1);
+  EXPECT_EQ(run.out.find("VRML 97 world"), std::string::npos) << run.out;
+  EXPECT_NE(run.err.find(":3:10: error:"), std::string::npos) << run.err;  // the scene reader's radius error
+}
+
 TEST(WorldCommands, BadWorldsAreInputErrors) {
   const fs::path bad = fs::temp_directory_path() / ("bad_world_" + std::to_string(::getpid()) + ".wrl");
   std::ofstream(bad) << "#VRML V2.0 utf8\nDEF T Transform { }\nDEF P PositionInterpolator { }\n"
