@@ -3,6 +3,7 @@
 #include "cli_world.h"
 #include "clip_pose.h"
 #include "prop_attachment.h"
+#include "imps/vrml_props.h"
 
 #include <CLI/CLI.hpp>
 
@@ -300,7 +301,42 @@ struct RenderArgs {
   std::string clip, clipName, map = "names";  // --clip: pose the character from a VRML clip at --at seconds
   double at = 0.0;
   std::vector<std::string> props;  // --prop FILE.wrl[@JOINT]: polygonal props, attached to a joint or in the world
+  std::vector<std::string> grabs;  // --grab FILE.wrl@JOINT@PICK:DROP: props picked up and put down (with --clip)
 };
+
+// Appends the props of every --grab, moved as the clip's joint carries them at --at (grabbedMotion). False after
+// printing the errors.
+bool addGrabbedProps(const RenderArgs& a, const Character& character, Mesh& mesh) {
+  if (a.grabs.empty()) return true;
+  auto driver = ClipDriver::load(a.clip, a.clipName, a.map, character);
+  if (!driver) {
+    std::fputs(driver.error().c_str(), stderr);
+    return false;
+  }
+  for (const std::string& spec : a.grabs) {
+    auto grab = parseGrab(spec, character);
+    if (!grab) {
+      std::fputs(grab.error().c_str(), stderr);
+      return false;
+    }
+    std::string warnings;
+    auto props = loadProps({grab->first}, character, &warnings);
+    std::fputs(warnings.c_str(), stderr);
+    if (!props) {
+      std::fputs(props.error().c_str(), stderr);
+      return false;
+    }
+    auto jointWorldAt = [&](double seconds) {
+      SkeletonCache posed(character);
+      driver->apply(seconds, posed);
+      posed.update();
+      return posed.world(grab->second.joint);
+    };
+    const Rigid motion = grabbedMotion(grab->second, a.at, jointWorldAt);
+    for (const AttachedProp& p : *props) appendMesh(mesh, transformed(p.mesh, motion));
+  }
+  return true;
+}
 
 // Renders the scene's Marching Cubes mesh in software to a PNG: a quick look without a GPU or a display.
 int runRender(const RenderArgs& a) {
@@ -336,6 +372,10 @@ int runRender(const RenderArgs& a) {
     return kExitInvalidInput;
   }
   appendPosedProps(mesh, *props, skeleton);
+  if (!addGrabbedProps(a, character, mesh)) {
+    progress.done();
+    return kExitInvalidInput;
+  }
   progress.phase("rendering " + std::to_string(mesh.triangleCount()) + " triangles");
   SnapshotOptions snap;
   snap.width = a.width;
@@ -414,6 +454,10 @@ void addSceneCommands(CLI::App& app, Commands& commands) {
   renderCmd->add_option("--map", render->map, "With --clip: names or a joint map FILE.json")->needs(renderClip);
   renderCmd->add_option("--prop", render->props,
                         "Polygonal props from a VRML 97 file, FILE.wrl@JOINT to attach them to a joint (repeatable)");
+  renderCmd->add_option("--grab", render->grabs,
+                        "With --clip: FILE.wrl@JOINT@PICK:DROP, props the joint picks up at PICK seconds and puts "
+                        "down at DROP (repeatable)")
+      ->needs(renderClip);
   commands.push_back({renderCmd, [render] { return runRender(*render); }});
 }
 

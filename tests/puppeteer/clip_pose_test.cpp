@@ -151,6 +151,35 @@ TEST(ClipDriver, AHatOnAJointFollowsItThroughTheJump) {
   EXPECT_NEAR(apex.world(top).translation.y, 0.55f + 0.62f * std::cos(0.25f), 1e-5f);
 }
 
+TEST(Grab, AGrabbedPropStaysPutThenFollowsTheHandThenStaysWhereDropped) {
+  const Grab grab{0, 1.0, 2.0};
+  // A hand that moves along x and turns about z as time goes on.
+  auto hand = [](double t) { return Rigid{glm::angleAxis(float(t), glm::vec3(0, 0, 1)), {float(t), 0, 0}}; };
+  const glm::vec3 p(0.3f, 0.2f, 0.1f);  // a point of the prop, in the file's frame
+  expectNear(grabbedMotion(grab, 0.5, hand).apply(p), p);  // before the pick: not moved
+  for (double t : {1.0, 1.3, 1.99}) {
+    // While held, the point keeps its place in the hand's frame at the pick.
+    expectNear(hand(t).inverse().apply(grabbedMotion(grab, t, hand).apply(p)), hand(1.0).inverse().apply(p));
+  }
+  // After the drop it stays where the hand left it.
+  expectNear(grabbedMotion(grab, 5.0, hand).apply(p), grabbedMotion(grab, 2.0, hand).apply(p));
+}
+
+TEST(Grab, SpecsAreChecked) {
+  const Character flubber = characterOf(kFlubber);
+  auto ok = parseGrab("ball.wrl@L_ARM_JOINT@0.5:1.5", flubber);
+  ASSERT_TRUE(ok.has_value()) << ok.error();
+  EXPECT_EQ(ok->first, "ball.wrl");
+  EXPECT_EQ(ok->second.joint, flubber.findJoint("L_ARM_JOINT"));
+  EXPECT_EQ(ok->second.pickSeconds, 0.5);
+  EXPECT_EQ(ok->second.dropSeconds, 1.5);
+  EXPECT_NE(parseGrab("ball.wrl@L_ARM_JOINT", flubber).error().find("expected FILE.wrl@JOINT@PICK:DROP"),
+            std::string::npos);
+  EXPECT_NE(parseGrab("ball.wrl@HAND@0:1", flubber).error().find("no joint 'HAND'"), std::string::npos);
+  EXPECT_NE(parseGrab("ball.wrl@L_ARM_JOINT@2:1", flubber).error().find("0 <= PICK <= DROP"), std::string::npos);
+  EXPECT_NE(parseGrab("ball.wrl@L_ARM_JOINT@x:1", flubber).error().find("must be numbers"), std::string::npos);
+}
+
 // ---- The commands, run as a user would ----
 
 fs::path puppeteer() { return IMPS_PUPPETEER_BINARY; }
@@ -215,6 +244,17 @@ TEST(WorldCommands, RenderPosesTheCharacterFromTheClip) {
   EXPECT_EQ(noJoint.exitCode, 1);
   EXPECT_NE(noJoint.err.find("the scene has no joint 'HEAD'"), std::string::npos) << noJoint.err;
   EXPECT_FALSE(fs::exists(out));
+  const auto grab = test::runProgram(puppeteer(), {"render", kFlubber, "--clip", kDance, "--at", "1.2", "--grab",
+                                                   kSource + "/examples/flubber_ball.wrl@L_ARM_JOINT@0.5:1.5",
+                                                   "--res", "24", "--width", "64", "--height", "64", "-o",
+                                                   out.string()});
+  EXPECT_EQ(grab.exitCode, 0) << grab.err;
+  fs::remove(out);
+  const auto badGrab = test::runProgram(puppeteer(), {"render", kFlubber, "--clip", kDance, "--grab",
+                                                      kSource + "/examples/flubber_ball.wrl@L_ARM_JOINT@3:1", "-o",
+                                                      out.string()});
+  EXPECT_EQ(badGrab.exitCode, 1);
+  EXPECT_NE(badGrab.err.find("expected 0 <= PICK <= DROP"), std::string::npos) << badGrab.err;
   const auto wrong = test::runProgram(puppeteer(), {"render", kBeanito, "--clip", kDance, "-o", out.string()});
   EXPECT_EQ(wrong.exitCode, 1);
   EXPECT_NE(wrong.err.find("drives no joint"), std::string::npos) << wrong.err;
