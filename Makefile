@@ -36,7 +36,7 @@ test-sanitize: deps
 FUZZ_BUILD     ?= build-fuzz
 FUZZ_SECONDS   ?= 60
 FUZZ_LARGE_LEN ?= 262144
-FUZZ_LARGE     := bvh_reader bvh_session check_pose rig_map scene_polygonize scene_reader session_reader
+FUZZ_LARGE     := vrml_file bvh_reader bvh_session check_pose rig_map scene_polygonize scene_reader session_reader
 FUZZ_TARGETS   := $(patsubst tests/fuzz/%.cpp,%,$(wildcard tests/fuzz/*_fuzz.cpp))
 fuzz:
 	@bash scripts/install-deps.sh fuzz

@@ -9,6 +9,8 @@ packages=(
   build-essential cmake ninja-build pkg-config clang libclang-rt-14-dev
   # core libraries
   libglm-dev libtbb-dev libcli11-dev nlohmann-json3-dev
+  # gzip-compressed VRML worlds (.wrl served compressed)
+  zlib1g-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev libtinygltf-dev
   # devices

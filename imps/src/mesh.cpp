@@ -177,14 +177,29 @@ void appendMesh(Mesh& target, const Mesh& source) {
   }
   target.indices.reserve(target.indices.size() + source.indices.size());
   for (const uint32_t i : source.indices) target.indices.push_back(i + static_cast<uint32_t>(offset));
-  if (target.textured() && source.textured() && target.layerGens == source.layerGens &&
-      target.layerImages == source.layerImages) {
-    target.layers.insert(target.layers.end(), source.layers.begin(), source.layers.end());
-    target.layerWeights.insert(target.layerWeights.end(), source.layerWeights.begin(), source.layerWeights.end());
-    target.texcoords.insert(target.texcoords.end(), source.texcoords.begin(), source.texcoords.end());
-  } else {
-    target.clearTextures();
+  if (!target.textured() && !source.textured()) return;
+  // Texture layers: an untextured side gets "no layer" per vertex; the source's layers follow the target's.
+  const size_t targetVertices = offset, sourceVertices = source.vertexCount();
+  if (!target.textured()) {
+    target.layers.assign(2 * targetVertices, -1);
+    target.layerWeights.assign(2 * targetVertices, 0.0f);
+    target.texcoords.assign(2 * targetVertices, 0.0f);
   }
+  if (!source.textured()) {
+    target.layers.insert(target.layers.end(), 2 * sourceVertices, -1);
+    target.layerWeights.insert(target.layerWeights.end(), 2 * sourceVertices, 0.0f);
+    target.texcoords.insert(target.texcoords.end(), 2 * sourceVertices, 0.0f);
+    return;
+  }
+  const bool sameLayers = target.layerGens == source.layerGens && target.layerImages == source.layerImages;
+  const auto layerOffset = static_cast<int32_t>(sameLayers ? 0 : target.layerGens.size());
+  if (!sameLayers) {
+    target.layerGens.insert(target.layerGens.end(), source.layerGens.begin(), source.layerGens.end());
+    target.layerImages.insert(target.layerImages.end(), source.layerImages.begin(), source.layerImages.end());
+  }
+  for (const int32_t l : source.layers) target.layers.push_back(l < 0 ? l : l + layerOffset);
+  target.layerWeights.insert(target.layerWeights.end(), source.layerWeights.begin(), source.layerWeights.end());
+  target.texcoords.insert(target.texcoords.end(), source.texcoords.begin(), source.texcoords.end());
 }
 
 }  // namespace imps

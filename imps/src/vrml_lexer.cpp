@@ -42,6 +42,18 @@ namespace {
 
 bool isIdentifierStart(char c) { return std::isalpha(static_cast<unsigned char>(c)) != 0 || c == '_'; }
 bool isIdentifierChar(char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_'; }
+// ISO/IEC 14772-1 clause 5.3: IdRestChars exclude control characters, space and `" # ' , . [ \ ] { }`; we keep
+// '.' (see Dialect::Vrml97). IdFirstChar further excludes digits, '+' and '-' (and '.').
+bool isVrml97IdentifierChar(char c) {
+  const auto b = static_cast<unsigned char>(c);
+  if (b <= 0x20 || b == 0x7F) return false;
+  return c != '"' && c != '#' && c != '\'' && c != ',' && c != '[' && c != '\\' && c != ']' && c != '{' && c != '}';
+}
+bool isVrml97IdentifierStart(char c) {
+  return isVrml97IdentifierChar(c) && std::isdigit(static_cast<unsigned char>(c)) == 0 && c != '+' && c != '-' &&
+         c != '.';
+}
+
 // A number is scanned as the longest run of these, so `1.2.3` and `1e` are one bad token rather than several.
 bool isNumberRunChar(char c) {
   return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '.' || c == '+' || c == '-' || c == '_';
@@ -91,8 +103,8 @@ std::string byteHex(unsigned char b) {
 
 }  // namespace
 
-Lexer::Lexer(std::string_view text, std::string fileName, DiagnosticSink& sink)
-    : text_(text), fileName_(std::move(fileName)), sink_(sink), end_(firstInvalidUtf8(text)) {}
+Lexer::Lexer(std::string_view text, std::string fileName, DiagnosticSink& sink, Dialect dialect)
+    : text_(text), fileName_(std::move(fileName)), sink_(sink), dialect_(dialect), end_(firstInvalidUtf8(text)) {}
 
 const Token& Lexer::peek(size_t ahead) {
   while (lookahead_.size() <= ahead) lookahead_.push_back(scan());
@@ -159,9 +171,10 @@ Token Lexer::scan() {
   if (c == '"') return scanString(std::move(token));
   if (std::isdigit(static_cast<unsigned char>(c)) != 0 || c == '+' || c == '-' || c == '.')
     return scanNumberLike(std::move(token));
-  if (isIdentifierStart(c)) {
+  const bool vrml97 = dialect_ == Dialect::Vrml97;
+  if (vrml97 ? isVrml97IdentifierStart(c) : isIdentifierStart(c)) {
     const size_t start = pos_;
-    while (pos_ < end_ && isIdentifierChar(current())) advance();
+    while (pos_ < end_ && (vrml97 ? isVrml97IdentifierChar(current()) : isIdentifierChar(current()))) advance();
     token.text = std::string(text_.substr(start, pos_ - start));
     token.kind = TokenKind::Identifier;
     if (isNonFiniteSpelling(token.text)) {

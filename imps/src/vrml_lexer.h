@@ -52,12 +52,18 @@ struct Token {
 // How a token is named in messages: 'radius', '1.5', a string, '{', end of file.
 std::string describe(const Token& token);
 
+// Which identifiers a lexer accepts. Imps: the scene dialect's C-like names ([A-Za-z_][A-Za-z0-9_]*). Vrml97: the
+// names of ISO/IEC 14772 clause 5 as DCC exporters write them (3D Studio MAX's `Box01-POS-INTERP`, UTF-8 letters):
+// any printable character except `" # ' , [ \ ] { }` and white space, not starting with a digit, '+', '-' or '.';
+// a '.' inside a name is kept so `Node.field` (ROUTE) is one token, split by the reader.
+enum class Dialect { Imps, Vrml97 };
+
 // Splits a whole file into tokens. Commas, whitespace and `#` comments separate tokens and are dropped. Lexical
 // errors are reported to the sink when the bad token is produced and come back as BadNumber or Invalid tokens.
 // Invalid UTF-8 is reported once, at the first bad byte, and ends the input there. `text` must outlive the lexer.
 class Lexer {
  public:
-  Lexer(std::string_view text, std::string fileName, DiagnosticSink& sink);
+  Lexer(std::string_view text, std::string fileName, DiagnosticSink& sink, Dialect dialect = Dialect::Imps);
 
   // The token `ahead` positions after the next one (0: the next one), without consuming anything.
   const Token& peek(size_t ahead = 0);
@@ -75,6 +81,7 @@ class Lexer {
   std::string_view text_;
   std::string fileName_;
   DiagnosticSink& sink_;
+  Dialect dialect_ = Dialect::Imps;
   std::deque<Token> lookahead_;
   size_t pos_ = 0;
   size_t end_ = 0;  // the first invalid UTF-8 byte, or the text's size

@@ -1,6 +1,8 @@
 // `puppeteer view` (pose by hand), `puppeteer replay` (play a recorded session) and `puppeteer live` (drive the
 // character from an armature): the live app's commands.
 #include "cli.h"
+#include "cli_world.h"
+#include "clip_pose.h"
 #include "device_opener.h"
 
 #include <CLI/CLI.hpp>
@@ -67,6 +69,7 @@ struct LiveArgs {
   bool syncPhases = false;
   bool overlap = false;
   std::vector<std::string> oscOut;  // live, replay: --osc-out targets
+  std::vector<std::string> props;   // --prop FILE.wrl[@JOINT]
   // replay
   std::string session;
   std::string rig, calibration;
@@ -74,6 +77,8 @@ struct LiveArgs {
   double speed = 1.0;
   bool stepped = false;
   std::string exportSession;
+  // view, replay: a VRML clip (docs/world-format.md); replay takes it in place of SESSION
+  std::string clip, clipName;
   // live
   std::string device;
   std::string record, recordDir = ".";
@@ -82,6 +87,9 @@ struct LiveArgs {
 };
 
 void addCommonOptions(CLI::App* cmd, LiveArgs& a) {
+  cmd->add_option("--prop", a.props,
+                  "Polygonal props from a VRML 97 file, FILE.wrl@JOINT to attach them to a joint (repeatable; "
+                  "docs/world-format.md)");
   cmd->add_option("--frames", a.frames, "Render this many frames, then exit (headless use; 0 = until closed)")
       ->check(nonNegativeNumber());
   cmd->add_option("--screenshot", a.screenshot, "With --frames: save the last frame to this PNG file");
@@ -169,6 +177,18 @@ std::unique_ptr<ViewerPipeline> makePipeline(const LiveArgs& a, int* exitCode) {
   return pipeline;
 }
 
+// --prop specs loaded for `character`; nullopt after printing the errors.
+std::optional<std::vector<AttachedProp>> propsFor(const LiveArgs& a, const Character& character) {
+  std::string warnings;
+  auto props = loadProps(a.props, character, &warnings);
+  std::fputs(warnings.c_str(), stderr);
+  if (!props) {
+    std::fputs(props.error().c_str(), stderr);
+    return std::nullopt;
+  }
+  return std::move(*props);
+}
+
 ViewerOptions viewerOptions(const LiveArgs& a, const std::string& title) {
   ViewerOptions v;
   v.width = a.width, v.height = a.height;
@@ -239,7 +259,10 @@ std::optional<std::vector<ScriptedEvent>> parseScript(const LiveArgs& a) {
   return script;
 }
 
+int runClip(const LiveArgs& a, const std::string& command);
+
 int runView(const LiveArgs& a) {
+  if (!a.clip.empty()) return runClip(a, "view");
   if (int rc = checkOutputArgs(a, "view"); rc != kExitOk) return rc;
   auto script = parseScript(a);
   if (!script) return kExitUsage;
@@ -247,6 +270,13 @@ int runView(const LiveArgs& a) {
   auto pipeline = makePipeline(a, &code);
   if (!pipeline) return code;
   ViewerOptions v = viewerOptions(a, "IMPS Puppeteer: " + a.scene);
+  if (!a.props.empty() && a.overlap) {
+    std::fprintf(stderr, "puppeteer: error: --prop cannot be combined with --overlap\n");
+    return kExitUsage;
+  }
+  auto props = propsFor(a, pipeline->character());
+  if (!props) return kExitInvalidInput;
+  v.props = std::move(*props);
   v.script = std::move(*script);
   return runViewer(*pipeline, nullptr, v);
 }
@@ -338,10 +368,55 @@ bool looksLikeScene(const std::string& path) {
   return extensionOf(path) == ".wrl";
 }
 
+// Plays a.clip (a VRML 97 clip file) on a.scene in the app: `view --clip` and `replay CLIP.wrl SCENE`.
+int runClip(const LiveArgs& a, const std::string& command) {
+  if (int rc = checkOutputArgs(a, command.c_str()); rc != kExitOk) return rc;
+  if (!checkOscOutArgs(a)) return kExitUsage;
+  auto script = parseScript(a);
+  if (!script) return kExitUsage;
+  int code = kExitOk;
+  auto pipeline = makePipeline(a, &code);
+  if (!pipeline) return code;
+  auto driver = ClipDriver::load(a.clip, a.clipName, a.map, pipeline->character());
+  if (!driver) {
+    std::fputs(driver.error().c_str(), stderr);
+    return kExitInvalidInput;
+  }
+  const std::string name = std::filesystem::path(a.clip).filename().string();
+  std::printf("puppeteer: playing %s of %s on %zu joint%s", driver->describe().c_str(), name.c_str(),
+              driver->bound().size(), driver->bound().size() == 1 ? "" : "s");
+  if (!driver->unbound().empty()) {
+    std::string names;
+    for (const std::string& t : driver->unbound()) names += " " + t;
+    std::printf(", targets driving no joint:%s", names.c_str());
+  }
+  std::printf("\n");
+  if (driver->hasScale())
+    std::printf("puppeteer: note: %s: scale tracks are not applied to the character (its joints are rigid)\n",
+                name.c_str());
+  // Headless runs (--frames) advance a fixed 1/60 s per frame, so a screenshot shows a known moment.
+  ClipPoseSource source(std::move(*driver), a.speed, a.frames > 0 ? 1.0 / 60.0 : 0.0, name);
+  ViewerOptions v = viewerOptions(a, "IMPS Puppeteer: " + command + " " + name);
+  if (!a.props.empty() && a.overlap) {
+    std::fprintf(stderr, "puppeteer: error: --prop cannot be combined with --overlap\n");
+    return kExitUsage;
+  }
+  auto props = propsFor(a, pipeline->character());
+  if (!props) return kExitInvalidInput;
+  v.props = std::move(*props);
+  v.script = std::move(*script);
+  return runWithOscOut(a, *pipeline, source, v);
+}
+
 int runReplay(const LiveArgs& given) {
   // SESSION SCENE, or SCENE SESSION as view and live take the scene first: told apart by content.
   LiveArgs a = given;
   if (looksLikeScene(a.session) && !looksLikeScene(a.scene)) std::swap(a.session, a.scene);
+  if (isWorldFile(a.scene) && !isWorldFile(a.session)) std::swap(a.session, a.scene);  // SCENE CLIP.wrl
+  if (isWorldFile(a.session)) {
+    a.clip = a.session;
+    return runClip(a, "replay");
+  }
   if (int rc = checkOutputArgs(a, "replay"); rc != kExitOk) return rc;
   if (!checkRigArgs(a) || !checkOscOutArgs(a)) return kExitUsage;
   auto script = parseScript(a);
@@ -418,6 +493,13 @@ int runReplay(const LiveArgs& given) {
   else
     source = std::make_unique<ReplayPoseSource>(*session, std::move(*mapper), a.speed, name);
   ViewerOptions v = viewerOptions(a, "IMPS Puppeteer: replay " + name);
+  if (!a.props.empty() && a.overlap) {
+    std::fprintf(stderr, "puppeteer: error: --prop cannot be combined with --overlap\n");
+    return kExitUsage;
+  }
+  auto props = propsFor(a, pipeline->character());
+  if (!props) return kExitInvalidInput;
+  v.props = std::move(*props);
   v.script = std::move(*script);
   return runWithOscOut(a, *pipeline, *source, v);
 }
@@ -465,6 +547,13 @@ int runLive(const LiveArgs& a) {
     if (!mapper) return kExitInvalidInput;
   }
   ViewerOptions v = viewerOptions(a, "IMPS Puppeteer: live " + a.device);
+  if (!a.props.empty() && a.overlap) {
+    std::fprintf(stderr, "puppeteer: error: --prop cannot be combined with --overlap\n");
+    return kExitUsage;
+  }
+  auto props = propsFor(a, pipeline->character());
+  if (!props) return kExitInvalidInput;
+  v.props = std::move(*props);
   v.script = std::move(*script);
   if (spec->kind == drivers::DeviceKind::Osc) {
     if (!a.record.empty()) {
@@ -496,10 +585,21 @@ int runLive(const LiveArgs& a) {
 
 }  // namespace
 
+// view --clip: which clip, how its targets map to joints, how fast.
+void addClipOptions(CLI::App* cmd, LiveArgs& a) {
+  cmd->add_option("--clip-name", a.clipName, "With --clip: the TimeSensor to play (default: the file's first clip)");
+  cmd->add_option("--map", a.map, "With --clip: names (targets drive joints of the same name) or a joint map FILE.json")
+      ->capture_default_str();
+  cmd->add_option("--speed", a.speed, "With --clip: playback speed (1 = real time)")->check(nonNegativeNumber());
+}
+
 void addLiveCommands(CLI::App& app, Commands& commands) {
   auto view = std::make_shared<LiveArgs>();
   CLI::App* viewCmd = app.add_subcommand("view", "Open the live app on a scene and pose it by hand with the mouse");
   viewCmd->add_option("scene", view->scene, "Scene file (.wrl)")->required()->check(inputFile());
+  viewCmd->add_option("--clip", view->clip, "Play a VRML 97 clip file's keyframes on the scene (docs/world-format.md)")
+      ->check(inputFile());
+  addClipOptions(viewCmd, *view);
   addCommonOptions(viewCmd, *view);
   commands.push_back({viewCmd, [view] { return runView(*view); }});
 
@@ -525,6 +625,8 @@ void addLiveCommands(CLI::App& app, Commands& commands) {
                       "One recorded sample per rendered frame, no clock: deterministic (tests)");
   replayCmd->add_option("--export-session", replay->exportSession,
                         "Also save the session (e.g. a converted .bvh) to this new file");
+  replayCmd->add_option("--clip-name", replay->clipName,
+                         "VRML clips: the TimeSensor to play (default: the file's first clip)");
   addOscOutOption(replayCmd, *replay);
   addCommonOptions(replayCmd, *replay);
   commands.push_back({replayCmd, [replay] { return runReplay(*replay); }});

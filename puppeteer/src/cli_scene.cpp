@@ -1,5 +1,9 @@
 // `puppeteer mesh` and `puppeteer check`: scene files to meshes, and scene validation.
 #include "cli.h"
+#include "cli_world.h"
+#include "clip_pose.h"
+#include "prop_attachment.h"
+#include "imps/vrml_props.h"
 
 #include <CLI/CLI.hpp>
 
@@ -302,6 +306,7 @@ Json checkJson(const std::string& path, const Character& c) {
 }
 
 int runCheck(const std::string& path, bool json) {
+  if (isWorldFile(path)) return runWorldCheck(path, json);  // a VRML 97 world or clip (docs/world-format.md)
   auto loaded = loadScene(path);
   if (!loaded) return kExitInvalidInput;
   const Character& character = loaded->character;
@@ -344,7 +349,45 @@ struct RenderArgs {
   std::string view = "three-quarter";
   size_t maxCells = MarchingCubesOptions{}.maxCells;
   bool json = false;
+  std::string clip, clipName, map = "names";  // --clip: pose the character from a VRML clip at --at seconds
+  double at = 0.0;
+  std::vector<std::string> props;  // --prop FILE.wrl[@JOINT]: polygonal props, attached to a joint or in the world
+  std::vector<std::string> grabs;  // --grab FILE.wrl@JOINT@PICK:DROP: props picked up and put down (with --clip)
 };
+
+// Appends the props of every --grab, moved as the clip's joint carries them at --at (grabbedMotion). False after
+// printing the errors.
+bool addGrabbedProps(const RenderArgs& a, const Character& character, Mesh& mesh) {
+  if (a.grabs.empty()) return true;
+  auto driver = ClipDriver::load(a.clip, a.clipName, a.map, character);
+  if (!driver) {
+    std::fputs(driver.error().c_str(), stderr);
+    return false;
+  }
+  for (const std::string& spec : a.grabs) {
+    auto grab = parseGrab(spec, character);
+    if (!grab) {
+      std::fputs(grab.error().c_str(), stderr);
+      return false;
+    }
+    std::string warnings;
+    auto props = loadProps({grab->first}, character, &warnings);
+    std::fputs(warnings.c_str(), stderr);
+    if (!props) {
+      std::fputs(props.error().c_str(), stderr);
+      return false;
+    }
+    auto jointWorldAt = [&](double seconds) {
+      SkeletonCache posed(character);
+      driver->apply(seconds, posed);
+      posed.update();
+      return posed.world(grab->second.joint);
+    };
+    const Rigid motion = grabbedMotion(grab->second, a.at, jointWorldAt);
+    for (const AttachedProp& p : *props) appendMesh(mesh, transformed(p.mesh, motion));
+  }
+  return true;
+}
 
 // Renders the scene's Marching Cubes mesh in software to a PNG: a quick look without a GPU or a display.
 int runRender(const RenderArgs& a) {
@@ -358,6 +401,15 @@ int runRender(const RenderArgs& a) {
     return kExitInvalidInput;
   }
   SkeletonCache skeleton(character);
+  if (!a.clip.empty()) {
+    auto driver = ClipDriver::load(a.clip, a.clipName, a.map, character);
+    if (!driver) {
+      std::fputs(driver.error().c_str(), stderr);
+      return kExitInvalidInput;
+    }
+    driver->apply(a.at, skeleton);
+    skeleton.update();
+  }
   MarchingCubesOptions options;
   options.cellSize = a.cell;
   options.resolution = a.res;
@@ -368,6 +420,19 @@ int runRender(const RenderArgs& a) {
   followPolygonizing(progress, options);
   Mesh mesh = polygonize(skeleton.field(), options);
   textureMesh(mesh, skeleton);
+  std::string propWarnings;
+  auto props = loadProps(a.props, character, &propWarnings);
+  std::fputs(propWarnings.c_str(), stderr);
+  if (!props) {
+    progress.done();
+    std::fputs(props.error().c_str(), stderr);
+    return kExitInvalidInput;
+  }
+  appendPosedProps(mesh, *props, skeleton);
+  if (!addGrabbedProps(a, character, mesh)) {
+    progress.done();
+    return kExitInvalidInput;
+  }
   progress.phase("rendering " + std::to_string(mesh.triangleCount()) + " triangles");
   SnapshotOptions snap;
   snap.textures = &*textures;
@@ -438,6 +503,19 @@ void addSceneCommands(CLI::App& app, Commands& commands) {
       ->check(CLI::PositiveNumber);
   renderCmd->add_option("--view", render->view, "Camera direction")->check(CLI::IsMember({"three-quarter", "front", "side", "top"}));
   renderCmd->add_flag("--json", render->json, "Print the report as JSON (for scripts)");
+  auto* renderClip = renderCmd->add_option("--clip", render->clip, "Pose the character from a VRML 97 clip file "
+                                                                   "(docs/world-format.md)")->check(inputFile());
+  renderCmd->add_option("--at", render->at, "With --clip: the time into the clip, seconds (looping)")
+      ->check(nonNegativeNumber())->needs(renderClip);
+  renderCmd->add_option("--clip-name", render->clipName, "With --clip: the TimeSensor to play (default: the first)")
+      ->needs(renderClip);
+  renderCmd->add_option("--map", render->map, "With --clip: names or a joint map FILE.json")->needs(renderClip);
+  renderCmd->add_option("--prop", render->props,
+                        "Polygonal props from a VRML 97 file, FILE.wrl@JOINT to attach them to a joint (repeatable)");
+  renderCmd->add_option("--grab", render->grabs,
+                        "With --clip: FILE.wrl@JOINT@PICK:DROP, props the joint picks up at PICK seconds and puts "
+                        "down at DROP (repeatable)")
+      ->needs(renderClip);
   commands.push_back({renderCmd, [render] { return runRender(*render); }});
 }
 

@@ -477,7 +477,13 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
       // 3. Upload, only a new mesh.
       const bool drawParticles = s.showParticles && pipeline.polygonizer() == Polygonizer::Particles;
       if (pipeline.meshVersion() != uploadedVersion) {
-        renderer->uploadMesh(pipeline.mesh());
+        if (options.props.empty() || worker) {
+          renderer->uploadMesh(pipeline.mesh());
+        } else {
+          Mesh withProps = pipeline.mesh();  // the props posed like the character this frame
+          appendPosedProps(withProps, options.props, pipeline.skeleton());
+          renderer->uploadMesh(withProps);
+        }
         uploadedVersion = pipeline.meshVersion();
       }
       if (drawParticles) renderer->uploadParticles(pipeline.tesselator().particles().positions);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "hud.h"
+#include "prop_attachment.h"
 #include "scripted_input.h"
 #include "viewer_pipeline.h"
 
@@ -44,6 +45,9 @@ class PoseSource {
 
 struct ViewerOptions {
   int width = 1280, height = 720;  // window size in pixels
+  // Polygonal props drawn with the character's mesh, attached ones following their joints (`--prop`; not with
+  // `overlap`, where the worker thread owns the skeleton cache).
+  std::vector<AttachedProp> props;
   // > 0: render this many frames (after the initial settle), then close; the headless mode for tests and docs.
   int frames = 0;
   // Written after the last frame when frames > 0 (PNG).

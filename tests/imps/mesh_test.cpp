@@ -201,5 +201,46 @@ TEST(AppendMesh, OffsetsIndicesAndDropsAttributesOnlyOneSideHas) {
   EXPECT_EQ(fromEmpty, a);
 }
 
+// A prop (untextured) appended to a textured character keeps the character's textures; two textured meshes with
+// different layers keep both, the source's layer indices moved past the target's.
+TEST(AppendMesh, KeepsTextureLayersOfEitherSide) {
+  Mesh textured = tetrahedron();
+  textured.layerGens = {TexGen{}};
+  textured.layerImages = {0};
+  textured.layers.assign(2 * textured.vertexCount(), -1);
+  textured.layerWeights.assign(2 * textured.vertexCount(), 0.0f);
+  textured.texcoords.assign(2 * textured.vertexCount(), 0.5f);
+  for (size_t v = 0; v < textured.vertexCount(); ++v) textured.layers[2 * v] = 0, textured.layerWeights[2 * v] = 1.0f;
+
+  Mesh withProp = textured;
+  appendMesh(withProp, cube());
+  ASSERT_TRUE(withProp.textured());
+  ASSERT_EQ(withProp.layers.size(), 2 * withProp.vertexCount());
+  ASSERT_EQ(withProp.layerWeights.size(), 2 * withProp.vertexCount());
+  ASSERT_EQ(withProp.texcoords.size(), 2 * withProp.vertexCount());
+  EXPECT_EQ(withProp.layers[0], 0);
+  EXPECT_EQ(withProp.layers[2 * 4], -1);  // the cube's first vertex: no layer, weight 0
+  EXPECT_EQ(withProp.layerWeights[2 * 4], 0.0f);
+
+  Mesh propFirst = cube();
+  appendMesh(propFirst, textured);
+  ASSERT_EQ(propFirst.layers.size(), 2 * propFirst.vertexCount());
+  EXPECT_EQ(propFirst.layers[0], -1);
+  EXPECT_EQ(propFirst.layers[2 * 8], 0);
+
+  Mesh other = textured;
+  other.layerImages = {1};
+  Mesh both = textured;
+  appendMesh(both, other);
+  ASSERT_EQ(both.layerGens.size(), 2u);
+  EXPECT_EQ(both.layerImages, (std::vector<int32_t>{0, 1}));
+  EXPECT_EQ(both.layers[0], 0);
+  EXPECT_EQ(both.layers[2 * 4], 1);  // the second tetrahedron's layer follows the first's
+  Mesh same = textured;
+  appendMesh(same, textured);
+  EXPECT_EQ(same.layerGens.size(), 1u);
+  EXPECT_EQ(same.layers[2 * 4], 0);
+}
+
 }  // namespace
 }  // namespace imps

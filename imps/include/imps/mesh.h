@@ -95,7 +95,8 @@ MeshBounds bounds(const Mesh& mesh);
 
 // Appends `source` to `target`, offsetting its indices. normals (and colors) of the result are kept only if both
 // meshes have them, or if `target` is empty; otherwise they are dropped so the Mesh invariant holds. Texture
-// layers are kept only when `target` is empty (copied) or both meshes have the same layers; otherwise dropped.
+// layers are kept: the vertices of an untextured side get no layer (weights 0), and the source's layers are added
+// after the target's unless both have the same ones (a character's mesh keeps its textures when props join it).
 void appendMesh(Mesh& target, const Mesh& source);
 
 }  // namespace imps

@@ -1,0 +1,45 @@
+// Polygonal props from VRML 97 files (imps/vrml_file.h): every Shape's IndexedFaceSet, Box, Sphere, Cylinder or Cone
+// as a triangle mesh in the file's coordinates, with its Material's colour. docs/world-format.md ("Props").
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <glm/mat4x4.hpp>
+
+#include "imps/character.h"
+#include "imps/diagnostic.h"
+#include "imps/mesh.h"
+#include "imps/vrml_file.h"
+
+namespace imps {
+
+// One Shape of a world.
+struct Prop {
+  std::string name;      // the DEF name of the Shape, else of its geometry, else of the nearest Transform; or "propN"
+  std::string geometry;  // "IndexedFaceSet", "Box", "Sphere", "Cylinder", "Cone"
+  // Triangles in the file's coordinates (every Transform above the Shape applied), flat-shaded: three vertices of
+  // its own per triangle with the face normal, counter-clockwise seen from outside (an IndexedFaceSet with
+  // `ccw FALSE` is turned round). colors: the Material's diffuseColor (0.8 grey without one), or the Color node's.
+  Mesh mesh;
+  SourceLoc loc;  // the Shape
+};
+
+// Every Shape under the file's top-level nodes, depth first (a USE'd subtree once per use). Geometry of other types
+// (IndexedLineSet, Text, …) and Shapes without geometry are skipped with a warning. Bad IndexedFaceSet data — an
+// index outside the Coordinate's points, a face of fewer than three points, a point count that is not a multiple
+// of 3 — gives a warning at the field and that face (or the Shape) is left out; bad primitive sizes (not > 0) too.
+// At most 10,000,000 triangles in all (more: a warning and the rest is left out). Thread-safe.
+std::vector<Prop> readProps(const VrmlFile& file, Diagnostics* warnings = nullptr);
+
+// The triangles of a VRML primitive centred at the origin, as readProps makes them (Box: `size`; Sphere: `radius`;
+// Cylinder: `radius`, `height`; Cone: `bottomRadius`, `height`; y is the axis). Closed and outward-facing.
+Mesh boxMesh(const glm::vec3& size);
+Mesh sphereMesh(float radius);
+Mesh cylinderMesh(float radius, float height);
+Mesh coneMesh(float bottomRadius, float height);
+
+// `mesh` moved by the rigid transform `pose` (positions and normals).
+Mesh transformed(const Mesh& mesh, const Rigid& pose);
+
+}  // namespace imps
