@@ -3,7 +3,7 @@ BUILD      ?= build
 ASAN_BUILD ?= build-asan
 JOBS       ?= $(shell nproc)
 CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
-WERROR     ?= OFF# ON: the project's warnings are errors (CI sets it)
+WERROR     ?= $(if $(CI),ON,OFF)# ON: the project's warnings are errors (on by default where CI is set, as in .ci/run)
 
 .PHONY: deps build demo test test-sanitize bench fuzz clean
 

@@ -411,7 +411,9 @@ void Renderer::uploadTexturedMesh(const Mesh& mesh) {
     const int count = std::clamp(layers.count, 0, TriangleLayers::kMax);
     int order[TriangleLayers::kMax] = {0, 1, 2, 3, 4, 5};
     auto total = [&](int i) { return layers.weight[i].x + layers.weight[i].y + layers.weight[i].z; };
-    std::sort(order, order + count, [&](int a, int b) { return total(a) > total(b); });
+    // Insertion sort: at most six layers (and GCC 12's -Warray-bounds misreads std::sort on a fixed array).
+    for (int i = 1; i < count; ++i)
+      for (int j = i; j > 0 && total(order[j]) > total(order[j - 1]); --j) std::swap(order[j], order[j - 1]);
     for (int k = 0; k < 3; ++k) {
       TexturedCorner& c = corners[3 * t + size_t(k)];
       const glm::vec3 p = mesh.position(v[k]);

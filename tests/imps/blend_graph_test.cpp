@@ -314,7 +314,9 @@ TEST(BlendGraph, BipedCalvesNeverBlendWithThePelvis) {
     const auto set = c.blendSets().set(s);
     for (uint32_t a : set)
       for (uint32_t b : set) {
-        if (a != b) EXPECT_TRUE(c.blends(a, b)) << c.primitives()[a].name << " " << c.primitives()[b].name;
+        if (a != b) {
+          EXPECT_TRUE(c.blends(a, b)) << c.primitives()[a].name << " " << c.primitives()[b].name;
+        }
       }
   }
 }

@@ -101,7 +101,9 @@ TEST(Character, BlendSetsAreTheMaximalCliquesOfTheBlendGraph) {
     // A clique: every pair of members blends ...
     for (uint32_t a : sets.set(s))
       for (uint32_t b : sets.set(s)) {
-        if (a != b) EXPECT_TRUE(c.blends(a, b)) << s;
+        if (a != b) {
+          EXPECT_TRUE(c.blends(a, b)) << s;
+        }
       }
     // ... and maximal: no other primitive blends with all of them.
     for (size_t i = 0; i < n; ++i) {
