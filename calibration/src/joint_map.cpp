@@ -2,8 +2,6 @@
 #include "calibration/joint_map.h"
 
 #include <algorithm>
-#include <fstream>
-#include <sstream>
 
 #include "json_document.h"
 #include "object_reader.h"
@@ -82,16 +80,9 @@ std::expected<std::vector<JointMatch>, Diagnostics> parseJointMap(std::string_vi
 std::expected<std::vector<JointMatch>, Diagnostics> readJointMapFile(const std::filesystem::path& path,
                                                                      const std::vector<std::string>& sourceJoints,
                                                                      const Character* character) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  if (in) text << in.rdbuf();
-  if (!in || std::filesystem::is_directory(path)) {
-    Diagnostics d;
-    d.error({path.string(), 0, 0}, std::string("cannot read joint map: ") +
-                                       (std::filesystem::exists(path) ? "not a readable file" : "no such file"));
-    return std::unexpected(d);
-  }
-  return parseJointMap(text.str(), path.string(), sourceJoints, character);
+  auto text = detail::readJsonFileText(path, "joint map");
+  if (!text) return std::unexpected(text.error());
+  return parseJointMap(*text, path.string(), sourceJoints, character);
 }
 
 }  // namespace imps::calibration

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <cstddef>
+#include <expected>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -16,6 +18,11 @@ namespace imps::calibration::detail {
 // The largest rig map, calibration or check-pose file read (a real one is a few kilobytes): a bigger or endless
 // input (/dev/zero) is refused before it fills memory.
 inline constexpr size_t kMaxFileBytes = size_t{16} << 20;
+
+// The text of a calibration-side JSON file (`what`: "rig map", "joint map", "check pose"), read up to kMaxFileBytes
+// (IMPS_MAX_INPUT_MIB raises it), or one diagnostic at `path`: "cannot read WHAT: no such file", "…: not a readable
+// file" or "…: larger than the 16 MiB limit (…); a WHAT is a few kilobytes".
+std::expected<std::string, Diagnostics> readJsonFileText(const std::filesystem::path& path, std::string_view what);
 
 struct JsonValue {
   enum class Kind { Null, Bool, Number, String, Array, Object };

@@ -8,7 +8,6 @@
 #include <numbers>
 #include <sstream>
 
-#include "imps/file_read.h"
 #include "json_document.h"
 #include "object_reader.h"
 
@@ -154,14 +153,8 @@ std::expected<std::vector<PoseTarget>, Diagnostics> parseCheckPose(std::string_v
 
 std::expected<std::vector<PoseTarget>, Diagnostics> readCheckPoseFile(const std::filesystem::path& path,
                                                                       const Character* character) {
-  auto text = readFileText(path, detail::kMaxFileBytes);
-  if (!text) {
-    Diagnostics d;
-    d.error({path.string(), 0, 0}, "cannot read check pose: " + (text.error().starts_with("larger")
-                                                                    ? text.error() + "; a check pose is a few lines"
-                                                                    : std::string("not a readable file")));
-    return std::unexpected(d);
-  }
+  auto text = detail::readJsonFileText(path, "check pose");
+  if (!text) return std::unexpected(text.error());
   return parseCheckPose(*text, path.string(), character);
 }
 

@@ -19,7 +19,6 @@
 
 #include <nlohmann/json.hpp>
 
-#include "imps/file_read.h"
 #include "imps/utf8.h"
 #include "json_document.h"
 #include "object_reader.h"
@@ -451,15 +450,8 @@ std::expected<RigMap, Diagnostics> parseRigMap(std::string_view json, std::strin
 
 std::expected<RigMap, Diagnostics> readRigMapFile(const std::filesystem::path& path, const RigMapContext& context,
                                                   Diagnostics* warnings) {
-  auto text = readFileText(path, detail::kMaxFileBytes);
-  if (!text) {
-    const std::string reason = !std::filesystem::exists(path)       ? std::string("no such file")
-                               : text.error().starts_with("larger") ? text.error() + "; a rig map is a few kilobytes"
-                                                                    : std::string("not a readable file");
-    Diagnostics d;
-    d.error({path.string(), 0, 0}, "cannot read rig map: " + reason);
-    return std::unexpected(d);
-  }
+  auto text = detail::readJsonFileText(path, "rig map");
+  if (!text) return std::unexpected(text.error());
   return parseRigMap(*text, path.string(), context, warnings);
 }
 

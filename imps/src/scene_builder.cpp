@@ -408,8 +408,11 @@ void SceneBuilder::beginNode(const NodeHeader& header) {
   frame.typeName = header.type;
   frame.defName = header.defName;
   frame.loc = header.typeLoc;
-  ++expandedNodes_;
-  if (skipping()) {
+  // Written nodes count toward the same limit as USE copies: a million literal Metaballs would cost a gigabyte.
+  if (++expandedNodes_ == kMaxExpandedNodes + 1)
+    sink_.error(header.typeLoc, "the scene has more than " + std::to_string(kMaxExpandedNodes) +
+                                    " nodes (written or copied by USE); the format's limit");
+  if (skipping() || expandedNodes_ > kMaxExpandedNodes) {
     frame.skipped = true;
   } else if (const auto type = nodeTypeNamed(header.type)) {
     frame.type = *type;

@@ -13,7 +13,7 @@
 
 namespace imps::vrml {
 
-// A scene is refused when expanding USE would give more nodes than this (the "billion laughs" of DEF/USE).
+// A scene is refused when it has more nodes than this, written or copied by USE (the "billion laughs" of DEF/USE).
 #ifndef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION
 constexpr size_t kMaxExpandedNodes = 100000;
 #else

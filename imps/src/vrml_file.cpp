@@ -22,6 +22,9 @@ using vrml::Token;
 using vrml::TokenKind;
 
 constexpr size_t kMaxFileBytes = size_t{256} << 20;
+// The most values one field holds: 4,000,000 numbers is a Coordinate of 1.3 million points, far beyond a prop or
+// a clip, and caps a field at 32 MB however its numbers are written ("0 0 0 …" costs 2 bytes a value on disk).
+constexpr size_t kMaxFieldValues = 4'000'000;
 constexpr std::string_view kHeader = "#VRML V2.0 utf8";
 
 constexpr std::array<std::string_view, 54> kVrml97Nodes = {
@@ -368,7 +371,7 @@ class Reader {
         field.nodeValued = true;
         while (!stopped_ && !sink_.full() && parseStatement(depth, &field.nodes)) {}
       } else {
-        while (isScalar(lexer_.peek())) addScalar(field, lexer_.next());
+        readScalars(field);
       }
       if (stopped_) return false;
       const Token& close = lexer_.peek();
@@ -388,11 +391,26 @@ class Reader {
       return !stopped_;
     }
     if (isScalar(t)) {
-      while (isScalar(lexer_.peek())) addScalar(field, lexer_.next());
+      readScalars(field);
       return true;
     }
     fail(t, "expected a value for field '" + field.name + "' of " + context + ", found " + vrml::describe(t));
     return false;
+  }
+
+  // Reads a run of scalars into the field, at most kMaxFieldValues of them: past that one error is reported and the
+  // rest of the run is read and dropped, so one huge list costs bounded memory.
+  void readScalars(VrmlField& field) {
+    size_t count = 0;
+    while (isScalar(lexer_.peek())) {
+      const Token t = lexer_.next();
+      if (++count <= kMaxFieldValues) {
+        addScalar(field, t);
+      } else if (count == kMaxFieldValues + 1) {
+        sink_.error(lexer_.loc(t), "field '" + field.name + "' has more than " + std::to_string(kMaxFieldValues) +
+                                       " values; the reader's limit per field (docs/world-format.md)");
+      }
+    }
   }
 
   static void addScalar(VrmlField& field, const Token& t) {
@@ -558,7 +576,12 @@ std::expected<VrmlFile, Diagnostics> readVrml(std::string_view bytes, const std:
   DiagnosticSink sink(diagnostics);
   std::string inflated;
   if (isGzip(bytes)) {
-    auto text = gunzip(bytes, kMaxFileBytes);
+    auto limit = inputLimitBytes(kMaxFileBytes);
+    if (!limit) {
+      diagnostics.error({fileName, 0, 0}, "cannot decompress: " + limit.error());
+      return std::unexpected(std::move(diagnostics));
+    }
+    auto text = gunzip(bytes, *limit);
     if (!text) {
       diagnostics.error({fileName, 0, 0}, "cannot decompress: " + text.error());
       return std::unexpected(std::move(diagnostics));

@@ -45,5 +45,18 @@ TEST(JointMap, EveryProblemHasALocation) {
   EXPECT_FALSE(readJointMapFile("/nonexistent/map.json").has_value());
 }
 
+// An endless or huge file is refused at the reader's limit, saying how to raise it, instead of growing memory.
+TEST(JointMap, FileReadsAreBounded) {
+  auto zero = readJointMapFile("/dev/zero");
+  ASSERT_FALSE(zero.has_value());
+  EXPECT_NE(zero.error().str().find("/dev/zero: error: cannot read joint map: larger than the 16 MiB limit"),
+            std::string::npos)
+      << zero.error().str();
+  EXPECT_NE(zero.error().str().find("IMPS_MAX_INPUT_MIB"), std::string::npos) << zero.error().str();
+  auto missing = readJointMapFile("/nonexistent/map.json");
+  ASSERT_FALSE(missing.has_value());
+  EXPECT_EQ(missing.error().str(), "/nonexistent/map.json: error: cannot read joint map: no such file\n");
+}
+
 }  // namespace
 }  // namespace imps::calibration

@@ -568,6 +568,19 @@ TEST(SceneReaderErrors, UseExpansionIsBounded) {
   EXPECT_NE(errors.find("makes the scene larger than 100000 nodes"), std::string::npos) << errors;
 }
 
+TEST(SceneReaderErrors, WrittenNodesAreBoundedToo) {
+  // 100001 literal metaballs: one error at the first one past the limit, and the rest read past, not stored.
+  std::string text = kHeader + "RigidTransform { children [\n";
+  for (int i = 0; i < 100000; ++i) text += "Metaball { }\n";
+  text += "] }";
+  const std::string errors = errorsOf(text);
+  EXPECT_EQ(errors, "t.wrl:100002:1: error: the scene has more than 100000 nodes (written or copied by USE); the "
+                    "format's limit\n");
+  std::string fits = kHeader + "RigidTransform { children [\n";
+  for (int i = 0; i < 99999; ++i) fits += "Metaball { }\n";
+  EXPECT_TRUE(readScene(fits + "] }", "t.wrl").has_value());
+}
+
 TEST(SceneReaderErrors, SeveralErrorsInOneRunAndTheCap) {
   auto result = readSceneFile(scenePath("bad_errors.wrl"));
   ASSERT_FALSE(result.has_value());

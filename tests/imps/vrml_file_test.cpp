@@ -238,6 +238,21 @@ TEST(VrmlFile, DeepNestingIsAnErrorNotACrash) {
   EXPECT_NE(errorsOf(text).find("nodes nested deeper than 200 levels"), std::string::npos);
 }
 
+TEST(VrmlFile, AFieldHoldsAtMostFourMillionValues) {
+  // Two bytes a value on disk, eight in memory: the cap keeps one field at 32 MB however it is written.
+  std::string many = kHeader + "Coordinate { point [";
+  many.reserve(many.size() + 2 * 4'000'003 + 8);
+  for (int i = 0; i < 4'000'003; ++i) many += " 0";
+  EXPECT_EQ(errorsOf(many + " ] }"),
+            "w.wrl:2:8000022: error: field 'point' has more than 4000000 values; the reader's limit per field "
+            "(docs/world-format.md)\n");
+  std::string fits = kHeader + "Coordinate { point [";
+  for (int i = 0; i < 1'000'000; ++i) fits += " 0 0 0 0";
+  const VrmlFile file = fileOf(fits + " ] }");
+  ASSERT_EQ(file.roots.size(), 1u);
+  EXPECT_EQ(file.roots[0]->field("point")->numbers.size(), 4'000'000u);
+}
+
 TEST(VrmlFile, MissingFileIsOneDiagnostic) {
   auto result = readVrmlFile("/nonexistent/x.wrl");
   ASSERT_FALSE(result.has_value());
