@@ -10,28 +10,17 @@
 #include <csignal>
 #include <cstdint>
 #include <filesystem>
-#include <fstream>
 #include <set>
-#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
+
+#include "scratch_dir.h"
 
 namespace imps {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string slurp(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-void spit(const fs::path& path, const std::string& text) {
-  std::ofstream(path, std::ios::binary) << text;
-}
 
 mode_t modeOf(const fs::path& path) {
   struct stat st {};
@@ -41,25 +30,13 @@ mode_t modeOf(const fs::path& path) {
 
 class AtomicFile : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("imps_atomic_file_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ignored;
-    fs::permissions(dir_, fs::perms::owner_all, fs::perm_options::add, ignored);
-    fs::remove_all(dir_, ignored);
-  }
   // Every name in the directory: a save leaves the target and nothing else.
   std::set<std::string> names() const {
     std::set<std::string> out;
-    for (const auto& entry : fs::directory_iterator(dir_)) out.insert(entry.path().filename().string());
+    for (const auto& entry : fs::directory_iterator(dir_.path())) out.insert(entry.path().filename().string());
     return out;
   }
-  fs::path dir_;
+  ScratchDir dir_{"imps_atomic_file_test"};
 };
 
 TEST_F(AtomicFile, CreatesANewFileWithExactlyTheBytes) {
@@ -68,15 +45,15 @@ TEST_F(AtomicFile, CreatesANewFileWithExactlyTheBytes) {
   std::string error = "unchanged";
   ASSERT_TRUE(writeFileAtomically(target.string(), bytes, &error));
   EXPECT_EQ(error, "unchanged");  // success leaves *error alone
-  EXPECT_EQ(slurp(target), bytes);
+  EXPECT_EQ(fileBytes(target), bytes);
   EXPECT_EQ(names(), std::set<std::string>{"new.txt"});
 }
 
 TEST_F(AtomicFile, ReplacesAnExistingFileWhole) {
   const fs::path target = dir_ / "scene.json";
-  spit(target, std::string(100000, 'o'));  // longer than the new contents: nothing of it may remain
+  writeBytes(target, std::string(100000, 'o'));  // longer than the new contents: nothing of it may remain
   ASSERT_TRUE(writeFileAtomically(target.string(), std::string_view("short"), nullptr));
-  EXPECT_EQ(slurp(target), "short");
+  EXPECT_EQ(fileBytes(target), "short");
   EXPECT_EQ(names(), std::set<std::string>{"scene.json"});
 }
 
@@ -84,17 +61,17 @@ TEST_F(AtomicFile, TheByteSpanOverloadWritesTheSameBytes) {
   const fs::path target = dir_ / "mesh.bin";
   const std::vector<uint8_t> bytes = {0, 1, 2, 0xfe, 0xff, 0};
   ASSERT_TRUE(writeFileAtomically(target.string(), std::span<const uint8_t>(bytes), nullptr));
-  EXPECT_EQ(slurp(target), std::string("\0\1\2\xfe\xff\0", 6));
+  EXPECT_EQ(fileBytes(target), std::string("\0\1\2\xfe\xff\0", 6));
   ASSERT_TRUE(writeFileAtomically(target.string(), std::span<const uint8_t>(), nullptr));
   EXPECT_EQ(fs::file_size(target), 0u);
 }
 
 TEST_F(AtomicFile, AnExistingTargetKeepsItsPermissions) {
   const fs::path target = dir_ / "private.json";
-  spit(target, "old");
+  writeBytes(target, "old");
   fs::permissions(target, fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
   ASSERT_TRUE(writeFileAtomically(target.string(), std::string_view("new"), nullptr));
-  EXPECT_EQ(slurp(target), "new");
+  EXPECT_EQ(fileBytes(target), "new");
   EXPECT_EQ(modeOf(target), mode_t{0640});
 }
 
@@ -116,24 +93,24 @@ TEST_F(AtomicFile, AMissingDirectoryFailsWithTheStepAndReasonAndWritesNothing) {
 }
 
 TEST_F(AtomicFile, AParentThatIsAFileFails) {
-  spit(dir_ / "plain", "I am a file");
+  writeBytes(dir_ / "plain", "I am a file");
   std::string error;
   EXPECT_FALSE(writeFileAtomically((dir_ / "plain" / "out.txt").string(), std::string_view("x"), &error));
   EXPECT_NE(error.find("creating a temporary file: Not a directory"), std::string::npos) << error;
-  EXPECT_EQ(slurp(dir_ / "plain"), "I am a file");
+  EXPECT_EQ(fileBytes(dir_ / "plain"), "I am a file");
   EXPECT_EQ(names(), std::set<std::string>{"plain"});
 }
 
 TEST_F(AtomicFile, AnUnwritableDirectoryFailsAndLeavesTheTargetUntouched) {
   if (::geteuid() == 0) GTEST_SKIP() << "root writes into read-only directories";
   const fs::path target = dir_ / "kept.txt";
-  spit(target, "precious");
-  fs::permissions(dir_, fs::perms::owner_read | fs::perms::owner_exec);
+  writeBytes(target, "precious");
+  fs::permissions(dir_.path(), fs::perms::owner_read | fs::perms::owner_exec);
   std::string error;
   EXPECT_FALSE(writeFileAtomically(target.string(), std::string_view("lost?"), &error));
-  fs::permissions(dir_, fs::perms::owner_all);
+  fs::permissions(dir_.path(), fs::perms::owner_all);
   EXPECT_NE(error.find("creating a temporary file: Permission denied"), std::string::npos) << error;
-  EXPECT_EQ(slurp(target), "precious");
+  EXPECT_EQ(fileBytes(target), "precious");
   EXPECT_EQ(names(), std::set<std::string>{"kept.txt"});
 }
 
@@ -141,19 +118,19 @@ TEST_F(AtomicFile, ARenameFailureRemovesTheTemporaryFileAndLeavesTheTargetUntouc
   // A non-empty directory cannot be renamed over (for root too): the temporary file is written, then the rename fails.
   const fs::path target = dir_ / "occupied";
   fs::create_directories(target);
-  spit(target / "inside.txt", "still here");
+  writeBytes(target / "inside.txt", "still here");
   std::string error;
   EXPECT_FALSE(writeFileAtomically(target.string(), std::string_view("data"), &error));
   EXPECT_EQ(error.rfind("cannot save '" + target.string() + "': renaming the temporary file over it: ", 0), 0u)
       << error;
   EXPECT_EQ(names(), std::set<std::string>{"occupied"});
-  EXPECT_EQ(slurp(target / "inside.txt"), "still here");
+  EXPECT_EQ(fileBytes(target / "inside.txt"), "still here");
 }
 
 TEST_F(AtomicFile, AWriteFailureRemovesTheTemporaryFileAndLeavesTheTargetUntouched) {
   // A file size limit makes write() fail with EFBIG part way through (for root too).
   const fs::path target = dir_ / "big.bin";
-  spit(target, "old contents");
+  writeBytes(target, "old contents");
   rlimit previous{};
   ASSERT_EQ(::getrlimit(RLIMIT_FSIZE, &previous), 0);
   rlimit small = previous;
@@ -166,7 +143,7 @@ TEST_F(AtomicFile, AWriteFailureRemovesTheTemporaryFileAndLeavesTheTargetUntouch
   std::signal(SIGXFSZ, previousHandler);
   EXPECT_FALSE(saved);
   EXPECT_EQ(error, "cannot save '" + target.string() + "': writing: File too large");
-  EXPECT_EQ(slurp(target), "old contents");
+  EXPECT_EQ(fileBytes(target), "old contents");
   EXPECT_EQ(names(), std::set<std::string>{"big.bin"});
 }
 
@@ -190,11 +167,11 @@ TEST_F(AtomicFile, AnExistingFileWithTheNextTemporaryNameIsNeverOverwritten) {
   std::vector<fs::path> squatters;
   for (unsigned long n = next; n < next + 3; ++n) {
     squatters.push_back(probe.substr(0, dash + 1) + std::to_string(n));
-    spit(squatters.back(), "someone else's");
+    writeBytes(squatters.back(), "someone else's");
   }
   ASSERT_TRUE(writeFileAtomically(path, std::string_view("mine"), nullptr));
-  EXPECT_EQ(slurp(path), "mine");
-  for (const fs::path& s : squatters) EXPECT_EQ(slurp(s), "someone else's") << s;
+  EXPECT_EQ(fileBytes(path), "mine");
+  for (const fs::path& s : squatters) EXPECT_EQ(fileBytes(s), "someone else's") << s;
   EXPECT_EQ(names().size(), 1 + squatters.size());
 }
 
@@ -210,7 +187,7 @@ TEST_F(AtomicFile, ConcurrentSavesOfOneTargetLeaveOneWholeVersion) {
     });
   for (std::thread& t : writers) t.join();
   for (int w = 0; w < kWriters; ++w) EXPECT_EQ(ok[size_t(w)], 10) << w;
-  const std::string final = slurp(path);
+  const std::string final = fileBytes(path);
   ASSERT_FALSE(final.empty());
   EXPECT_EQ(final, contents(final[0] - 'a'));  // one writer's bytes, whole
   EXPECT_EQ(names(), std::set<std::string>{"shared.txt"});
@@ -218,13 +195,13 @@ TEST_F(AtomicFile, ConcurrentSavesOfOneTargetLeaveOneWholeVersion) {
 
 TEST_F(AtomicFile, CommitTemporaryFileRenamesOverTheTargetKeepingItsPermissions) {
   const fs::path target = dir_ / "session.imps";
-  spit(target, "old");
+  writeBytes(target, "old");
   fs::permissions(target, fs::perms::owner_read | fs::perms::owner_write);
   const std::string temp = temporarySibling(target.string());
-  spit(temp, "recorded");
+  writeBytes(temp, "recorded");
   std::string error;
   ASSERT_TRUE(commitTemporaryFile(temp, target.string(), &error)) << error;
-  EXPECT_EQ(slurp(target), "recorded");
+  EXPECT_EQ(fileBytes(target), "recorded");
   EXPECT_EQ(modeOf(target), mode_t{0600});
   EXPECT_EQ(names(), std::set<std::string>{"session.imps"});
 }
@@ -233,7 +210,7 @@ TEST_F(AtomicFile, AFailedCommitRemovesTheTemporaryFile) {
   const fs::path target = dir_ / "occupied";
   fs::create_directories(target / "child");
   const std::string temp = temporarySibling(target.string());
-  spit(temp, "recorded");
+  writeBytes(temp, "recorded");
   std::string error;
   EXPECT_FALSE(commitTemporaryFile(temp, target.string(), &error));
   EXPECT_EQ(error.rfind("cannot save '" + target.string() + "': renaming the temporary file over it: ", 0), 0u)

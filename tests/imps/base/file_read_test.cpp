@@ -7,9 +7,10 @@
 
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <optional>
 #include <string>
+
+#include "scratch_dir.h"
 
 namespace imps {
 namespace {
@@ -37,19 +38,11 @@ class ScopedLimit {
 
 class FileRead : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("imps_file_read_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
   fs::path fileOf(const std::string& name, const std::string& bytes) const {
-    const fs::path path = dir_ / name;
-    std::ofstream(path, std::ios::binary) << bytes;
-    return path;
+    writeBytes(dir_ / name, bytes);
+    return dir_ / name;
   }
-  fs::path dir_;
+  ScratchDir dir_{"imps_file_read_test"};
   ScopedLimit noLimit_{std::nullopt};
 };
 
@@ -131,7 +124,7 @@ TEST_F(FileRead, SystemErrorsAreReportedInTheSystemsWords) {
   const auto missing = readFileText(dir_ / "missing.wrl", kMiB);
   ASSERT_FALSE(missing);
   EXPECT_EQ(missing.error(), "No such file or directory");
-  const auto directory = readFileText(dir_, kMiB);
+  const auto directory = readFileText(dir_.path(), kMiB);
   ASSERT_FALSE(directory);
   EXPECT_EQ(directory.error(), "Is a directory");
 }
