@@ -14,15 +14,12 @@
 
 #include "drivers/osc_receiver.h"
 #include "drivers/osc_sender.h"
+#include "imps/clock.h"
 
 namespace {
 
 using namespace imps::drivers;
-
-int64_t steadyNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
+using imps::steadyNowNs;
 
 // The simple biped's 19 joints with a plausible pose.
 std::unique_ptr<OscPose> bipedPose() {
@@ -66,7 +63,7 @@ struct Link {
     OscReceiverOptions o;
     o.host = "127.0.0.1";
     o.onPose = [this](const OscPose& p) {
-      const int64_t now = steadyNs();
+      const int64_t now = steadyNowNs();
       std::lock_guard lock(mutex);
       latencyNs.push_back(now - p.sampleTimeNs);
     };
@@ -79,8 +76,8 @@ struct Link {
     return latencyNs.size();
   }
   void settle(size_t expected) {
-    const int64_t until = steadyNs() + 2'000'000'000;
-    while (received() < expected && steadyNs() < until) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    const int64_t until = steadyNowNs() + 2'000'000'000;
+    while (received() < expected && steadyNowNs() < until) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
 };
 
@@ -90,13 +87,13 @@ void BM_OscSustainedPosesPerSecond(benchmark::State& state) {
   auto pose = bipedPose();
   for (auto _ : state) {
     Link link(poses);
-    const int64_t start = steadyNs();
+    const int64_t start = steadyNowNs();
     for (size_t i = 0; i < poses; ++i) {
-      pose->sampleTimeNs = steadyNs();
+      pose->sampleTimeNs = steadyNowNs();
       while (!link.sender->send(*pose)) std::this_thread::yield();
     }
     link.settle(poses);
-    const double seconds = double(steadyNs() - start) * 1e-9;
+    const double seconds = double(steadyNowNs() - start) * 1e-9;
     state.counters["poses_per_s"] = double(link.received()) / seconds;
     state.counters["lost_in_kernel"] = double(poses - link.received());
   }
@@ -113,7 +110,7 @@ void BM_OscLatencyAt1kHz(benchmark::State& state) {
     for (size_t i = 0; i < poses; ++i) {
       next += std::chrono::milliseconds(1);
       std::this_thread::sleep_until(next);
-      pose->sampleTimeNs = steadyNs();
+      pose->sampleTimeNs = steadyNowNs();
       link.sender->send(*pose);
     }
     link.settle(poses);

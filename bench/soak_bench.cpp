@@ -22,6 +22,7 @@
 #include "drivers/device_session.h"
 #include "drivers/pose_mailbox.h"
 #include "drivers/serial_transport.h"
+#include "imps/clock.h"
 #include "sim/pseudo_terminal.h"
 #include "sim/simulated_armature.h"
 
@@ -35,11 +36,6 @@ constexpr int kBits = 16;
 constexpr uint16_t kRateHz = 1000;
 constexpr size_t kQueueCapacity = 8192;  // 8 s at 1 kHz; the consumer drains every frame (16.7 ms)
 constexpr size_t kPoses = 4096;          // distinct poses the armature cycles through
-
-int64_t steadyNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 double envSeconds(const char* name, double fallback) {
   const char* text = std::getenv(name);
@@ -84,7 +80,7 @@ double processCpuSeconds() {
 class SoakClock final : public imps::Clock {
  public:
   int64_t nowNs() override {
-    const int64_t t = std::min(steadyNs(), frozenAt_.load(std::memory_order_acquire));
+    const int64_t t = std::min(steadyNowNs(), frozenAt_.load(std::memory_order_acquire));
     if (first_.load(std::memory_order_relaxed) < 0) {
       int64_t unset = -1;
       first_.compare_exchange_strong(unset, t);
@@ -96,7 +92,7 @@ class SoakClock final : public imps::Clock {
     const int64_t left = timeNs - nowNs();
     if (left > 0) std::this_thread::sleep_for(std::chrono::nanoseconds(left));
   }
-  void freeze() { frozenAt_.store(steadyNs(), std::memory_order_release); }
+  void freeze() { frozenAt_.store(steadyNowNs(), std::memory_order_release); }
   int64_t firstReadingNs() const { return first_.load(std::memory_order_relaxed); }
 
  private:
@@ -236,7 +232,7 @@ void runStream(StreamRun& r, double seconds, double warmupSeconds, double frameH
   auto consume = [&](int64_t frameNs) {
     if (frameNs > 0) ++r.frames;
     if (mailbox.latest(newest)) {
-      const int64_t take = steadyNs();
+      const int64_t take = steadyNowNs();
       if (measuring) {
         r.newestAge.add(take - newest.arrivalTimeNs);
         r.newestTotal.add(take - (deviceEpoch + newest.deviceTimeNs));
@@ -246,7 +242,7 @@ void runStream(StreamRun& r, double seconds, double warmupSeconds, double frameH
     }
     batch.clear();
     mailbox.drain(batch, kQueueCapacity);
-    const int64_t take = steadyNs();
+    const int64_t take = steadyNowNs();
     for (const Sample& s : batch) {
       if (s.sequence != static_cast<uint32_t>(expected)) {
         if (s.sequence > expected) r.consumerGaps += s.sequence - expected;
@@ -267,7 +263,7 @@ void runStream(StreamRun& r, double seconds, double warmupSeconds, double frameH
   };
 
   const int64_t framePeriod = static_cast<int64_t>(1e9 / frameHz);
-  const int64_t t0 = steadyNs();
+  const int64_t t0 = steadyNowNs();
   const int64_t warmEnd = t0 + static_cast<int64_t>(warmupSeconds * 1e9);
   const int64_t end = t0 + static_cast<int64_t>(seconds * 1e9);
   r.rssStart = rssKiB();
@@ -280,7 +276,7 @@ void runStream(StreamRun& r, double seconds, double warmupSeconds, double frameH
   for (;;) {
     next += framePeriod;
     std::this_thread::sleep_until(std::chrono::steady_clock::time_point(std::chrono::nanoseconds(next)));
-    const int64_t now = steadyNs();
+    const int64_t now = steadyNowNs();
     if (now >= end) break;
     next = std::max(next, now - framePeriod);  // after a stall, carry on at the frame rate rather than catch up
     consume(now);
@@ -299,7 +295,7 @@ void runStream(StreamRun& r, double seconds, double warmupSeconds, double frameH
   }
   r.rssEnd = rssKiB();
   r.rssMax = std::max(r.rssMax, r.rssEnd);
-  const double measuredSeconds = std::max(1e-9, static_cast<double>(steadyNs() - warmEnd) * 1e-9);
+  const double measuredSeconds = std::max(1e-9, static_cast<double>(steadyNowNs() - warmEnd) * 1e-9);
   r.cpuPercent = 100 * (processCpuSeconds() - cpuStart) / measuredSeconds;
   r.load1End = loadAverage1();
   if (n >= 2 && n * stt - st * st > 0) r.rssSlopeKiBPerMin = (n * str - st * sr) / (n * stt - st * st);
@@ -308,8 +304,8 @@ void runStream(StreamRun& r, double seconds, double warmupSeconds, double frameH
   measuring = false;
   clock.freeze();
   std::this_thread::sleep_for(std::chrono::milliseconds(50));  // the server produces its last due samples
-  const int64_t giveUp = steadyNs() + 10'000'000'000;
-  while (steadyNs() < giveUp) {
+  const int64_t giveUp = steadyNowNs() + 10'000'000'000;
+  while (steadyNowNs() < giveUp) {
     consume(0);
     if (r.received == server->samplesSent() && mailbox.stats().drained == session->stats().samples) {
       r.drainedToTheEnd = true;

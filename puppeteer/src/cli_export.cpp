@@ -140,11 +140,11 @@ std::optional<Take> loadTake(const ExportArgs& a, const Character& character, in
     return *code = kExitUsage, std::nullopt;
   }
   if (lowerExtension(a.input) == ".bvh") {
-    std::vector<std::string> warnings;
+    Diagnostics warnings;
     auto clip = sim::readBvh(a.input, &warnings);
-    for (const std::string& w : warnings) std::fprintf(stderr, "%s\n", w.c_str());
+    std::fputs(warnings.str().c_str(), stderr);
     if (!clip) {
-      std::fprintf(stderr, "%s\n", clip.error().c_str());
+      std::fputs(clip.error().str().c_str(), stderr);
       return *code = kExitInvalidInput, std::nullopt;
     }
     return clipTake(*clip, a, character, selection, code);

@@ -286,7 +286,7 @@ std::optional<sim::Session> loadSession(const std::string& path) {
   if (std::filesystem::path(path).extension() == ".bvh") {
     auto clip = sim::readBvh(path);
     if (!clip) {
-      std::fprintf(stderr, "%s\n", clip.error().c_str());
+      std::fputs(clip.error().str().c_str(), stderr);
       return std::nullopt;
     }
     auto session = sim::bvhToSession(*clip, std::filesystem::path(path).filename().string());
@@ -445,7 +445,7 @@ int runReplay(const LiveArgs& given) {
   } else if (session->skeleton) {
     auto clip = sim::readBvhText(session->skeleton->bvh, name + " skeleton");
     if (!clip) {
-      std::fprintf(stderr, "%s\n", clip.error().c_str());
+      std::fputs(clip.error().str().c_str(), stderr);
       return kExitInvalidInput;
     }
     const auto options = retargetOptionsFor(a.map, *clip, pipeline->character());

@@ -153,13 +153,13 @@ int runConvert(const ConvertArgs& a) {
   }
   Progress progress("convert");
   if (in == ".bvh" && out == ".session") {
-    std::vector<std::string> warnings;
+    Diagnostics warnings;
     progress.phase("reading " + a.input);
     auto clip = sim::readBvh(a.input, &warnings);
     progress.done();
-    for (const std::string& w : warnings) std::fprintf(stderr, "%s\n", w.c_str());
+    std::fputs(warnings.str().c_str(), stderr);
     if (!clip) {
-      std::fprintf(stderr, "%s\n", clip.error().c_str());
+      std::fputs(clip.error().str().c_str(), stderr);
       return kExitInvalidInput;
     }
     sim::BvhToSessionOptions options;

@@ -145,10 +145,10 @@ std::optional<Take> loadTake(const std::string& path, const std::string& map, co
   std::optional<sim::BvhClip> clip;
   std::optional<sim::Session> session;
   if (extensionOf(path) == ".bvh") {
-    std::vector<std::string> warnings;
+    Diagnostics warnings;
     auto c = sim::readBvh(path, &warnings);
-    for (const std::string& w : warnings) std::fprintf(stderr, "%s\n", w.c_str());
-    if (!c) return std::fprintf(stderr, "%s\n", c.error().c_str()), std::nullopt;
+    std::fputs(warnings.str().c_str(), stderr);
+    if (!c) return std::fputs(c.error().str().c_str(), stderr), std::nullopt;
     clip = std::move(*c);
   } else {
     auto s = sim::readSession(path);

@@ -2,20 +2,15 @@
 #include "clip_pose.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 
 #include "calibration/joint_map.h"
+#include "imps/clock.h"
 #include "hud.h"
 
 namespace imps::app {
 
 namespace {
-
-int64_t nowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 std::string secondsText(double s) {
   char buf[32];
@@ -96,16 +91,16 @@ std::string ClipDriver::describe() const {
 
 ClipPoseSource::ClipPoseSource(ClipDriver driver, double speed, double fixedStepSeconds, std::string name)
     : driver_(std::move(driver)), speed_(speed), fixedStep_(fixedStepSeconds), name_(std::move(name)),
-      startNs_(nowNs()) {}
+      startNs_(steadyNowNs()) {}
 
 double ClipPoseSource::seconds() const {
   if (fixedStep_ > 0.0) return static_cast<double>(frames_) * fixedStep_ * speed_;
-  return static_cast<double>(nowNs() - startNs_) * 1e-9 * speed_;
+  return static_cast<double>(steadyNowNs() - startNs_) * 1e-9 * speed_;
 }
 
 bool ClipPoseSource::poll(SkeletonCache& skeleton, int64_t* arrivalNs) {
   driver_.apply(seconds(), skeleton);
-  if (arrivalNs != nullptr) *arrivalNs = nowNs();
+  if (arrivalNs != nullptr) *arrivalNs = steadyNowNs();
   return true;
 }
 

@@ -111,7 +111,7 @@ std::expected<ClipPoseMap, std::string> ClipPoseMap::create(const sim::Session& 
                                                             const RetargetOptions& options) {
   if (!session.skeleton) return std::unexpected("the session has no skeleton (it was not made from a BVH clip)");
   auto parsed = sim::readBvhText(session.skeleton->bvh, "session skeleton");
-  if (!parsed) return std::unexpected(parsed.error());
+  if (!parsed) return std::unexpected(parsed.error().all().front().str());  // the reader's one error
   ClipPoseMap m;
   m.clip_ = std::move(*parsed);
   m.unitsPerCount_ = session.skeleton->positionUnitsPerCount;

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "imps/atomic_file.h"
+#include "imps/diagnostic.h"
 #include "imps/file_read.h"
 
 namespace imps::sim {
@@ -134,10 +135,10 @@ std::string quoted(std::string_view s) {
 
 class Parser {
  public:
-  Parser(std::string_view text, std::string_view name, std::vector<std::string>* warnings)
+  Parser(std::string_view text, std::string_view name, Diagnostics* warnings)
       : lex_(text), name_(name), warnings_(warnings) {}
 
-  std::expected<BvhClip, std::string> parse() {
+  std::expected<BvhClip, Diagnostics> parse() {
     Token t = lex_.next();
     if (!iequals(t.text, "HIERARCHY")) return fail(t, "expected 'HIERARCHY' at the start of the file, found " + quoted(t.text));
     for (;;) {
@@ -156,18 +157,19 @@ class Parser {
   }
 
  private:
-  std::unexpected<std::string> fail(const Token& at, const std::string& what) const {
-    return std::unexpected(location(at) + ": error: " + what);
+  // The reader stops at the first error: a failure holds exactly that one.
+  std::unexpected<Diagnostics> fail(const Token& at, std::string what) const {
+    Diagnostics errors;
+    errors.error(location(at), std::move(what));
+    return std::unexpected(std::move(errors));
   }
-  std::string location(const Token& at) const {
-    return name_ + ":" + std::to_string(at.line) + ":" + std::to_string(at.column);
-  }
-  void warn(const Token& at, const std::string& what) {
-    if (warnings_) warnings_->push_back(location(at) + ": warning: " + what);
+  SourceLoc location(const Token& at) const { return {name_, at.line, at.column}; }
+  void warn(const Token& at, std::string what) {
+    if (warnings_) warnings_->warning(location(at), std::move(what));
   }
 
   // Reads `count` numbers after keyword `what`.
-  std::expected<void, std::string> numbers(double* out, int count, std::string_view what) {
+  std::expected<void, Diagnostics> numbers(double* out, int count, std::string_view what) {
     for (int i = 0; i < count; ++i) {
       Token t = lex_.next();
       auto v = parseNumber<double>(t.text);
@@ -179,7 +181,7 @@ class Parser {
     return {};
   }
 
-  std::expected<void, std::string> parseJoint(const Token& keyword, int parent) {
+  std::expected<void, Diagnostics> parseJoint(const Token& keyword, int parent) {
     // The name is the rest of the line up to a '{' (names with spaces are joined with one space).
     std::string name;
     while (!lex_.atLineEnd() && !lex_.braceNextOnLine()) {
@@ -257,7 +259,7 @@ class Parser {
 
   // Consumes a label such as "Frames:" or "Frame Time:" given as words; the colon may be glued or separate, and
   // the value may be glued to the colon ("Frames:2"). Returns the value token.
-  std::expected<Token, std::string> labelledValue(std::initializer_list<std::string_view> words, std::string_view shown) {
+  std::expected<Token, Diagnostics> labelledValue(std::initializer_list<std::string_view> words, std::string_view shown) {
     size_t i = 0;
     for (std::string_view w : words) {
       Token t = lex_.next();
@@ -278,7 +280,7 @@ class Parser {
     return lex_.next();
   }
 
-  std::expected<void, std::string> parseMotion() {
+  std::expected<void, Diagnostics> parseMotion() {
     const Token framesAt = lex_.peek();
     auto frames = labelledValue({"Frames"}, "Frames:");
     if (!frames) return std::unexpected(frames.error());
@@ -350,7 +352,7 @@ class Parser {
   Lexer lex_;
   int depth_ = 0;
   std::string name_;
-  std::vector<std::string>* warnings_;
+  Diagnostics* warnings_;
   BvhClip clip_;
 };
 
@@ -390,18 +392,18 @@ size_t BvhClip::firstChannel(size_t joint) const {
   return n;
 }
 
-std::expected<BvhClip, std::string> readBvhText(std::string_view text, std::string_view name,
-                                                std::vector<std::string>* warnings) {
+std::expected<BvhClip, Diagnostics> readBvhText(std::string_view text, std::string_view name, Diagnostics* warnings) {
   return Parser(text, name, warnings).parse();
 }
 
-std::expected<BvhClip, std::string> readBvh(const std::filesystem::path& path, std::vector<std::string>* warnings) {
+std::expected<BvhClip, Diagnostics> readBvh(const std::filesystem::path& path, Diagnostics* warnings) {
   auto text = readFileText(path, kMaxBvhFileBytes);
-  if (!text)
-    return std::unexpected(path.string() + ": error: " +
-                           (text.error().starts_with("larger")
-                                ? "cannot read BVH file: " + text.error()
-                                : "cannot open BVH file: " + text.error()));
+  if (!text) {
+    Diagnostics errors;
+    const char* what = text.error().starts_with("larger") ? "cannot read BVH file: " : "cannot open BVH file: ";
+    errors.error({path.string()}, what + text.error());
+    return std::unexpected(std::move(errors));
+  }
   return readBvhText(*text, path.string(), warnings);
 }
 

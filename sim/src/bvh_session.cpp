@@ -207,7 +207,7 @@ std::expected<BvhClip, std::string> sessionToBvh(const Session& session, Session
   double unitsPerCount = options.positionUnitsPerCount;
   if (session.skeleton) {
     auto parsed = readBvhText(session.skeleton->bvh, "session skeleton");
-    if (!parsed) return std::unexpected(parsed.error());
+    if (!parsed) return std::unexpected(parsed.error().all().front().str());  // the reader's one error
     clip = std::move(*parsed);
     clip.frames.clear();
     unitsPerCount = session.skeleton->positionUnitsPerCount;

@@ -93,7 +93,7 @@ TEST(Export, CharacterBvhMatchesTheSkeletonCacheFrameForFrame) {
   const Take take = randomTake(biped, 10);
   const sim::BvhClip written = characterClip(biped, take);
   auto clip = sim::readBvhText(sim::writeBvh(written), "biped.bvh");
-  ASSERT_TRUE(clip.has_value()) << clip.error();
+  ASSERT_TRUE(clip.has_value()) << clip.error().str();
   ASSERT_EQ(clip->joints.size(), biped.joints().size());
   ASSERT_EQ(clip->frames.size(), 10u);
   EXPECT_NEAR(clip->frameTime, 0.04, 1e-12);

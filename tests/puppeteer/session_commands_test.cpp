@@ -84,7 +84,7 @@ TEST(ConvertCommand, ExtremeTimestampsGiveTheDefaultFrameTimeNotAWrappedOne) {
   testing::internal::GetCapturedStdout();
   ASSERT_EQ(rc, kExitOk);
   auto clip = sim::readBvh(bvh);
-  ASSERT_TRUE(clip.has_value()) << clip.error();
+  ASSERT_TRUE(clip.has_value()) << clip.error().str();
   EXPECT_NEAR(clip->frameTime, 1.0 / 60.0, 1e-9);
 }
 

@@ -66,7 +66,7 @@ Biped loadBiped() {
 
 sim::Session clipSession() {
   auto clip = sim::readBvhText(kClip, "wave.bvh");
-  EXPECT_TRUE(clip.has_value()) << clip.error();
+  EXPECT_TRUE(clip.has_value()) << clip.error().str();
   auto session = sim::bvhToSession(*clip, "wave.bvh");
   EXPECT_TRUE(session.has_value()) << session.error();
   return std::move(*session);

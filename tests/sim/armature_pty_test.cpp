@@ -11,6 +11,7 @@
 
 #include "drivers/device_session.h"
 #include "drivers/serial_transport.h"
+#include "imps/clock.h"
 #include "sim/pseudo_terminal.h"
 #include "sim/simulated_armature.h"
 
@@ -19,21 +20,16 @@ namespace {
 
 using namespace imps::drivers;
 
-int64_t steadyNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
 // The steady clock, until freeze(): from then on time stands still for the armature, so no further sample falls
 // due while its server keeps writing what was already produced. That ends the stream at an exact sample.
 class FreezableClock final : public Clock {
  public:
-  int64_t nowNs() override { return std::min(steadyNs(), frozenAt_.load(std::memory_order_acquire)); }
+  int64_t nowNs() override { return std::min(steadyNowNs(), frozenAt_.load(std::memory_order_acquire)); }
   void sleepUntilNs(int64_t timeNs) override {  // in real time, so a frozen clock cannot block the server
     const int64_t left = timeNs - nowNs();
     if (left > 0) std::this_thread::sleep_for(std::chrono::nanoseconds(left));
   }
-  void freeze() { frozenAt_.store(steadyNs(), std::memory_order_release); }
+  void freeze() { frozenAt_.store(steadyNowNs(), std::memory_order_release); }
 
  private:
   std::atomic<int64_t> frozenAt_{INT64_MAX};

@@ -18,7 +18,7 @@ fs::path data(const std::string& name) { return fs::path(IMPS_SOURCE_DIR) / "tes
 
 BvhClip read(const std::string& name) {
   auto clip = readBvh(data(name));
-  EXPECT_TRUE(clip) << clip.error();
+  EXPECT_TRUE(clip) << clip.error().str();
   return clip ? *clip : BvhClip{};
 }
 
@@ -226,7 +226,7 @@ TEST(SessionToBvh, LiveSessionGetsAFlatSkeleton) {
   EXPECT_FLOAT_EQ(clip->frames[3][4], static_cast<float>(304 * 0.5));
   // The flat skeleton is a valid BVH file.
   auto reread = readBvhText(writeBvh(*clip));
-  ASSERT_TRUE(reread) << reread.error();
+  ASSERT_TRUE(reread) << reread.error().str();
   EXPECT_EQ(*reread, *clip);
 }
 

@@ -21,9 +21,9 @@ std::string fileText(const fs::path& p) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-BvhClip read(const std::string& name, std::vector<std::string>* warnings = nullptr) {
+BvhClip read(const std::string& name, Diagnostics* warnings = nullptr) {
   auto clip = readBvh(data(name), warnings);
-  EXPECT_TRUE(clip) << clip.error();
+  EXPECT_TRUE(clip) << clip.error().str();
   return clip ? *clip : BvhClip{};
 }
 
@@ -36,9 +36,9 @@ TEST(BvhRead, MixedLineEndingsTabsAndTrailingWhitespace) {
   const std::string text = fileText(data("line_endings.bvh"));
   ASSERT_NE(text.find("\r\n"), std::string::npos);  // the file really has all three kinds
   ASSERT_NE(text.find("Chest\r\t"), std::string::npos);
-  std::vector<std::string> warnings;
+  Diagnostics warnings;
   const BvhClip clip = read("line_endings.bvh", &warnings);
-  EXPECT_TRUE(warnings.empty());
+  EXPECT_TRUE(warnings.all().empty());
   ASSERT_EQ(clip.joints.size(), 2u);
   EXPECT_EQ(clip.joints[0].name, "Hips");
   EXPECT_EQ(clip.joints[0].offset, (std::array<double, 3>{0, 1.5, -2.25}));
@@ -62,7 +62,7 @@ TEST(BvhRead, MixedLineEndingsTabsAndTrailingWhitespace) {
     }
   }
   auto again = readBvhText(lf, "lf");
-  ASSERT_TRUE(again) << again.error();
+  ASSERT_TRUE(again) << again.error().str();
   EXPECT_EQ(*again, clip);
 }
 
@@ -111,24 +111,29 @@ TEST(BvhRead, EndSiteVersusAJointNamedEnd) {
 }
 
 TEST(BvhRead, FrameCountDisagreeingWithDataUsesTheDataAndWarns) {
-  std::vector<std::string> warnings;
+  Diagnostics warnings;
   BvhClip more = read("frames_more_than_data.bvh", &warnings);
   EXPECT_EQ(more.frames.size(), 3u);
-  EXPECT_EQ(warnings, std::vector<std::string>{data("frames_more_than_data.bvh").string() +
-                                               ":12:1: warning: 'Frames:' says 5 but 3 frames of data follow; using the data"});
-  warnings.clear();
+  EXPECT_EQ(warnings.str(), data("frames_more_than_data.bvh").string() +
+                                ":12:1: warning: 'Frames:' says 5 but 3 frames of data follow; using the data\n");
+  ASSERT_EQ(warnings.all().size(), 1u);
+  EXPECT_EQ(warnings.all()[0].severity, Severity::Warning);  // warnings do not make the input invalid
+  EXPECT_FALSE(warnings.hasErrors());
+  EXPECT_EQ(warnings.all()[0].loc.line, 12);
+  EXPECT_EQ(warnings.all()[0].loc.column, 1);
+  warnings = {};
   BvhClip fewer = read("frames_fewer_than_data.bvh", &warnings);
   EXPECT_EQ(fewer.frames.size(), 3u);
   EXPECT_EQ(fewer.frames[2], (std::vector<float>{7, 8, 9}));
-  ASSERT_EQ(warnings.size(), 1u);
-  EXPECT_NE(warnings[0].find("'Frames:' says 1 but 3"), std::string::npos);
+  ASSERT_EQ(warnings.all().size(), 1u);
+  EXPECT_NE(warnings.all()[0].message.find("'Frames:' says 1 but 3"), std::string::npos);
 
-  warnings.clear();
+  warnings = {};
   BvhClip cut = read("truncated_last_frame.bvh", &warnings);
   EXPECT_EQ(cut.frames.size(), 2u);
-  ASSERT_EQ(warnings.size(), 2u);
-  EXPECT_EQ(warnings[0], data("truncated_last_frame.bvh").string() +
-                             ":16:1: warning: last frame has 2 of 3 values (file cut short?); dropped");
+  ASSERT_EQ(warnings.all().size(), 2u);
+  EXPECT_EQ(warnings.all()[0].str(), data("truncated_last_frame.bvh").string() +
+                                         ":16:1: warning: last frame has 2 of 3 values (file cut short?); dropped");
 }
 
 TEST(BvhRead, ErrorFilesSayWhatIsWrongAndWhere) {
@@ -147,18 +152,19 @@ TEST(BvhRead, ErrorFilesSayWhatIsWrongAndWhere) {
     const fs::path path = data("errors/" + file);
     auto clip = readBvh(path);
     ASSERT_FALSE(clip) << file;
-    EXPECT_EQ(clip.error(), path.string() + message);
+    EXPECT_EQ(clip.error().str(), path.string() + message + "\n");  // one error: the reader stops there
   }
   auto missing = readBvh(data("no_such_file.bvh"));
   ASSERT_FALSE(missing);
-  EXPECT_EQ(missing.error(), data("no_such_file.bvh").string() + ": error: cannot open BVH file: No such file or directory");
+  EXPECT_EQ(missing.error().str(),
+            data("no_such_file.bvh").string() + ": error: cannot open BVH file: No such file or directory\n");
 }
 
 TEST(BvhRead, InlineErrors) {
   auto expectError = [](std::string_view text, const std::string& message) {
     auto clip = readBvhText(text, "t.bvh");
     ASSERT_FALSE(clip) << text;
-    EXPECT_EQ(clip.error(), message);
+    EXPECT_EQ(clip.error().str(), message + "\n");
   };
   expectError("", "t.bvh:1:1: error: expected 'HIERARCHY' at the start of the file, found end of file");
   expectError("HIERARCHY\nMOTION\n", "t.bvh:2:1: error: expected 'ROOT', found 'MOTION'");
@@ -171,11 +177,20 @@ TEST(BvhRead, InlineErrors) {
   expectError("HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\n}\nMOTION\nFrames: 1\nFrame Time: 0.1 x\n",
               "t.bvh:8:17: error: unexpected 'x' after the frame time");
   expectError("HIERARCHY\nROOT A}B\n{\n", "t.bvh:2:7: error: expected '{' after joint name 'A', found '}'");
+  // The position is kept as a position, not only as text.
+  auto repeated = readBvhText("HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\nCHANNELS 2 Xrotation Xrotation\n", "t.bvh");
+  ASSERT_FALSE(repeated);
+  ASSERT_EQ(repeated.error().all().size(), 1u);
+  EXPECT_EQ(repeated.error().errorCount(), 1);
+  EXPECT_EQ(repeated.error().all()[0].loc.file, "t.bvh");
+  EXPECT_EQ(repeated.error().all()[0].loc.line, 5);
+  EXPECT_EQ(repeated.error().all()[0].loc.column, 22);
+  EXPECT_EQ(repeated.error().all()[0].message, "channel 'Xrotation' repeated in joint 'A'");
   std::string deep = "HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\n";
   for (int i = 0; i < 300; ++i) deep += "JOINT J\n{\nOFFSET 0 0 0\n";
   auto tooDeep = readBvhText(deep, "deep.bvh");
   ASSERT_FALSE(tooDeep);
-  EXPECT_NE(tooDeep.error().find("error: joints nested more than 256 deep"), std::string::npos);
+  EXPECT_NE(tooDeep.error().str().find("error: joints nested more than 256 deep"), std::string::npos);
 }
 
 TEST(BvhRead, SizesAreBoundedWithAMessage) {
@@ -183,23 +198,23 @@ TEST(BvhRead, SizesAreBoundedWithAMessage) {
   // A frame time whose timestamps (frame index * frame time, in ns) could not be represented.
   auto slow = readBvhText(header + "Frame Time: 1e308\n0\n", "t.bvh");
   ASSERT_FALSE(slow);
-  EXPECT_EQ(slow.error(), "t.bvh:9:13: error: frame time 1e308 s is longer than the 3600 s this program accepts (a BVH "
-                          "frame time is a fraction of a second, e.g. 0.0083333)");
+  EXPECT_EQ(slow.error().str(), "t.bvh:9:13: error: frame time 1e308 s is longer than the 3600 s this program accepts "
+                                "(a BVH frame time is a fraction of a second, e.g. 0.0083333)\n");
   // More frames than the reader keeps: 2^20 (2.4 hours at 120 fps).
   std::string many = header + "Frame Time: 0.01\n";
   for (size_t f = 0; f <= (size_t{1} << 20); ++f) many += "0\n";
   auto tooMany = readBvhText(many, "t.bvh");
   ASSERT_FALSE(tooMany);
-  EXPECT_EQ(tooMany.error(), "t.bvh:1048586:1: error: more than 1048576 frames (2 hours at 120 fps), the most this "
-                             "program reads: split the clip");
+  EXPECT_EQ(tooMany.error().str(), "t.bvh:1048586:1: error: more than 1048576 frames (2 hours at 120 fps), the most "
+                                   "this program reads: split the clip\n");
 }
 
 TEST(BvhRead, AnEndlessFileIsRefusedAtTheLimit) {
   // /dev/zero never ends: the reader stops at its limit instead of filling memory.
   auto endless = readBvh("/dev/zero");
   ASSERT_FALSE(endless);
-  EXPECT_EQ(endless.error(), "/dev/zero: error: cannot read BVH file: larger than the 256 MiB limit (IMPS_MAX_INPUT_MIB=N "
-                             "raises it)");
+  EXPECT_EQ(endless.error().str(), "/dev/zero: error: cannot read BVH file: larger than the 256 MiB limit "
+                                   "(IMPS_MAX_INPUT_MIB=N raises it)\n");
 }
 
 TEST(BvhRead, LenientAboutCaseColonsBomAndJointNamesWithSpaces) {
@@ -207,7 +222,7 @@ TEST(BvhRead, LenientAboutCaseColonsBomAndJointNamesWithSpaces) {
       "\xEF\xBB\xBFhierarchy\nroot My Hips {\n offset 1 2 3\n channels 3 ZROTATION xrotation Yrotation\n}\n"
       "motion\nFrames:2\nFrame Time : +0.5\n1 2 3\n\n4 5 6";
   auto clip = readBvhText(text);
-  ASSERT_TRUE(clip) << clip.error();
+  ASSERT_TRUE(clip) << clip.error().str();
   EXPECT_EQ(clip->joints[0].name, "My Hips");
   EXPECT_EQ(clip->joints[0].channels, (std::vector<C>{C::Zrotation, C::Xrotation, C::Yrotation}));
   EXPECT_EQ(clip->frameTime, 0.5);
@@ -220,7 +235,7 @@ TEST(BvhWrite, WriteThenReadReproducesEveryQuirkFile) {
     const BvhClip clip = read(file);
     const std::string text = writeBvh(clip);
     auto back = readBvhText(text, "written");
-    ASSERT_TRUE(back) << back.error();
+    ASSERT_TRUE(back) << back.error().str();
     EXPECT_EQ(*back, clip);
     EXPECT_EQ(writeBvh(*back), text);  // canonical: a fixed point
     EXPECT_EQ(text.find('\r'), std::string::npos);
@@ -257,7 +272,7 @@ TEST(BvhWrite, SaveIsAtomicAndReplaces) {
   ASSERT_TRUE(saveBvh(dir / "out.bvh", clip));
   EXPECT_EQ(fs::status(dir / "out.bvh").permissions(), fs::perms::owner_read | fs::perms::owner_write);
   auto back = readBvh(dir / "out.bvh");
-  ASSERT_TRUE(back) << back.error();
+  ASSERT_TRUE(back) << back.error().str();
   EXPECT_EQ(*back, clip);
   EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
   auto nowhere = saveBvh(dir / "missing_dir" / "x.bvh", clip);

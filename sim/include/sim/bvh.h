@@ -10,6 +10,8 @@
 #include <string_view>
 #include <vector>
 
+#include "imps/diagnostic.h"
+
 namespace imps::sim {
 
 // One channel of a BVH joint. Positions are in the file's length unit, rotations in degrees.
@@ -46,13 +48,14 @@ struct BvhClip {
 // Reads a BVH file. Accepts CRLF, LF, CR and mixed line endings, tabs, blank lines anywhere, a UTF-8 BOM, per-joint
 // channel orders, joint names with ':' or spaces, a joint named `End`, keywords in any letter case, and a `Frames:`
 // count that disagrees with the data (the data wins; a warning says so). A last frame line cut short is dropped
-// with a warning. Anything else wrong is an error "file:line:column: error: ..." naming what was expected.
-// Warnings, if `warnings` is given, are appended there as "file:line:column: warning: ...".
-std::expected<BvhClip, std::string> readBvh(const std::filesystem::path& path,
-                                            std::vector<std::string>* warnings = nullptr);
+// with a warning. Anything else wrong is an error at the file, line and column where it was found, naming what was
+// expected; the reader stops there, so a failure holds exactly one diagnostic (printed "file:line:column: error:
+// ..."; a file that cannot be read, "file: error: cannot open BVH file: REASON"). Warnings, if `warnings` is given,
+// are appended there (printed "file:line:column: warning: ...").
+std::expected<BvhClip, Diagnostics> readBvh(const std::filesystem::path& path, Diagnostics* warnings = nullptr);
 // The same from text; `name` stands for the file in messages.
-std::expected<BvhClip, std::string> readBvhText(std::string_view text, std::string_view name = "<text>",
-                                                std::vector<std::string>* warnings = nullptr);
+std::expected<BvhClip, Diagnostics> readBvhText(std::string_view text, std::string_view name = "<text>",
+                                                Diagnostics* warnings = nullptr);
 
 // Writes a clip in a canonical form: LF line endings, tab indentation, numbers in the shortest form that reads
 // back to the same value, so readBvhText(writeBvh(c)) == c. The clip must be well formed (parents before children,

@@ -1,10 +1,12 @@
-// The threading layer (imps/include/imps/parallel.h): every index once, worker numbers for per-worker scratch.
+// The threading layer (imps/base/include/imps/parallel.h): every index once, worker numbers for per-worker scratch.
 #include "imps/parallel.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <memory>
+#include <thread>
 #include <vector>
 
 namespace imps {
@@ -17,6 +19,31 @@ TEST(Parallel, ParallelForVisitsEveryIndexOnce) {
       parallelFor(n, threads, [&](size_t i) { ++visits[i]; });
       for (size_t i = 0; i < n; ++i) ASSERT_EQ(visits[i], 1) << "index " << i << " threads " << threads;
     }
+}
+
+TEST(Parallel, ResolveThreadsHonoursARequestUpToTheCapAndElseTakesTheMachine) {
+  const int machine = std::max(1, int(std::thread::hardware_concurrency()));
+  EXPECT_EQ(resolveThreads(1), 1);
+  EXPECT_EQ(resolveThreads(7), 7);
+  EXPECT_EQ(resolveThreads(kMaxThreads), kMaxThreads);
+  EXPECT_EQ(resolveThreads(kMaxThreads + 1), kMaxThreads);
+  EXPECT_EQ(resolveThreads(1 << 30), kMaxThreads);
+  EXPECT_EQ(resolveThreads(0), machine);
+  EXPECT_EQ(resolveThreads(-3), machine);
+}
+
+TEST(Parallel, AGrainStillVisitsEveryIndexOnceAndPerIndexOutputsMatchOneThread) {
+  const size_t n = 4099;  // not a multiple of the grain
+  std::vector<double> one(n), many(n);
+  auto f = [](size_t i) { return double(i) * 0.5 + double(i % 13); };
+  parallelFor(n, 1, [&](size_t i) { one[i] = f(i); }, 64);
+  std::vector<std::atomic<int>> visits(n);
+  parallelFor(n, 4, [&](size_t i) {
+    ++visits[i];
+    many[i] = f(i);
+  }, 64);
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(visits[i], 1) << "index " << i;
+  EXPECT_EQ(one, many);
 }
 
 TEST(Parallel, WorkersAreNumberedBelowTheThreadCountAndNeverShared) {
