@@ -62,7 +62,11 @@ int paintDab(const Mesh& mesh, const MeshHit& hit, const Brush& brush, std::vect
   if (best < 0) return -1;
   RgbaImage& image = images[size_t(layers.image[best])];
   // The brush's centre in texel coordinates (x right, y down from the top row), as sampleTexture reads them.
-  const glm::vec2 uv = mesh.layerGens[size_t(layers.layer[best])].map(hit.point);
+  // Projective: the generator's mapping of the hit point; carried: the corners' coordinates interpolated.
+  const glm::vec2 uv = mesh.layerTexcoords.empty()
+                           ? mesh.layerGens[size_t(layers.layer[best])].map(hit.point)
+                           : hit.barycentric.x * layers.uv[best][0] + hit.barycentric.y * layers.uv[best][1] +
+                                 hit.barycentric.z * layers.uv[best][2];
   const float cx = (uv.x - std::floor(uv.x)) * float(image.width);
   const float cy = (1.0f - (uv.y - std::floor(uv.y))) * float(image.height);
   const float r = brush.radiusTexels();
