@@ -95,7 +95,13 @@ std::vector<std::string> paintedTextureNames(const Character& character, const s
     if (k >= painted.size() || !painted[k]) continue;
     const std::string base = stem + "_" + fs::path(character.textures()[k].path).stem().string();
     std::string name = base + ".png";
-    for (int n = 2; taken.contains(fs::absolute(dir / name).lexically_normal().string()); ++n)
+    // Never a name of the scene's textures, nor of any file already there (an unrelated image, or an earlier save).
+    auto busy = [&](const std::string& candidate) {
+      std::error_code ec;
+      const fs::path full = fs::absolute(dir / candidate).lexically_normal();
+      return taken.contains(full.string()) || fs::exists(fs::symlink_status(full, ec));
+    };
+    for (int n = 2; busy(name); ++n)
       name = base + "_" + std::to_string(n) + ".png";
     taken.insert(fs::absolute(dir / name).lexically_normal().string());
     names[k] = (dir / name).string();
