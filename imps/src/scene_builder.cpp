@@ -650,7 +650,8 @@ void SceneBuilder::storeField(Frame& frame, const FieldSpec& spec, const SourceL
       return;
     }
     if (spec.constraint == Constraint::TextureModeName &&
-        (value.items.size() != 1 || (value.items.front().text != "projective" && value.items.front().text != "carried"))) {
+        (value.items.size() != 1 ||
+         (value.items.front().text != "projective" && value.items.front().text != "carried"))) {
       sink_.error(loc, "field '" + fieldName + "' of " + typeName + " must be \"projective\" or \"carried\", found " +
                            (value.items.size() == 1 ? "\"" + value.items.front().text + "\""
                                                     : std::to_string(value.items.size()) + " strings"));

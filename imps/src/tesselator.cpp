@@ -85,16 +85,16 @@ void findNeighbours(Tesselator::State& s, const TesselatorOptions& o) {
     permute(s.owner, s.tmpI);
     permute(s.id, s.tmpU);
     if (s.carry) {  // two slots per particle
-      auto permute2 = [&](auto& v) {
-        auto tmp = v;
+      auto permute2 = [&](auto& v, auto& tmp) {
+        tmp.resize(2 * n);
         for (size_t k = 0; k < n; ++k) {
           tmp[2 * k] = v[2 * size_t(order[k])];
           tmp[2 * k + 1] = v[2 * size_t(order[k]) + 1];
         }
         v.swap(tmp);
       };
-      permute2(s.texLayer);
-      permute2(s.texUv);
+      permute2(s.texLayer, s.tmpI);
+      permute2(s.texUv, s.tmpUv);
     }
     s.hash.adoptOrder();
     s.cacheValid = false;

@@ -109,6 +109,7 @@ struct Tesselator::State {
   std::vector<float> tmpF;
   std::vector<int32_t> tmpI;
   std::vector<uint64_t> tmpU;
+  std::vector<glm::vec2> tmpUv;
 
   // Triangulation buffers.
   std::vector<glm::vec3> vpos, vcol;

@@ -156,7 +156,8 @@ std::unique_ptr<ViewerPipeline> makePipeline(const LiveArgs& a, int* exitCode) {
   o.polygonizer = a.polygonizer == "mc" || (a.polygonizer.empty() && fileNamesMc) ? Polygonizer::MarchingCubes
                                                                                  : Polygonizer::Particles;
   o.threads = a.threads;
-  if (!a.textureMode.empty()) o.textureMode = a.textureMode == "carried" ? TextureMode::Carried : TextureMode::Projective;
+  if (!a.textureMode.empty())
+    o.textureMode = a.textureMode == "carried" ? TextureMode::Carried : TextureMode::Projective;
   auto pipeline = std::make_unique<ViewerPipeline>(std::move(loaded->scene), std::move(loaded->character), o);
   pipeline->setTextures(std::move(*textures));
   for (const std::string& text : a.poses) {

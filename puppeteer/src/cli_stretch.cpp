@@ -33,7 +33,8 @@ int runStretch(StretchArgs& a) {
   if (a.axis.size() == 3) a.options.axis = {a.axis[0], a.axis[1], a.axis[2]};
   if (a.direction.size() == 3) a.options.dotDirection = {a.direction[0], a.direction[1], a.direction[2]};
   TesselatorOptions o;
-  if (const auto* node = std::get_if<Tesselator3MPNode>(&loaded->scene.polygonizer)) o = TesselatorOptions::fromNode(*node);
+  if (const auto* node = std::get_if<Tesselator3MPNode>(&loaded->scene.polygonizer))
+    o = TesselatorOptions::fromNode(*node);
   if (a.threads >= 0) o.numThreads = a.threads;
   std::vector<TextureMode> modes;
   if (a.mode != "carried") modes.push_back(TextureMode::Projective);
@@ -75,10 +76,11 @@ int runStretch(StretchArgs& a) {
     return kExitOk;
   }
   const StretchResult& f = results.front();
-  std::printf("%s: a dot on joint %s (layer %d, uv %.4f %.4f), bent %g degrees over %d frames and back; "
-              "desiredRadius %.4g m\n",
-              a.scene.c_str(), a.options.joint.c_str(), f.layer, f.dotUv.x, f.dotUv.y, double(a.options.degrees),
-              a.options.frames, double(f.radius));
+  std::printf(
+      "%s: a dot on joint %s (layer %d, uv %.4f %.4f), bent %g degrees over %d frames and back; "
+      "desiredRadius %.4g m\n",
+      a.scene.c_str(), a.options.joint.c_str(), f.layer, f.dotUv.x, f.dotUv.y, double(a.options.degrees),
+      a.options.frames, double(f.radius));
   std::printf("%-11s %22s %26s %26s\n", "mode", "round trip m (radii)", "slide when bent m (radii)",
               "slide when back m (radii)");
   for (const StretchResult& r : results)
@@ -94,9 +96,10 @@ int runStretch(StretchArgs& a) {
 
 void addStretchCommands(CLI::App& app, Commands& commands) {
   auto a = std::make_shared<StretchArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "stretch", "Paint a dot on a joint, bend it and back, and report how far the dot slid over the skin "
-                 "(projective and carried texture modes)");
+  CLI::App* cmd =
+      app.add_subcommand("stretch",
+                         "Paint a dot on a joint, bend it and back, and report how far the dot slid over the skin "
+                         "(projective and carried texture modes)");
   cmd->add_option("scene", a->scene, "A scene (.wrl) with a textured primitive at the joint")
       ->required()
       ->check(inputFile());

@@ -101,8 +101,7 @@ std::vector<std::string> paintedTextureNames(const Character& character, const s
       const fs::path full = fs::absolute(dir / candidate).lexically_normal();
       return taken.contains(full.string()) || fs::exists(fs::symlink_status(full, ec));
     };
-    for (int n = 2; busy(name); ++n)
-      name = base + "_" + std::to_string(n) + ".png";
+    for (int n = 2; busy(name); ++n) name = base + "_" + std::to_string(n) + ".png";
     taken.insert(fs::absolute(dir / name).lexically_normal().string());
     names[k] = (dir / name).string();
   }

@@ -20,10 +20,11 @@ struct StretchOptions {
   std::string joint = "L_Forearm";  // the joint that bends (the elbow); the dot is painted on its origin's surface
   glm::vec3 axis{0, 0, 1};          // the bend's axis, in the joint's parent's frame (unit or not)
   float degrees = 90.0f;            // the bend
-  int frames = 30;                  // frames to bend, and as many to come back (tesselator frames: updatesPerRender each)
+  int frames = 30;                  // frames to bend, and as many back (each: updatesPerRender updates)
   int restFrames = 10;              // frames at rest before painting, and after coming back before measuring
-  glm::vec3 dotDirection{0, -1, 0}; // the dot is where the ray from the joint's origin (inside the limb) this way
-                                    // (world, at rest) leaves the surface: the outside of the default bend
+  // The dot is where the ray from the joint's origin (inside the limb) this way (world, at rest) leaves the
+  // surface: the outside of the default bend.
+  glm::vec3 dotDirection{0, -1, 0};
 };
 
 // One mode's figures. Lengths in metres; `radius` is the tesselator's desiredRadius.

@@ -148,7 +148,8 @@ TEST(CarriedTexcoords, NewParticlesTakeTheGeneratorsCoordinates) {
 }
 
 TEST(TextureModeField, ReadWrittenBackAndBadValuesAreErrorsAtThem) {
-  const std::string text = "#VRML V2.0 utf8\nTesselator3MP {\n  textureMode \"carried\"\n  sceneGraph Metaball { }\n}\n";
+  const std::string text =
+      "#VRML V2.0 utf8\nTesselator3MP {\n  textureMode \"carried\"\n  sceneGraph Metaball { }\n}\n";
   auto scene = readScene(text, "s.wrl");
   ASSERT_TRUE(scene.has_value()) << scene.error().str();
   EXPECT_EQ(std::get<Tesselator3MPNode>(scene->polygonizer).textureMode, TextureMode::Carried);

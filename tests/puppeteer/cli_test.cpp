@@ -156,7 +156,8 @@ TEST_F(CliTest, StretchRefusesScenesItCannotMeasure) {
 TEST_F(CliTest, AnUnknownOptionIsAUsageErrorForEveryCommand) {
   const std::vector<std::vector<std::string>> commands = {
       {"check", kBiped}, {"mesh", kBiped, "-o", at("m.ply")}, {"render", kBiped, "-o", at("r.png")},
-      {"bench", kBiped}, {"stretch", kBiped}, {"devices"}, {"sim", "--pty"}, {"record", "--device", "sim:", "-o", at("t.session")},
+      {"bench", kBiped}, {"stretch", kBiped}, {"devices"}, {"sim", "--pty"},
+      {"record", "--device", "sim:", "-o", at("t.session")},
       {"calibrate", "--rig", kRig, "--scene", kBiped, "--session", kWave, "-o", at("c.json")},
       {"info", kWave}, {"convert", kBvh, at("c.session")}, {"view", kBiped}, {"replay", kWave, kBiped},
       {"live", kBiped, "--device", "sim:"}};

@@ -9,10 +9,10 @@
 // what failed.
 #include <cmath>
 #include <cstdio>
-#include <vector>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "imps/character.h"
 #include "imps/scene_reader.h"
@@ -73,8 +73,8 @@ int main(int argc, char** argv) {
     size_t cores = 0;  // changed texels now exactly in the brush colour
     for (size_t i = 0; i < core.size(); ++i) {
       const uint8_t *p = &now.rgba[4 * i], *o = &original.rgba[4 * i];
-      core[i] = p[0] == colour[0] && p[1] == colour[1] && p[2] == colour[2] &&
-                (o[0] != p[0] || o[1] != p[1] || o[2] != p[2]);
+      core[i] =
+          p[0] == colour[0] && p[1] == colour[1] && p[2] == colour[2] && (o[0] != p[0] || o[1] != p[1] || o[2] != p[2]);
       cores += core[i];
     }
     std::printf("core: %zu changed texels in the brush colour\n", cores);
@@ -123,8 +123,7 @@ int main(int argc, char** argv) {
         if (p[0] == o[0] && p[1] == o[1] && p[2] == o[2]) continue;
         bool near = false;
         for (int dy = -2; dy <= 2 && !near; ++dy)
-          for (int dx = -2; dx <= 2 && !near; ++dx)
-            near = dx * dx + dy * dy <= 4 && core[at(x + dx, y + dy)];
+          for (int dx = -2; dx <= 2 && !near; ++dx) near = dx * dx + dy * dy <= 4 && core[at(x + dx, y + dy)];
         stray += !near;
       }
     if (stray > 0)
