@@ -125,6 +125,9 @@ void addStretchCommands(CLI::App& app, Commands& commands) {
       ->check(CLI::Range(0, 100000));
   cmd->add_option("--threads", a->threads, "Worker threads (0: all cores; default: the scene's numThreads)")
       ->check(CLI::Range(0, 1024));
+  cmd->add_option("--pictures", a->options.pictures,
+                  "Also paint the dot into the texture and render the joint at rest, bent and back to "
+                  "PREFIX_MODE_{rest,bent,back}.png");
   cmd->add_flag("--json", a->json, "Print the figures as JSON (for scripts)");
   commands.push_back({cmd, [a] { return runStretch(*a); }});
 }

@@ -12,6 +12,8 @@
 #include "imps/texturing.h"
 #include "manipulator.h"
 #include "painter.h"
+#include "snapshot.h"
+#include "textures.h"
 
 namespace imps::app {
 
@@ -141,6 +143,32 @@ std::expected<StretchResult, std::string> measureStretch(const Character& charac
   if (!rest) return std::unexpected(std::string("the dot's coordinates are on no triangle blending its layer"));
   r.dotRest = *rest;
 
+  // Pictures: the dot painted into the image, the joint seen from the outside of the bend.
+  std::vector<RgbaImage> images;
+  if (!options.pictures.empty()) {
+    auto loaded = loadTextures(character);
+    if (!loaded) return std::unexpected(loaded.error());
+    images = std::move(*loaded);
+    Brush brush;
+    brush.size = 5;  // 7 texels
+    paintDab(mesh, *hit, brush, images);
+  }
+  const glm::vec3 view = glm::normalize(glm::vec3(0.1f, -1.3f, 1.0f)) * 0.4f;  // from below the front
+  auto picture = [&](const char* stage) -> std::string {
+    if (options.pictures.empty()) return "";
+    SnapshotOptions so;
+    so.textures = &images;
+    Camera camera;
+    camera.target = cache.world(joint).translation;
+    camera.eye = camera.target + view;
+    so.camera = camera;
+    const std::string path = options.pictures + "_" + (mode == TextureMode::Carried ? "carried" : "projective") +
+                             "_" + stage + ".png";
+    std::string error;
+    return renderMeshToPng(mesh, so, path, &error) ? "" : path + ": " + error;
+  };
+  if (auto e = picture("rest"); !e.empty()) return std::unexpected(e);
+
   SkinMarker marker{r.dotRest, cache.field().sample(r.dotRest).owner};
   const glm::quat restRotation = cache.local(joint).rotation;
   const glm::vec3 axis = glm::normalize(options.axis);
@@ -157,11 +185,13 @@ std::expected<StretchResult, std::string> measureStretch(const Character& charac
   const auto bent = surfacePointOfUv(mesh, r.layer, r.dotUv, r.skinBent);
   if (!bent) return std::unexpected(std::string("the dot vanished at the bent pose"));
   r.dotBent = *bent;
+  if (auto e = picture("bent"); !e.empty()) return std::unexpected(e);
   for (int f = frames - 1; f >= 0; --f) pose(float(f) / float(frames));
   for (int f = 0; f < options.restFrames; ++f) drawFrame(tess, cache, mesh);
   const auto back = surfacePointOfUv(mesh, r.layer, r.dotUv, r.dotRest);
   if (!back) return std::unexpected(std::string("the dot vanished after coming back"));
   r.dotBack = *back;
+  if (auto e = picture("back"); !e.empty()) return std::unexpected(e);
   r.skinBack = marker.p;
   r.roundTrip = glm::length(r.dotBack - r.dotRest);
   r.skinRoundTrip = glm::length(r.skinBack - r.dotRest);

@@ -25,6 +25,9 @@ struct StretchOptions {
   // The dot is where the ray from the joint's origin (inside the limb) this way (world, at rest) leaves the
   // surface: the outside of the default bend.
   glm::vec3 dotDirection{0, -1, 0};
+  // Non-empty: the dot is also painted into the texture image (a red dab of 7 texels) and the joint is rendered
+  // (software, 640 x 480, looking at its outside) at rest, bent and back into PREFIX_MODE_{rest,bent,back}.png.
+  std::string pictures;
 };
 
 // One mode's figures. Lengths in metres; `radius` is the tesselator's desiredRadius.
@@ -58,7 +61,7 @@ std::optional<glm::vec3> surfacePointOfUv(const Mesh& mesh, int32_t layer, glm::
 // restFrames frames at rest, measure. The skin's own motion is a marker moved as a particle without repulsion: by
 // its owner's differential transform every frame, then projected back onto the surface, its ownership passing to
 // blend neighbours as the tesselator's particles' does. Deterministic (the tesselator's options' seed and threads).
-// An error names what is missing (joint, surface, texture at the dot).
+// An error names what is missing (joint, surface, texture at the dot), or an image that cannot be read or written.
 std::expected<StretchResult, std::string> measureStretch(const Character& character, TesselatorOptions tesselator,
                                                          TextureMode mode, const StretchOptions& options);
 

@@ -153,6 +153,17 @@ TEST_F(CliTest, StretchRefusesScenesItCannotMeasure) {
   });
 }
 
+// `stretch --pictures` paints the dot and renders the joint at rest, bent and back.
+TEST_F(CliTest, StretchPicturesShowTheJointAtRestBentAndBack) {
+  const auto run = runProgram(puppeteer(), {"stretch", kSource + "/examples/textured_biped.wrl", "--frames", "2",
+                                            "--rest-frames", "0", "--mode", "carried", "--pictures", at("elbow")});
+  ASSERT_EQ(run.exitCode, kOk) << run.err;
+  EXPECT_NE(run.out.find("carried"), std::string::npos) << run.out;
+  for (const char* stage : {"rest", "bent", "back"})
+    EXPECT_GT(fs::file_size(at(std::string("elbow_carried_") + stage + ".png")), 1000u) << stage;
+  EXPECT_FALSE(fs::exists(at("elbow_projective_rest.png")));
+}
+
 TEST_F(CliTest, AnUnknownOptionIsAUsageErrorForEveryCommand) {
   const std::vector<std::vector<std::string>> commands = {
       {"check", kBiped}, {"mesh", kBiped, "-o", at("m.ply")}, {"render", kBiped, "-o", at("r.png")},
