@@ -180,6 +180,10 @@ void appendMesh(Mesh& target, const Mesh& source) {
   if (!target.textured() && !source.textured()) return;
   // Texture layers: an untextured side gets "no layer" per vertex; the source's layers follow the target's.
   const size_t targetVertices = offset, sourceVertices = source.vertexCount();
+  // Carried coordinates survive when either side has them; the other side's slots get their generators' mapping
+  // (the same coordinates layerUv() would have read).
+  const bool carried = !target.layerTexcoords.empty() || !source.layerTexcoords.empty();
+  if (carried && target.layerTexcoords.empty()) target.layerTexcoords.assign(4 * targetVertices, 0.0f);
   if (!target.textured()) {
     target.layers.assign(2 * targetVertices, -1);
     target.layerWeights.assign(2 * targetVertices, 0.0f);
@@ -189,6 +193,7 @@ void appendMesh(Mesh& target, const Mesh& source) {
     target.layers.insert(target.layers.end(), 2 * sourceVertices, -1);
     target.layerWeights.insert(target.layerWeights.end(), 2 * sourceVertices, 0.0f);
     target.texcoords.insert(target.texcoords.end(), 2 * sourceVertices, 0.0f);
+    if (carried) target.layerTexcoords.insert(target.layerTexcoords.end(), 4 * sourceVertices, 0.0f);
     return;
   }
   const bool sameLayers = target.layerGens == source.layerGens && target.layerImages == source.layerImages;
@@ -200,6 +205,13 @@ void appendMesh(Mesh& target, const Mesh& source) {
   for (const int32_t l : source.layers) target.layers.push_back(l < 0 ? l : l + layerOffset);
   target.layerWeights.insert(target.layerWeights.end(), source.layerWeights.begin(), source.layerWeights.end());
   target.texcoords.insert(target.texcoords.end(), source.texcoords.begin(), source.texcoords.end());
+  if (!carried) return;
+  for (size_t v = 0; v < sourceVertices; ++v)
+    for (size_t k = 0; k < 2; ++k) {
+      const int32_t l = source.layers[2 * v + k];
+      const glm::vec2 uv = l >= 0 ? source.layerUv(v, l) : glm::vec2(0.0f);
+      target.layerTexcoords.insert(target.layerTexcoords.end(), {uv.x, uv.y});
+    }
 }
 
 }  // namespace imps

@@ -48,7 +48,7 @@ bool Tesselator3MPNode::operator==(const Tesselator3MPNode& o) const {
   return deltaT == o.deltaT && desiredRadius == o.desiredRadius && queryRadius == o.queryRadius &&
          energyCoeff == o.energyCoeff && surfaceCoeff == o.surfaceCoeff && fissioningFrac == o.fissioningFrac &&
          isoValue == o.isoValue && useSimpleRadii == o.useSimpleRadii && numThreads == o.numThreads &&
-         updatesPerRender == o.updatesPerRender && colorWidth == o.colorWidth &&
+         updatesPerRender == o.updatesPerRender && colorWidth == o.colorWidth && textureMode == o.textureMode &&
          doDifferentialTransforms == o.doDifferentialTransforms && seed == o.seed &&
          blendingFunction == o.blendingFunction && spatialSubdivision == o.spatialSubdivision &&
          sceneGraph == o.sceneGraph;

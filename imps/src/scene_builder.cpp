@@ -56,6 +56,7 @@ enum class FieldType { Bool, Int, Float, Vec3, Color, Rotation, Strings, Node, N
 enum class Constraint {
   None, Positive, NonNegative, AtLeastOne, BitsPerDim, UnitInterval, Threads, Resolution,
   OneString,  // Strings: exactly one, not empty
+  TextureModeName,  // Strings: exactly one of "projective", "carried"
 };
 
 // Bounds on sizes a scene asks for (the command line's --threads and --res take the same ranges; kMaxThreads is
@@ -111,6 +112,12 @@ const std::vector<FieldSpec> kTesselatorFields = {
     {"doDifferentialTransforms", FieldType::Bool, Constraint::None,
      IMPS_SET(Tesselator3MPNode, doDifferentialTransforms, b), 0, ""},
     {"seed", FieldType::Int, Constraint::None, IMPS_SET(Tesselator3MPNode, seed, i), 0, ""},
+    {"textureMode", FieldType::Strings, Constraint::TextureModeName,
+     [](NodeData& n, const Value& x) {
+       std::get<Tesselator3MPNode>(n).textureMode =
+           x.strings.front() == "carried" ? TextureMode::Carried : TextureMode::Projective;
+     },
+     0, ""},
     {"blendingFunction", FieldType::Node, Constraint::None, nullptr, kBlendClass, kBlendText},
     {"spatialSubdivision", FieldType::Node, Constraint::None, nullptr, kHashClass, "a UniformHash"},
     {"sceneGraph", FieldType::Node, Constraint::None, nullptr, kSceneGraphClasses, kSceneGraphText},
@@ -551,7 +558,8 @@ std::string constraintBroken(const FieldSpec& spec, int i, const std::array<floa
     const double x = isInt ? double(i) : double(numbers[k]);
     switch (spec.constraint) {
       case Constraint::None:
-      case Constraint::OneString: break;
+      case Constraint::OneString:
+      case Constraint::TextureModeName: break;
       case Constraint::Positive: ok = ok && x > 0.0; break;
       case Constraint::NonNegative: ok = ok && x >= 0.0; break;
       case Constraint::AtLeastOne: ok = ok && x >= 1.0; break;
@@ -572,7 +580,8 @@ std::string constraintBroken(const FieldSpec& spec, int i, const std::array<floa
     case Constraint::Threads: rule = "be between 0 and " + std::to_string(kMaxThreads) + " (0: all cores)"; break;
     case Constraint::Resolution: rule = "be between 0 and " + std::to_string(kMaxResolution) + " cells (0: unset)"; break;
     case Constraint::None:
-    case Constraint::OneString: break;
+    case Constraint::OneString:
+    case Constraint::TextureModeName: break;
   }
   if (n > 1) rule += " in every component";
   return rule;
@@ -640,6 +649,14 @@ void SceneBuilder::storeField(Frame& frame, const FieldSpec& spec, const SourceL
     if (spec.constraint == Constraint::OneString && (value.items.size() != 1 || value.items.front().text.empty())) {
       sink_.error(loc, "field '" + fieldName + "' of " + typeName + " must be one non-empty string, found " +
                            (value.items.size() == 1 ? std::string("an empty string")
+                                                    : std::to_string(value.items.size()) + " strings"));
+      return;
+    }
+    if (spec.constraint == Constraint::TextureModeName &&
+        (value.items.size() != 1 ||
+         (value.items.front().text != "projective" && value.items.front().text != "carried"))) {
+      sink_.error(loc, "field '" + fieldName + "' of " + typeName + " must be \"projective\" or \"carried\", found " +
+                           (value.items.size() == 1 ? "\"" + value.items.front().text + "\""
                                                     : std::to_string(value.items.size()) + " strings"));
       return;
     }

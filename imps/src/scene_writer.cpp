@@ -103,6 +103,7 @@ class Writer {
     field("colorWidth", number(t.colorWidth));
     field("doDifferentialTransforms", boolean(t.doDifferentialTransforms));
     field("seed", std::to_string(t.seed));
+    if (t.textureMode == TextureMode::Carried) field("textureMode", "\"carried\"");  // projective: the default
     const bool functionFirst = !usesLater(t.blendingFunction);
     if (functionFirst) blendingFunction(t.blendingFunction);
     nodeField("spatialSubdivision");

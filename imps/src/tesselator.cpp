@@ -84,6 +84,18 @@ void findNeighbours(Tesselator::State& s, const TesselatorOptions& o) {
     permute(s.value, s.tmpF);
     permute(s.owner, s.tmpI);
     permute(s.id, s.tmpU);
+    if (s.carry) {  // two slots per particle
+      auto permute2 = [&](auto& v, auto& tmp) {
+        tmp.resize(2 * n);
+        for (size_t k = 0; k < n; ++k) {
+          tmp[2 * k] = v[2 * size_t(order[k])];
+          tmp[2 * k + 1] = v[2 * size_t(order[k]) + 1];
+        }
+        v.swap(tmp);
+      };
+      permute2(s.texLayer, s.tmpI);
+      permute2(s.texUv, s.tmpUv);
+    }
     s.hash.adoptOrder();
     s.cacheValid = false;
   }
@@ -183,6 +195,7 @@ TesselatorOptions TesselatorOptions::fromNode(const Tesselator3MPNode& n) {
   o.cubeSize = n.spatialSubdivision.cubeSize;
   o.bitsPerDim = n.spatialSubdivision.bitsPerDim;
   o.seed = uint64_t(int64_t(n.seed));
+  o.textureMode = n.textureMode;
   return o;
 }
 
@@ -198,6 +211,19 @@ void Tesselator::State::resizeParticles(size_t n) {
   owner.resize(n);
   id.resize(n);
   dead.resize(n);
+  if (carry) {
+    texLayer.resize(2 * n, -1);
+    texUv.resize(2 * n, glm::vec2(0.0f));
+  }
+}
+
+void Tesselator::State::dropTexcoords() {
+  carry = false;
+  carryLayers = 0;
+  texLayer.clear();
+  texUv.clear();
+  texGens.clear();
+  prevPos.clear();
 }
 
 void Tesselator::State::add(glm::vec3 p, glm::vec3 g, float s, int32_t ownerIndex) {
@@ -213,6 +239,10 @@ void Tesselator::State::add(glm::vec3 p, glm::vec3 g, float s, int32_t ownerInde
   owner.push_back(ownerIndex);
   id.push_back(nextId++);
   dead.push_back(0);
+  if (carry) {
+    texLayer.insert(texLayer.end(), 2, -1);
+    texUv.insert(texUv.end(), 2, glm::vec2(0.0f));
+  }
 }
 
 Tesselator::Tesselator(const TesselatorOptions& options) : options_(options), s_(std::make_unique<State>(options)) {
@@ -227,6 +257,7 @@ Tesselator::~Tesselator() = default;
 
 void Tesselator::reset() {
   s_->resizeParticles(0);
+  s_->dropTexcoords();
   s_->nbrValid = false;
   s_->cacheValid = false;
   s_->lastGeneration = ~0ull;
@@ -291,6 +322,7 @@ void Tesselator::update(const SkeletonCache& skeleton) {
     s.nbrValid = false;
     s.cacheValid = false;
   }
+  if (s.carry) updateTexGens(s, skeleton);
   const bool carried = options_.doDifferentialTransforms && s.character->hierarchical();
   s.fieldMoved =
       s.lastGeneration == ~0ull || (skeleton.generation() != s.lastGeneration && skeletonMoved(skeleton, carried));
@@ -408,6 +440,22 @@ void fission(Tesselator::State& s, size_t i, const TesselatorOptions& o) {
   const glm::vec3 p = s.pos[i];
   s.pos[i] = p - off;
   s.add(p + off, s.grad[i], child, s.owner[i]);
+  if (s.carry) {  // the two halves take the parent's coordinates moved by what their offsets map to
+    const size_t c = s.size() - 1;
+    for (size_t k = 0; k < 2; ++k) {
+      const size_t from = 2 * i + k, to = 2 * c + k;
+      const int32_t l = s.texLayer[from];
+      s.texLayer[to] = l;
+      s.texUv[to] = s.texUv[from];
+      if (l < 0 || size_t(l) >= s.texGens.size()) continue;
+      const TexGen& gen = s.texGens[size_t(l)];
+      glm::vec2 mid = gen.map(p), ahead = gen.map(p + off), behind = gen.map(p - off);
+      ahead.x -= std::round(ahead.x - mid.x);  // a sphere generator's u wraps
+      behind.x -= std::round(behind.x - mid.x);
+      s.texUv[to] += ahead - mid;
+      s.texUv[from] += behind - mid;
+    }
+  }
 }
 
 // Whether particle i fuses into an older, living one of its kMaxFuse nearest (recorded by the compute phase).
@@ -433,6 +481,11 @@ void compactParticles(Tesselator::State& s) {
       s.sigma[w] = s.sigma[i];
       s.owner[w] = s.owner[i];
       s.id[w] = s.id[i];
+      if (s.carry)
+        for (size_t k = 0; k < 2; ++k) {
+          s.texLayer[2 * w + k] = s.texLayer[2 * i + k];
+          s.texUv[2 * w + k] = s.texUv[2 * i + k];
+        }
     }
     ++w;
   }
@@ -594,7 +647,9 @@ void Tesselator::step(const Field& field, const SkeletonCache*) {
     stats_.transfers += s.chunkTransfers[c];
     stats_.blockedTransfers += s.chunkBlocked[c];
   }
+  if (s.carry) s.prevPos = s.pos;
   integrateParticles(s, field, o);
+  if (s.carry) advectTexcoords(s, o);
   stats_.simulateMs += msSince(t0);
 
   t0 = Clock::now();

@@ -76,6 +76,17 @@ struct Tesselator::State {
   std::vector<uint32_t> fuse;  // per particle its kMaxFuse nearest at the compute phase (the fusion candidates)
   std::vector<uint8_t> fuseCount;
 
+  // Carried texture coordinates (TextureMode::Carried on a textured mesh; tesselator_texcoords.cpp). While `carry`,
+  // every particle has two slots 2i and 2i+1: texLayer (a layer of the mesh, -1: none) and texUv. texGens are the
+  // layers' generators at the current pose (world space; from the skeleton cache at every update, else from the last
+  // carried mesh). Empty otherwise.
+  bool carry = false;
+  size_t carryLayers = 0;  // the mesh's layer count the slots refer to
+  std::vector<int32_t> texLayer;
+  std::vector<glm::vec2> texUv;
+  std::vector<TexGen> texGens;
+  std::vector<glm::vec3> prevPos;  // the positions before this update's integration (the advection's step)
+
   UniformHashGrid hash;
   std::vector<FieldScratch> scratch;  // one per chunk (reused)
 
@@ -98,6 +109,7 @@ struct Tesselator::State {
   std::vector<float> tmpF;
   std::vector<int32_t> tmpI;
   std::vector<uint64_t> tmpU;
+  std::vector<glm::vec2> tmpUv;
 
   // Triangulation buffers.
   std::vector<glm::vec3> vpos, vcol;
@@ -128,6 +140,8 @@ struct Tesselator::State {
   // Appends a particle on the surface (grad: field gradient there).
   // Appends a particle. Takes its vectors by value: callers pass elements of the arrays this grows.
   void add(glm::vec3 p, glm::vec3 g, float s, int32_t ownerIndex);
+  // Drops the carried coordinates (the particles carry none until the next carryTexcoords()).
+  void dropTexcoords();
 };
 
 // Sorts the particles into hash-bucket order (every per-particle array is permuted) and rebuilds the neighbour list
@@ -185,6 +199,12 @@ void computeForces(Tesselator::State& s, const Field& field, const TesselatorOpt
 // Integration (parallel): the clamped step along s.vel and the radius rate, then one Newton step back onto the
 // surface along the compute phase's gradient; particles carried off the surface are marked dead.
 void integrateParticles(Tesselator::State& s, const Field& field, const TesselatorOptions& o);
+// Carried coordinates (tesselator_texcoords.cpp; only while s.carry): after integration, each particle's coordinates
+// move by what its layer's generator maps its step (s.prevPos -> s.pos) to. Parallel, each particle writes only its
+// own slots.
+void advectTexcoords(Tesselator::State& s, const TesselatorOptions& o);
+// The generators of a carried mesh's layers at the skeleton's current pose (no change if their count differs).
+void updateTexGens(Tesselator::State& s, const SkeletonCache& skeleton);
 // Additions and deletions (sequential, particle order): strays, fusion, death, fission (children appended), then
 // compaction in particle order. Counts into stats.
 void addAndDeleteParticles(Tesselator::State& s, const TesselatorOptions& o, TesselatorStats& stats);

@@ -153,8 +153,7 @@ std::vector<TexturedPart> splitByTexture(const Mesh& mesh) {
     for (const auto& [t, layer] : triangles) {
       glm::vec2 uv[3];
       for (int c = 0; c < 3; ++c)
-        uv[c] = layer >= 0 ? mesh.layerGens[size_t(layer)].map(mesh.position(mesh.indices[3 * t + size_t(c)]))
-                           : glm::vec2(0.0f);
+        uv[c] = layer >= 0 ? mesh.layerUv(mesh.indices[3 * t + size_t(c)], layer) : glm::vec2(0.0f);
       bool seam = false;
       for (int c = 1; c < 3; ++c) {
         const float shift = std::round(uv[c].x - uv[0].x);

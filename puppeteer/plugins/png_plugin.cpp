@@ -1,6 +1,8 @@
 // The PNG encoder plugin: OpenImageIO behind a small C interface, loaded by puppeteer/src/png.cpp only when a PNG
 // is written. OpenImageIO brings some 500 shared libraries whose start-up costs about 0.3 s; commands that write
 // no image (mesh, check, record …) should not pay it.
+#include <cctype>
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -49,8 +51,26 @@ extern "C" __attribute__((visibility("default"))) int imps_png_encode(int width,
 
 extern "C" __attribute__((visibility("default"))) void imps_png_free(uint8_t* png) { std::free(png); }
 
+// Whether an image's values are linear light (EXR, HDR, floating-point TIFF ...) rather than sRGB-encoded: a
+// floating-point pixel type, or a colour space OpenImageIO names linear.
+bool linearImage(const OIIO::ImageSpec& spec) {
+  if (spec.format.is_floating_point()) return true;
+  std::string space = spec.get_string_attribute("oiio:ColorSpace");
+  for (char& c : space) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return space.find("linear") != std::string::npos || space.rfind("lin_", 0) == 0 || space == "scene_linear";
+}
+
+// Linear [0, 1] -> an sRGB-encoded byte (IEC 61966-2-1), rounded to nearest; NaN -> 0.
+uint8_t encodeSrgb(float linear) {
+  const float c = linear > 0.0f ? (linear < 1.0f ? linear : 1.0f) : 0.0f;
+  const float e = c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
+  return uint8_t(std::lround(e * 255.0f));
+}
+
 // Reads any image OpenImageIO knows (PNG, JPEG, EXR, ...) as RGBA8, rows from the top: grey gets copied to
-// RGB, a missing alpha is opaque, other types are converted by OpenImageIO (floats clamped to [0, 1]). On success
+// RGB, a missing alpha is opaque. The bytes are sRGB-encoded colour (as PNG and JPEG store it) and linear alpha:
+// a linear image (EXR's floats, linearImage()) has its colour clamped to [0, 1] and encoded to sRGB, its alpha
+// clamped and scaled; other types are converted by OpenImageIO. On success
 // returns 0 and sets *rgba (malloc'd; release with imps_png_free), *width and *height; on failure returns -1 and
 // writes a message into error.
 extern "C" __attribute__((visibility("default"))) int imps_image_read(const char* path, int* width, int* height,
@@ -67,8 +87,23 @@ extern "C" __attribute__((visibility("default"))) int imps_image_read(const char
     copyError("unsupported image size " + std::to_string(w) + " x " + std::to_string(h), error, errorSize);
     return -1;
   }
+  const bool linear = linearImage(spec);
   std::vector<uint8_t> pixels(size_t(w) * size_t(h) * size_t(channels));
-  if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, pixels.data())) {
+  if (linear) {
+    std::vector<float> values(pixels.size());
+    if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, values.data())) {
+      copyError("cannot decode: " + in->geterror(), error, errorSize);
+      return -1;
+    }
+    // Colour channels: the first three (one or two channels: grey, then alpha).
+    const int colour = channels >= 3 ? 3 : 1;
+    for (size_t i = 0; i < values.size(); ++i) {
+      const float x = values[i];
+      pixels[i] = int(i % size_t(channels)) < colour
+                      ? encodeSrgb(x)
+                      : uint8_t(std::lround((x > 0.0f ? (x < 1.0f ? x : 1.0f) : 0.0f) * 255.0f));
+    }
+  } else if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, pixels.data())) {
     copyError("cannot decode: " + in->geterror(), error, errorSize);
     return -1;
   }

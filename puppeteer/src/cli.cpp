@@ -158,6 +158,7 @@ int runCli(int argc, char** argv) {
   addSceneCommands(app, commands);
   addDeviceCommands(app, commands);
   addTesselatorCommands(app, commands);
+  addStretchCommands(app, commands);
   addCalibrationCommands(app, commands);
   addSessionCommands(app, commands);
   addLiveCommands(app, commands);

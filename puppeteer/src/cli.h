@@ -67,6 +67,7 @@ using Commands = std::vector<Command>;
 void addSceneCommands(CLI::App& app, Commands& commands);  // mesh, check
 void addDeviceCommands(CLI::App& app, Commands& commands);  // devices, sim, record
 void addTesselatorCommands(CLI::App& app, Commands& commands);  // bench
+void addStretchCommands(CLI::App& app, Commands& commands);     // stretch
 void addCalibrationCommands(CLI::App& app, Commands& commands);  // calibrate
 void addSessionCommands(CLI::App& app, Commands& commands);      // info, convert
 void addLiveCommands(CLI::App& app, Commands& commands);         // view, replay, live

@@ -60,6 +60,7 @@ struct LiveArgs {
   bool printHashes = false;
   int width = 1280, height = 720;
   int threads = -1;
+  std::string textureMode;  // "", "projective" or "carried"
   int msaa = -1;
   std::vector<std::string> poses;
   std::string save;
@@ -107,6 +108,10 @@ void addCommonOptions(CLI::App* cmd, LiveArgs& a) {
   cmd->add_option("--height", a.height, "Window height in pixels")->check(CLI::Range(64, 8192));
   cmd->add_option("--threads", a.threads, "Tesselator threads (default: the scene's numThreads; 0 = all cores)")
       ->check(nonNegativeNumber());
+  cmd->add_option("--texture-mode", a.textureMode,
+                  "projective (textures slide over the skin as it bends) or carried (the particles carry their "
+                  "texture coordinates: textures stretch with the skin); default: the scene's textureMode")
+      ->check(CLI::IsMember({"projective", "carried"}));
   cmd->add_option("--msaa", a.msaa, "Multisampling samples (0 = off; default: 4, or off under software GL)")
       ->check(CLI::Range(0, 16));
   cmd->add_option("--pose", a.poses,
@@ -151,6 +156,8 @@ std::unique_ptr<ViewerPipeline> makePipeline(const LiveArgs& a, int* exitCode) {
   o.polygonizer = a.polygonizer == "mc" || (a.polygonizer.empty() && fileNamesMc) ? Polygonizer::MarchingCubes
                                                                                  : Polygonizer::Particles;
   o.threads = a.threads;
+  if (!a.textureMode.empty())
+    o.textureMode = a.textureMode == "carried" ? TextureMode::Carried : TextureMode::Projective;
   auto pipeline = std::make_unique<ViewerPipeline>(std::move(loaded->scene), std::move(loaded->character), o);
   pipeline->setTextures(std::move(*textures));
   for (const std::string& text : a.poses) {

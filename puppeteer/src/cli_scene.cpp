@@ -149,6 +149,7 @@ int runParticleMesh(const MeshArgs& a, const Scene& scene, const SkeletonCache& 
   }
   progress.phase("writing " + a.output);
   textureMesh(mesh, skeleton, options.numThreads);
+  tess.carryTexcoords(mesh);
   std::string error;
   if (!writeTexturedMesh(mesh, skeleton.character(), images, a.output, &error)) {
     progress.done();

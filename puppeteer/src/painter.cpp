@@ -62,7 +62,11 @@ int paintDab(const Mesh& mesh, const MeshHit& hit, const Brush& brush, std::vect
   if (best < 0) return -1;
   RgbaImage& image = images[size_t(layers.image[best])];
   // The brush's centre in texel coordinates (x right, y down from the top row), as sampleTexture reads them.
-  const glm::vec2 uv = mesh.layerGens[size_t(layers.layer[best])].map(hit.point);
+  // Projective: the generator's mapping of the hit point; carried: the corners' coordinates interpolated.
+  const glm::vec2 uv = mesh.layerTexcoords.empty()
+                           ? mesh.layerGens[size_t(layers.layer[best])].map(hit.point)
+                           : hit.barycentric.x * layers.uv[best][0] + hit.barycentric.y * layers.uv[best][1] +
+                                 hit.barycentric.z * layers.uv[best][2];
   const float cx = (uv.x - std::floor(uv.x)) * float(image.width);
   const float cy = (1.0f - (uv.y - std::floor(uv.y))) * float(image.height);
   const float r = brush.radiusTexels();
@@ -91,8 +95,13 @@ std::vector<std::string> paintedTextureNames(const Character& character, const s
     if (k >= painted.size() || !painted[k]) continue;
     const std::string base = stem + "_" + fs::path(character.textures()[k].path).stem().string();
     std::string name = base + ".png";
-    for (int n = 2; taken.contains(fs::absolute(dir / name).lexically_normal().string()); ++n)
-      name = base + "_" + std::to_string(n) + ".png";
+    // Never a name of the scene's textures, nor of any file already there (an unrelated image, or an earlier save).
+    auto busy = [&](const std::string& candidate) {
+      std::error_code ec;
+      const fs::path full = fs::absolute(dir / candidate).lexically_normal();
+      return taken.contains(full.string()) || fs::exists(fs::symlink_status(full, ec));
+    };
+    for (int n = 2; busy(name); ++n) name = base + "_" + std::to_string(n) + ".png";
     taken.insert(fs::absolute(dir / name).lexically_normal().string());
     names[k] = (dir / name).string();
   }

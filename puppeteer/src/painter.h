@@ -46,7 +46,9 @@ int paintDab(const Mesh& mesh, const MeshHit& hit, const Brush& brush, std::vect
 
 // The file names painted textures are saved under, beside `scenePath`: STEM_NAME.png for the texture whose file
 // is NAME.EXT (STEM the saved scene's name without extension), with _2, _3 ... added while the name is one of the
-// scene's current texture files or the source image itself — so saving never overwrites an original.
+// scene's current texture files or the source image itself, or names any file that exists (a dangling symlink
+// included) — so saving never overwrites an original or an unrelated file; each save of a painted texture gets a
+// fresh file.
 std::vector<std::string> paintedTextureNames(const Character& character, const std::vector<bool>& painted,
                                              const std::string& scenePath);
 

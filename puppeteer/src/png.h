@@ -28,8 +28,9 @@ struct RgbaImage {
 };
 
 // Reads an image file OpenImageIO knows (PNG, JPEG, EXR, ...) through the same plugin: grey becomes RGB, a missing
-// alpha is opaque, float images are clamped to [0, 1]. On failure returns false and sets *error (if non-null) to
-// the reason (without the path).
+// alpha is opaque. The colour bytes are always sRGB-encoded (as the renderers decode them): PNG's and JPEG's as
+// stored, a linear image's (EXR, any floating-point image) clamped to [0, 1] and encoded linear -> sRGB (alpha stays
+// linear). On failure returns false and sets *error (if non-null) to the reason (without the path).
 bool readImage(const std::string& path, RgbaImage& image, std::string* error);
 
 }  // namespace imps::app

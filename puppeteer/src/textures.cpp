@@ -83,8 +83,7 @@ void TriangleLayers::gather(const Mesh& mesh, uint32_t a, uint32_t b, uint32_t c
         layer[i] = l;
         image[i] = mesh.layerImages[size_t(l)];
         weight[i] = glm::vec3(0.0f);
-        const TexGen& gen = mesh.layerGens[size_t(l)];
-        for (int q = 0; q < 3; ++q) uv[i][q] = gen.map(mesh.position(corner[q]));
+        for (int q = 0; q < 3; ++q) uv[i][q] = mesh.layerUv(corner[q], l);
         for (int q = 1; q < 3; ++q) uv[i][q].x -= std::round(uv[i][q].x - uv[i][0].x);
         ++count;
       }

@@ -26,7 +26,8 @@ std::expected<std::vector<RgbaImage>, std::string> loadTextures(const Character&
 glm::vec3 sampleTexture(const RgbaImage& image, float u, float v);
 
 // The texture layers of one triangle of a textured mesh (mesh.h): every layer any corner names, with its weight
-// at each corner (0 where the corner does not name it) and its (u, v) at each corner from its generator, u
+// at each corner (0 where the corner does not name it) and its (u, v) at each corner (Mesh::layerUv: carried, or
+// from its generator), u
 // unwrapped across a sphere generator's seam so that no triangle spans it (the image repeats). Renderers blend
 // (1 - sum of weights) white + sum of weight x texel, the weights and coordinates interpolated over the triangle.
 struct TriangleLayers {

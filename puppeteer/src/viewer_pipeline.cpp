@@ -25,6 +25,7 @@ ViewerPipeline::ViewerPipeline(Scene scene, Character character, const PipelineO
   TesselatorOptions t;
   if (const auto* node = std::get_if<Tesselator3MPNode>(&scene_.polygonizer)) t = TesselatorOptions::fromNode(*node);
   if (options_.threads >= 0) t.numThreads = options_.threads;
+  if (options_.textureMode) t.textureMode = *options_.textureMode;
   tesselator_ = std::make_unique<Tesselator>(t);
   mcOptions_.resolution = options_.mcResolution;
   mcOptions_.threads = t.numThreads;
@@ -58,6 +59,7 @@ void ViewerPipeline::frame() {
       tesselator_->frame(*skeleton_, mesh_);
     }
     textureMesh(mesh_, *skeleton_, tesselator_->options().numThreads);
+    tesselator_->carryTexcoords(mesh_);  // a no-op unless the texture mode is carried
     ++meshVersion_;
   } else if (!mcValid_ || mcGeneration_ != skeleton_->generation()) {
     // Marching Cubes is a function of the pose alone: an unchanged skeleton gives the same mesh.

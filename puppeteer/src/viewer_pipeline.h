@@ -25,6 +25,8 @@ struct PipelineOptions {
   Polygonizer polygonizer = Polygonizer::Particles;
   // Tesselator threads; -1 keeps the scene's numThreads.
   int threads = -1;
+  // The particle tesselator's texture mode (--texture-mode); unset keeps the scene's textureMode.
+  std::optional<TextureMode> textureMode;
   // Particle updates run by the constructor (and by reset()) before the first frame, so the first picture is a
   // settled surface rather than a few seed particles (Tesselator::settle; stops earlier once settled).
   int settleUpdates = 400;

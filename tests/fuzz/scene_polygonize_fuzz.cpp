@@ -1,7 +1,9 @@
 // libFuzzer target for scene -> character -> polygonizer settings: whatever scene reads either fails to build a
 // character with diagnostics, or builds one whose polygonizer settings are honoured within bounded work: the Marching
 // Cubes grid is planned (and refused beyond its cell limit), a small one is meshed closed, and the particle
-// tesselator runs a few updates within its particle limit. Never a crash, an abort or unbounded memory.
+// tesselator runs a few updates within its particle limit (its carried texture coordinates finite). Never a crash,
+// an abort or unbounded memory.
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -15,6 +17,7 @@
 #include "imps/scene_reader.h"
 #include "imps/skeleton_cache.h"
 #include "imps/tesselator.h"
+#include "imps/texturing.h"
 
 namespace {
 
@@ -55,6 +58,15 @@ void particles(const imps::Scene& scene, const imps::SkeletonCache& skeleton) {
   imps::Mesh mesh;
   tess.triangulate(mesh);
   FUZZ_CHECK(mesh.vertexCount() == tess.particles().size());
+  // Textures (and, with textureMode "carried", the particles' carried coordinates): one more update carries them.
+  imps::textureMesh(mesh, skeleton, 1);
+  tess.carryTexcoords(mesh);
+  FUZZ_CHECK(mesh.layerTexcoords.empty() || mesh.layerTexcoords.size() == 4 * mesh.vertexCount());
+  tess.update(skeleton);
+  tess.triangulate(mesh);
+  imps::textureMesh(mesh, skeleton, 1);
+  tess.carryTexcoords(mesh);
+  for (const float x : mesh.layerTexcoords) FUZZ_CHECK(std::isfinite(x));
 }
 
 }  // namespace

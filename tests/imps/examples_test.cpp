@@ -34,7 +34,8 @@ TEST_P(ExampleTest, MeshesClosedAndManifoldAtSeveralResolutions) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Examples, ExampleTest,
-                         ::testing::Values("transformed_blobs", "textured_blobs", "beanito", "flubber", "simple_biped"));
+                         ::testing::Values("transformed_blobs", "textured_blobs", "beanito", "flubber", "simple_biped",
+                                           "textured_biped"));
 
 // The simple biped is one piece, and stays one piece (its thin hands and feet included) even at a coarse cell.
 TEST(Examples, BipedIsOneConnectedSurfaceEvenAtCoarseCells) {

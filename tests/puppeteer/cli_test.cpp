@@ -81,6 +81,7 @@ TEST_F(CliTest, AMissingInputFileIsAnInputErrorForEveryCommand) {
       {"mesh", {"mesh", none + ".wrl", "-o", at("m.ply")}, kInvalidInput, "no such file"},
       {"render", {"render", none + ".wrl", "-o", at("r.png")}, kInvalidInput, "no such file"},
       {"bench", {"bench", none + ".wrl"}, kInvalidInput, "no such file"},
+      {"stretch", {"stretch", none + ".wrl"}, kInvalidInput, "no such file"},
       {"calibrate --rig", {"calibrate", "--rig", none + ".json", "--scene", kBiped, "--session", kWave, "-o",
                            at("c.json")}, kInvalidInput, "no such file"},
       {"calibrate --scene", {"calibrate", "--rig", kRig, "--scene", none + ".wrl", "--session", kWave, "-o",
@@ -142,10 +143,32 @@ TEST_F(CliTest, AMissingTextureImageIsAnInputError) {
   EXPECT_TRUE(fs::exists(at("blobs.png")));
 }
 
+// `stretch` needs a textured character with the joint it bends; its mode is one of three words.
+TEST_F(CliTest, StretchRefusesScenesItCannotMeasure) {
+  const std::string textured = kSource + "/examples/textured_biped.wrl";
+  expectAll({
+      {"untextured", {"stretch", kBiped}, kInvalidInput, "no primitive has a texture generator"},
+      {"joint", {"stretch", textured, "--joint", "Elbow"}, kInvalidInput, "no joint named 'Elbow'"},
+      {"mode", {"stretch", textured, "--mode", "sliding"}, kUsage, "--mode"},
+  });
+}
+
+// `stretch --pictures` paints the dot and renders the joint at rest, bent and back.
+TEST_F(CliTest, StretchPicturesShowTheJointAtRestBentAndBack) {
+  const auto run = runProgram(puppeteer(), {"stretch", kSource + "/examples/textured_biped.wrl", "--frames", "2",
+                                            "--rest-frames", "0", "--mode", "carried", "--pictures", at("elbow")});
+  ASSERT_EQ(run.exitCode, kOk) << run.err;
+  EXPECT_NE(run.out.find("carried"), std::string::npos) << run.out;
+  for (const char* stage : {"rest", "bent", "back"})
+    EXPECT_GT(fs::file_size(at(std::string("elbow_carried_") + stage + ".png")), 1000u) << stage;
+  EXPECT_FALSE(fs::exists(at("elbow_projective_rest.png")));
+}
+
 TEST_F(CliTest, AnUnknownOptionIsAUsageErrorForEveryCommand) {
   const std::vector<std::vector<std::string>> commands = {
       {"check", kBiped}, {"mesh", kBiped, "-o", at("m.ply")}, {"render", kBiped, "-o", at("r.png")},
-      {"bench", kBiped}, {"devices"}, {"sim", "--pty"}, {"record", "--device", "sim:", "-o", at("t.session")},
+      {"bench", kBiped}, {"stretch", kBiped}, {"devices"}, {"sim", "--pty"},
+      {"record", "--device", "sim:", "-o", at("t.session")},
       {"calibrate", "--rig", kRig, "--scene", kBiped, "--session", kWave, "-o", at("c.json")},
       {"info", kWave}, {"convert", kBvh, at("c.session")}, {"view", kBiped}, {"replay", kWave, kBiped},
       {"live", kBiped, "--device", "sim:"}};
@@ -310,6 +333,9 @@ TEST_F(CliTest, ReportingCommandsPrintJson) {
       {{"mesh", "--json", kBiped, "--polygonizer", "particles", "--updates", "3", "-o", at("jp.ply")}, "particles"},
       {{"render", "--json", kBiped, "--res", "16", "--width", "32", "--height", "32", "-o", at("j.png")}, "triangles"},
       {{"bench", "--json", kBiped, "--updates", "1"}, "scenes"},
+      {{"stretch", "--json", kSource + "/examples/textured_biped.wrl", "--frames", "2", "--rest-frames", "0",
+        "--mode", "carried"},
+       "modes"},
       {{"devices", "--json"}, "serialPorts"},
       {{"info", "--json", kWave}, "devices"},
       {{"convert", "--json", kBvh, at("j.session")}, "samples"},

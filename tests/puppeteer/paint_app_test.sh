@@ -17,7 +17,8 @@ for polygonizer in mc particles; do
   grep -q "paint mode" "$work/out" || { cat "$work/out"; echo "FAIL: no paint mode"; exit 1; }
   grep -q "with its painted textures" "$work/out" || { cat "$work/out"; echo "FAIL: nothing painted"; exit 1; }
   [ -f "$work/painted_${polygonizer}_textured_blobs_checker.png" ] || { ls "$work"; echo "FAIL: no painted texture"; exit 1; }
-  "$check" "$work/painted_$polygonizer.wrl" "$work/textured_blobs_checker.png" 0
+  # Brush size 6 (key 6): radius 10 texels; the default colour 200,30,40.
+  "$check" "$work/painted_$polygonizer.wrl" "$work/textured_blobs_checker.png" 0 200,30,40 10
 done
 [ "$before" = "$(sha256sum "$work/textured_blobs_checker.png")" ] || { echo "FAIL: the original changed"; exit 1; }
 echo "paint_app: ok"

@@ -190,5 +190,24 @@ ExponentialBlend { children [
             (std::vector<std::string>{"/e/y_face.png", "/e/y_x_face.png"}));
 }
 
+// A file already beside the saved scene — unrelated to it, or saved before — is never overwritten.
+TEST_F(PainterTest, NeverTheNameOfAFileThatIsAlreadyThere) {
+  const std::string scenePath = (dir_ / "x.wrl").string();
+  const std::vector<std::string> first = paintedTextureNames(*character_, {true, false}, scenePath);
+  ASSERT_EQ(first.size(), 2u);
+  EXPECT_EQ(first[0], (dir_ / "x_face.png").string());
+  std::ofstream(first[0]) << "someone else's picture";
+  const std::vector<std::string> second = paintedTextureNames(*character_, {true, false}, scenePath);
+  EXPECT_EQ(second[0], (dir_ / "x_face_2.png").string());
+  fs::create_symlink(dir_ / "nowhere.png", dir_ / "x_face_2.png");  // dangling: writing through it would create a file
+  EXPECT_EQ(paintedTextureNames(*character_, {true, false}, scenePath)[0], (dir_ / "x_face_3.png").string());
+  std::string error;
+  ASSERT_TRUE(savePaintedScene(scene_, *character_, images_, {true, false}, scenePath, &error)) << error;
+  std::ifstream kept(first[0]);
+  std::string text((std::istreambuf_iterator<char>(kept)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text, "someone else's picture");
+  EXPECT_TRUE(fs::exists(dir_ / "x_face_3.png"));
+}
+
 }  // namespace
 }  // namespace imps::app

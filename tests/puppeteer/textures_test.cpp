@@ -5,6 +5,9 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <OpenImageIO/imageio.h>
+
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -72,6 +75,70 @@ TEST_F(TexturesTest, AMissingOrUnreadableImageIsAnErrorNamingTheFileAndItsPlaceI
   EXPECT_NE(junk.error().find(scene + ":3:41: error: cannot read texture 'maps/junk.png' ("), std::string::npos)
       << junk.error();
   EXPECT_TRUE(loadTextures(character("maps")).error().ends_with("): Is a directory"));
+}
+
+// Writes `values` (w x h x channels, rows from the top) to `path` through OpenImageIO as `type`.
+template <typename T>
+void writeImage(const fs::path& path, int w, int h, int channels, OIIO::TypeDesc type, const std::vector<T>& values,
+                OIIO::TypeDesc source) {
+  auto out = OIIO::ImageOutput::create(path.string());
+  ASSERT_TRUE(out) << OIIO::geterror();
+  OIIO::ImageSpec spec(w, h, channels, type);
+  spec.attribute("Compression", "none");
+  spec.attribute("CompressionQuality", 100);
+  ASSERT_TRUE(out->open(path.string(), spec)) << out->geterror();
+  ASSERT_TRUE(out->write_image(source, values.data())) << out->geterror();
+  ASSERT_TRUE(out->close());
+}
+
+// EXR holds linear light: the loader encodes it to sRGB bytes, so that the renderers' sRGB decoding
+// (sampleTexture, GL_SRGB8_ALPHA8) gives the file's values back (clamped to [0, 1]) instead of darkening them.
+TEST_F(TexturesTest, ExrLinearValuesComeBackLinearThroughTheSrgbDecoding) {
+  const std::vector<float> linear = {0.0f, 0.002f, 0.05f, 0.18f, 0.5f, 0.8f, 1.0f, 3.0f};  // 8 x 1, grey
+  for (const OIIO::TypeDesc& type : {OIIO::TypeDesc(OIIO::TypeDesc::FLOAT), OIIO::TypeDesc(OIIO::TypeDesc::HALF)}) {
+    SCOPED_TRACE(type.c_str());
+    std::vector<float> rgba;
+    for (float x : linear) rgba.insert(rgba.end(), {x, x * 0.5f, 0.25f, 0.6f});
+    writeImage(dir_ / "maps/light.exr", 8, 1, 4, type, rgba, OIIO::TypeDesc::FLOAT);
+    RgbaImage image;
+    std::string error;
+    ASSERT_TRUE(readImage((dir_ / "maps/light.exr").string(), image, &error)) << error;
+    ASSERT_EQ(image.width, 8);
+    ASSERT_EQ(image.height, 1);
+    for (int x = 0; x < 8; ++x) {
+      const glm::vec3 c = sampleTexture(image, (float(x) + 0.5f) / 8.0f, 0.5f);
+      // One 8-bit sRGB step is at most ~1.3 % of the value above 0.05 (and 0.0004 below).
+      const auto near = [](float want) { return 0.0005f + 0.015f * std::min(want, 1.0f); };
+      EXPECT_NEAR(c.r, std::min(linear[size_t(x)], 1.0f), near(linear[size_t(x)])) << "texel " << x;
+      EXPECT_NEAR(c.g, std::min(0.5f * linear[size_t(x)], 1.0f), near(0.5f * linear[size_t(x)])) << "texel " << x;
+      EXPECT_NEAR(c.b, 0.25f, near(0.25f));
+      EXPECT_EQ(image.rgba[size_t(x) * 4 + 3], 153) << "alpha stays linear: 0.6 x 255";
+    }
+    EXPECT_EQ(image.rgba[4 * 4], 188) << "linear 0.5 is sRGB byte 188";
+  }
+}
+
+// JPEG (like PNG) stores sRGB bytes: they are kept as they are.
+TEST_F(TexturesTest, JpegBytesAreKeptAsTheyAre) {
+  std::vector<uint8_t> rgb;
+  const glm::u8vec3 colours[4] = {{200, 100, 50}, {20, 220, 120}, {128, 128, 128}, {250, 10, 240}};
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      const glm::u8vec3 c = colours[(y / 16) * 2 + x / 16];
+      rgb.insert(rgb.end(), {c.r, c.g, c.b});
+    }
+  writeImage(dir_ / "maps/skin.jpg", 32, 32, 3, OIIO::TypeDesc::UINT8, rgb, OIIO::TypeDesc::UINT8);
+  const auto loaded = loadTextures(character("maps/skin.jpg"));
+  ASSERT_TRUE(loaded.has_value()) << loaded.error();
+  const RgbaImage& image = (*loaded)[0];
+  ASSERT_EQ(image.width, 32);
+  ASSERT_EQ(image.height, 32);
+  for (int q = 0; q < 4; ++q) {
+    const int x = (q % 2) * 16 + 8, y = (q / 2) * 16 + 8;  // inside each block, away from its edges
+    const uint8_t* p = &image.rgba[(size_t(y) * 32 + size_t(x)) * 4];
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(int(p[k]), int(colours[q][k]), 3) << "block " << q << " channel " << k;
+    EXPECT_EQ(p[3], 255) << "no alpha: opaque";
+  }
 }
 
 TEST(SampleTexture, BilinearRepeatingAndVUp) {

@@ -28,11 +28,16 @@ struct Mesh {
   // sum is at most 1 (the rest is untextured: the colour alone). texcoords[2v..2v+1] is the (u, v) of the vertex's
   // first layer (0, 0 without one). A renderer gets any layer's coordinates anywhere from its generator
   // (layerGens[l].map(position)), which is how a triangle whose corners name different layers is drawn seamlessly.
+  // layerTexcoords is empty (projective texturing: every coordinate comes from the generator) or, for a mesh whose
+  // coordinates were carried by the particle tesselator (TextureMode::Carried, Tesselator::carryTexcoords), 4 per
+  // vertex: the (u, v) of layers[2v] then of layers[2v+1] (0 where the slot is unused). Read coordinates through
+  // layerUv(), which falls back to the generator for a layer the vertex does not carry.
   std::vector<TexGen> layerGens;
   std::vector<int32_t> layerImages;
   std::vector<int32_t> layers;
   std::vector<float> layerWeights;
   std::vector<float> texcoords;
+  std::vector<float> layerTexcoords;
 
   size_t vertexCount() const { return positions.size() / 3; }
   size_t triangleCount() const { return indices.size() / 3; }
@@ -52,8 +57,17 @@ struct Mesh {
     layers.clear();
     layerWeights.clear();
     texcoords.clear();
+    layerTexcoords.clear();
   }
   bool textured() const { return !layers.empty(); }
+  // The (u, v) of layer `layer` (< layerGens.size()) at vertex v: the carried coordinate when v carries that layer
+  // (layerTexcoords), else its generator's mapping of the vertex's position.
+  glm::vec2 layerUv(size_t v, int32_t layer) const {
+    if (!layerTexcoords.empty())
+      for (size_t k = 0; k < 2; ++k)
+        if (layers[2 * v + k] == layer) return {layerTexcoords[4 * v + 2 * k], layerTexcoords[4 * v + 2 * k + 1]};
+    return layerGens[size_t(layer)].map(position(v));
+  }
   bool operator==(const Mesh&) const = default;
 };
 

@@ -6,6 +6,8 @@
 // Units: metres and radians. Colours are linear RGB in [0, 1].
 #pragma once
 
+#include <cstdint>
+
 #include <glm/vec3.hpp>
 
 #include <memory>
@@ -143,7 +145,14 @@ struct UniformHash {
   bool operator==(const UniformHash&) const = default;
 };
 
-// `Tesselator3MP`: the particle polygonizer, every field of thesis figure A-1 plus `seed`.
+// How the particle tesselator's mesh gets its texture coordinates (`textureMode`, ours; docs/scene-format.md):
+// Projective: every vertex takes its layers' generators' mapping of its position (thesis 3.9; the texture slides
+// over the skin as blends change). Carried: each particle carries its coordinates through the differential transforms
+// and its own motion over the surface, so the texture stretches with the skin (Tesselator::carryTexcoords). Marching
+// Cubes is always projective.
+enum class TextureMode : uint8_t { Projective, Carried };
+
+// `Tesselator3MP`: the particle polygonizer, every field of thesis figure A-1 plus `seed` and `textureMode`.
 struct Tesselator3MPNode {
   float deltaT = 0.045f;
   float desiredRadius = 0.3f;
@@ -158,6 +167,7 @@ struct Tesselator3MPNode {
   float colorWidth = 3.0f;
   bool doDifferentialTransforms = true;
   int seed = 1;  // ours: fixed seed for deterministic runs
+  TextureMode textureMode = TextureMode::Projective;  // ours
   std::optional<BlendNode> blendingFunction;
   UniformHash spatialSubdivision;
   std::optional<SceneNode> sceneGraph;

@@ -68,6 +68,9 @@ struct TesselatorOptions {
   // A triangulation left with a hole or a pinched vertex after repair is replaced by Marching Cubes of the same field
   // at cell desiredRadius (stats().fallback), so that no hole is ever shown. False: the particle mesh as it is.
   bool closedFallback = true;
+  // Projective: a textured mesh's coordinates come from the generators (textureMesh alone). Carried: every particle
+  // carries its coordinates (see carryTexcoords), so the texture stretches with the skin instead of sliding.
+  TextureMode textureMode = TextureMode::Projective;
   // Long bakes (settle()), as libfive's BRepSettings: when *cancel becomes true (from any thread) settle() returns
   // after the update under way, with `mesh` empty and stats().cancelled set. Null: never.
   std::atomic<bool>* cancel = nullptr;
@@ -139,6 +142,19 @@ class Tesselator {
 
   // updatesPerRender updates then one triangulation.
   void frame(const SkeletonCache& skeleton, Mesh& mesh);
+
+  // Carried texture coordinates (options().textureMode == Carried; otherwise a no-op). Call after textureMesh() on
+  // the mesh triangulate() just made (one vertex per particle). Each particle keeps a (layer, u, v) for each of its
+  // vertex's two layers: a layer it already carries keeps its coordinates, a new one (a particle born by seeding, or
+  // a layer it did not have) takes its generator's mapping of the vertex; the mesh gets them all in
+  // mesh.layerTexcoords (and texcoords). Between calls the coordinates ride with the particles: unchanged through the
+  // differential transforms (the skin moves, the texture with it); when a particle moves over the surface on its own
+  // (repulsion, projection) they change by what the layer's generator maps that step to (the texture must not be
+  // dragged along); a fission's two particles get the parent's, moved by what their offsets map to; fusion keeps the
+  // survivor's. A mesh that is the Marching
+  // Cubes fallback, or one without layers, is left projective (a character without textures costs nothing).
+  // Deterministic for any thread count, as every pass of the tesselator.
+  void carryTexcoords(Mesh& mesh);
 
   // Runs updates until settled (particle count stable to 1% over 10 updates, and the particle triangulation closed
   // without the fallback) or maxUpdates; returns the number of updates run. Leaves the last triangulation in

@@ -32,10 +32,10 @@ void textureMesh(Mesh& mesh, const SkeletonCache& cache, int threads = 0);
 // A textured mesh cut for formats with one texture per material (glTF, OBJ): each triangle goes to the part of the
 // layer that weighs most in it (summed over its corners; a triangle without layers, or whose heaviest layer has no
 // image, goes to the untextured part, image -1). Each part has its own vertices (positions, normals and colours
-// copied) with the part's layer's (u, v) from its generator; a triangle spanning a sphere generator's seam gets its
-// own corners with u unwrapped, so no triangle smears the whole image. Parts come in ascending image order, the
-// untextured one first; empty parts are left out. The blend between layers is lost: formats with one texture per
-// material show the heaviest one (the renderers blend).
+// copied) with the part's layer's (u, v) (Mesh::layerUv: carried, or from its generator); a triangle spanning a
+// sphere generator's seam gets its own corners with u unwrapped, so no triangle smears the whole image. Parts come
+// in ascending image order, the untextured one first; empty parts are left out. The blend between layers is lost:
+// formats with one texture per material show the heaviest one (the renderers blend).
 struct TexturedPart {
   int32_t image = -1;
   Mesh mesh;                  // positions, normals, colors, indices; no layers
