@@ -6,7 +6,6 @@
 
 #include <gtest/gtest.h>
 
-#include <fstream>
 #include <string>
 
 #include "scratch_dir.h"
@@ -183,7 +182,7 @@ TEST(JsonDocument, DescribeNamesKinds) {
 TEST(JsonDocument, ReadJsonFileTextIsBoundedAndSaysWhy) {
   ScratchDir dir("json_document");
   const auto path = dir.path() / "map.json";
-  std::ofstream(path) << "{\"a\": 1}\n";
+  writeBytes(path, "{\"a\": 1}\n");
   auto text = readJsonFileText(path, "rig map");
   ASSERT_TRUE(text.has_value());
   EXPECT_EQ(*text, "{\"a\": 1}\n");
