@@ -15,6 +15,7 @@
 
 #include "imps/mesh_io.h"
 #include "imps/texgen.h"
+#include "octahedron.h"
 #include "scratch_dir.h"
 
 namespace imps {
@@ -26,22 +27,9 @@ using nlohmann::json;
 // upper faces, layer 1 (image 1) on the lower ones; both are plane projectors down -z with a 4 x 4 slide, so
 // (u, v) = (1/2 + x/4, 1/2 + y/4), inside the slide.
 Mesh texturedOctahedron() {
-  Mesh m;
-  const float p[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-  for (const auto& v : p) {
-    m.positions.insert(m.positions.end(), {v[0], v[1], v[2]});
-    m.normals.insert(m.normals.end(), {v[0], v[1], v[2]});
-    m.colors.insert(m.colors.end(), {0.5f, 0.25f, 1.5f});  // 1.5: exported clamped to 1
-  }
-  for (int sx : {1, -1})
-    for (int sy : {1, -1})
-      for (int sz : {1, -1}) {
-        const uint32_t x = sx > 0 ? 0 : 1, y = sy > 0 ? 2 : 3, z = sz > 0 ? 4 : 5;
-        if (sx * sy * sz > 0)
-          m.indices.insert(m.indices.end(), {x, y, z});
-        else
-          m.indices.insert(m.indices.end(), {x, z, y});
-      }
+  Mesh m = test::octahedronMesh();
+  m.normals = m.positions;
+  for (size_t v = 0; v < m.vertexCount(); ++v) m.colors.insert(m.colors.end(), {0.5f, 0.25f, 1.5f});  // 1.5: clamped
   TexGen plane;
   plane.type = TexGenType::Plane;
   plane.width = plane.height = 4.0f;
@@ -51,7 +39,7 @@ Mesh texturedOctahedron() {
     const bool top = v == 4, bottom = v == 5;
     m.layers.insert(m.layers.end(), {0, 1});
     m.layerWeights.insert(m.layerWeights.end(), {top ? 1.0f : bottom ? 0.0f : 0.5f, bottom ? 1.0f : top ? 0.0f : 0.3f});
-    const glm::vec2 uv = plane.map(glm::vec3(p[v][0], p[v][1], p[v][2]));
+    const glm::vec2 uv = plane.map(m.position(v));
     m.texcoords.insert(m.texcoords.end(), {uv.x, uv.y});
   }
   return m;

@@ -8,6 +8,7 @@
 
 #include "imps/mesh.h"
 #include "imps/tesselator.h"
+#include "octahedron.h"
 
 namespace imps {
 namespace {
@@ -22,28 +23,6 @@ Mesh meshOf(const std::vector<glm::vec3>& vertices, const std::vector<uint32_t>&
 double worst(const Mesh& mesh, const glm::vec3& p, float searchRadius) {
   const std::vector<glm::vec3> one = {p};
   return worstDistanceToMesh(mesh, one, searchRadius);
-}
-
-// The octahedron of radius r about c: vertices c ± r e_k, faces wound outward.
-Mesh octahedron(const glm::vec3& c, float r) {
-  std::vector<glm::vec3> v;
-  for (int axis = 0; axis < 3; ++axis)
-    for (float sign : {1.0f, -1.0f}) {
-      glm::vec3 e(0.0f);
-      e[axis] = sign * r;
-      v.push_back(c + e);
-    }
-  std::vector<uint32_t> tris;
-  for (int sx : {1, -1})
-    for (int sy : {1, -1})
-      for (int sz : {1, -1}) {
-        const uint32_t x = sx > 0 ? 0 : 1, y = sy > 0 ? 2 : 3, z = sz > 0 ? 4 : 5;
-        if (sx * sy * sz > 0)
-          tris.insert(tris.end(), {x, y, z});
-        else
-          tris.insert(tris.end(), {x, z, y});
-      }
-  return meshOf(v, tris);
 }
 
 TEST(TesselatorAccuracy, EveryRegionOfATriangle) {
@@ -70,7 +49,7 @@ TEST(TesselatorAccuracy, InscribedOctahedronAgainstItsSphere) {
   // Anywhere in space, negative cells included, and at a search radius smaller than the mesh.
   for (const glm::vec3 centre : {glm::vec3(0.0f), glm::vec3(-3.3f, 7.1f, -0.4f)}) {
     const float r = 0.75f;
-    const Mesh mesh = octahedron(centre, r);
+    const Mesh mesh = test::octahedronMesh(centre, r);
     // Points on the sphere: the corners (on the mesh) and the directions of the face centres (farthest from it).
     std::vector<glm::vec3> corners, faceDirections, all;
     for (size_t v = 0; v < 6; ++v) corners.push_back(mesh.position(v));
@@ -95,7 +74,7 @@ TEST(TesselatorAccuracy, InscribedOctahedronAgainstItsSphere) {
 }
 
 TEST(TesselatorAccuracy, SearchRadiusConventions) {
-  const Mesh mesh = octahedron(glm::vec3(0.0f), 1.0f);
+  const Mesh mesh = test::octahedronMesh();
   EXPECT_EQ(worstDistanceToMesh(mesh, {}, 1.0f), 0.0) << "no points: nothing is off";
   const std::vector<glm::vec3> p = {{0, 0, 0.5f}};
   EXPECT_EQ(worstDistanceToMesh(Mesh{}, p, 0.25f), 0.25) << "no triangles: every point counts as searchRadius";

@@ -11,6 +11,7 @@
 #include <tuple>
 
 #include "imps/mesh.h"
+#include "octahedron.h"
 #include "tesselator_sphere.h"
 #include "tesselator_state.h"
 
@@ -243,28 +244,11 @@ TEST(TesselatorMesh, PinchedVertexLosesItsSmallerFan) {
 
 // ---- Hand-built meshes: the octahedron on the unit sphere (vertices +x -x +y -y +z -z) --------------------------
 
-// Its eight faces, counter-clockwise seen from outside: the corners on the x, y and z axes of one octant, turned
-// round when the octant has an odd number of negative axes.
-std::vector<uint32_t> octahedronFaces() {
-  std::vector<uint32_t> tris;
-  for (int sx : {1, -1})
-    for (int sy : {1, -1})
-      for (int sz : {1, -1}) {
-        const uint32_t x = sx > 0 ? 0 : 1, y = sy > 0 ? 2 : 3, z = sz > 0 ? 4 : 5;
-        if (sx * sy * sz > 0)
-          tris.insert(tris.end(), {x, y, z});
-        else
-          tris.insert(tris.end(), {x, z, y});
-      }
-  return tris;
-}
-
 struct Octahedron : Sphere {
   std::vector<uint32_t> corner;  // the particle at each axis point (findNeighbours sorts the particles)
   Octahedron() : Sphere({{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}}, test::sphereOptions(6)) {
     projectVertices(s, options);
-    const glm::vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-    for (const glm::vec3& axis : axes)
+    for (const glm::vec3& axis : test::octahedronAxes())
       for (uint32_t i = 0; i < s.size(); ++i)
         if (glm::length(s.pos[i] - axis) < 1e-3f) corner.push_back(i);
     EXPECT_EQ(corner.size(), 6u);
@@ -275,12 +259,12 @@ struct Octahedron : Sphere {
     for (uint32_t a : axisTris) out.push_back(corner[a]);
     return out;
   }
-  std::vector<uint32_t> faces() const { return particles(octahedronFaces()); }
+  std::vector<uint32_t> faces() const { return particles(test::octahedronFaces()); }
   // The octahedron without the given faces (over axis points, each as triangleSet writes it: its smallest corner
   // first).
   void buildWithout(const std::set<Triangle>& missing) {
     std::vector<uint32_t> kept;
-    const std::vector<uint32_t> all = octahedronFaces();
+    const std::vector<uint32_t> all = test::octahedronFaces();
     for (size_t t = 0; t < all.size(); t += 3) {
       const std::vector<uint32_t> face(all.begin() + long(t), all.begin() + long(t) + 3);
       if (!missing.count(*triangleSet(face).begin())) kept.insert(kept.end(), face.begin(), face.end());

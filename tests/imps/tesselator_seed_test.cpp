@@ -48,12 +48,18 @@ TesselatorOptions seedOptions(float h) {
   return o;
 }
 
-TEST(TesselatorSeed, EveryBlobGetsParticlesOnItsSurface) {
-  const Blobs blobs;
-  const float h = 0.08f;
+// The particles seedParticles places on the blobs at desiredRadius h.
+Tesselator::State seeded(const Blobs& blobs, float h) {
   const TesselatorOptions o = seedOptions(h);
   Tesselator::State s(o);
   seedParticles(s, blobs.field, o);
+  return s;
+}
+
+TEST(TesselatorSeed, EveryBlobGetsParticlesOnItsSurface) {
+  const Blobs blobs;
+  const float h = 0.08f;
+  const Tesselator::State s = seeded(blobs, h);
   ASSERT_GT(s.size(), 0u);
   std::vector<size_t> perBlob(blobs.anchors.size(), 0);
   for (size_t i = 0; i < s.size(); ++i) {
@@ -78,9 +84,7 @@ TEST(TesselatorSeed, EveryBlobGetsParticlesOnItsSurface) {
 TEST(TesselatorSeed, ParticlesAreThinnedButLeaveNoPartBare) {
   const Blobs blobs;
   const float h = 0.08f;
-  const TesselatorOptions o = seedOptions(h);
-  Tesselator::State s(o);
-  seedParticles(s, blobs.field, o);
+  const Tesselator::State s = seeded(blobs, h);
   for (size_t i = 0; i < s.size(); ++i)
     for (size_t j = i + 1; j < s.size(); ++j)
       ASSERT_GE(glm::length(s.pos[i] - s.pos[j]), 0.8f * h * (1.0f - 1e-5f)) << i << " and " << j;
