@@ -31,7 +31,7 @@ class DiagnosticSink {
 
 enum class TokenKind {
   Identifier,  // node types, field names, DEF names and the keywords DEF USE NULL TRUE FALSE
-  Number,      // a well-formed decimal or hexadecimal number (its spelling is kept: ints and floats differ)
+  Number,      // a well-formed decimal number (its spelling is kept: ints and floats differ)
   BadNumber,   // a malformed, non-finite or out-of-range number; already reported
   String,      // text: the contents with escapes decoded
   LeftBrace,

@@ -216,18 +216,5 @@ TEST(OscCodec, JointLimitsAreEnforced) {
               "joint name of 1..47 bytes");
 }
 
-TEST(OscCodec, TargetUrlsAreChecked) {
-  EXPECT_TRUE(checkOscTargetUrl("osc.udp://127.0.0.1:9000"));
-  EXPECT_TRUE(checkOscTargetUrl("osc.udp://render-2.local:9000/"));
-  auto scheme = checkOscTargetUrl("udp://127.0.0.1:9000");
-  ASSERT_FALSE(scheme);
-  EXPECT_EQ(scheme.error(), "osc:1:1: error: expected osc.udp://HOST:PORT");
-  auto port = checkOscTargetUrl("osc.udp://127.0.0.1:99999");
-  ASSERT_FALSE(port);
-  EXPECT_EQ(port.error(), "osc:1:21: error: expected a port in 1..65535");
-  EXPECT_FALSE(checkOscTargetUrl("osc.udp://:9000"));  // a target needs a host
-  EXPECT_FALSE(checkOscTargetUrl("osc.udp://host"));
-}
-
 }  // namespace
 }  // namespace imps::drivers

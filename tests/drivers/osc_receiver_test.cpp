@@ -1,4 +1,4 @@
-// Tests for drivers/osc_receiver and drivers/osc_sender over loopback UDP: every frame arrives in order; gaps,
+// Tests for drivers/osc_receiver over loopback UDP, fed by the sender and by hand: every frame arrives in order; gaps,
 // reordering, duplicates, lateness and malformed datagrams are counted and survived; silence loses the source and
 // the next frame brings it back; a DIY sender's raw channels reach the pose mailbox.
 #include "drivers/osc_receiver.h"
@@ -303,7 +303,7 @@ TEST(OscStream, SenderQueueOverflowDropsFramesTheReceiverSeesAsGaps) {
   }
 }
 
-TEST(OscStream, OpenErrorsAreReported) {
+TEST(OscStream, ReceiverOpenErrorsAreReported) {
   PoseMailbox mailbox;
   auto first = openReceiver(mailbox);
   ASSERT_TRUE(first);
@@ -318,9 +318,6 @@ TEST(OscStream, OpenErrorsAreReported) {
   auto bad = OscReceiver::open(named, mailbox);
   ASSERT_FALSE(bad);
   EXPECT_NE(bad.error().find("numeric IPv4 address"), std::string::npos) << bad.error();
-  auto sender = OscPoseSender::open({"osc.tcp://127.0.0.1:9000"});
-  ASSERT_FALSE(sender);
-  EXPECT_EQ(sender.error(), "osc.tcp://127.0.0.1:9000: osc:1:1: error: expected osc.udp://HOST:PORT");
 }
 
 }  // namespace

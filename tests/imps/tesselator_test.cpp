@@ -1,15 +1,19 @@
-// Tests for the particle tesselator (imps/src/tesselator*.cpp): convergence, closed meshes, determinism, blend rule,
-// recovery after fast motion, no NaN.
+// Tests for the particle tesselator (imps/src/tesselator.cpp): convergence, closed meshes, determinism, blend rule,
+// recovery after fast motion, no NaN; the update's compute, integration and add/delete phases one at a time; and
+// settle()'s cancel flag and progress callback. The triangulation's passes are in tesselator_mesh_test.cpp, the
+// seeding in tesselator_seed_test.cpp and the accuracy measure in tesselator_accuracy_test.cpp.
 #include "imps/tesselator.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <map>
 #include <optional>
 #include <span>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <glm/gtc/quaternion.hpp>
@@ -18,6 +22,9 @@
 #include "imps/mesh.h"
 #include "imps/scene_reader.h"
 #include "imps/skeleton_cache.h"
+#include "examples.h"
+#include "tesselator_sphere.h"
+#include "tesselator_state.h"
 
 namespace imps {
 namespace {
@@ -684,6 +691,125 @@ TEST(Tesselator, FlatFieldWithoutSkeletonAndReset) {
   EXPECT_EQ(tess.particles().size(), 0u);
   tess.triangulate(mesh);
   EXPECT_EQ(mesh.triangleCount(), 0u);
+}
+
+// ---- The update's phases one at a time (tesselator_state.h), on particles spread evenly over a sphere ---------
+
+TEST(TesselatorPhases, ComputeForcesKeepsVelocitiesTangentAndMarksStrays) {
+  test::Sphere sphere(600);
+  auto& s = sphere.s;
+  const size_t stray = 11;
+  s.pos[stray] *= 1.5f;  // F is nearly 0 there: off the surface
+  computeForces(s, sphere.field, sphere.options, /*cached=*/false);
+  ASSERT_EQ(s.dead.size(), s.size());
+  EXPECT_TRUE(s.dead[stray]);
+  for (size_t i = 0; i < s.size(); ++i) {
+    if (i == stray) continue;
+    ASSERT_FALSE(s.dead[i]) << i;
+    EXPECT_LE(std::abs(glm::dot(s.vel[i], s.nrm[i])), 1e-3f * glm::length(s.vel[i]) + 1e-4f) << i;
+    EXPECT_GT(s.energy[i], 0.0f) << i;
+    EXPECT_GE(s.fuseCount[i], 1u);
+    for (size_t k = 0; k < s.fuseCount[i]; ++k) EXPECT_NE(s.fuse[i * kMaxFuse + k], uint32_t(i));
+  }
+}
+
+TEST(TesselatorPhases, IntegrationEndsOnTheSurface) {
+  test::Sphere sphere(600);
+  auto& s = sphere.s;
+  computeForces(s, sphere.field, sphere.options, false);
+  integrateParticles(s, sphere.field, sphere.options);
+  EXPECT_FALSE(s.nbrValid) << "particles moved";
+  for (size_t i = 0; i < s.size(); ++i) {
+    EXPECT_NEAR(glm::length(s.pos[i]), test::kRadius, 0.01f * sphere.options.desiredRadius) << i;
+    EXPECT_GE(s.sigma[i], 0.25f * sphere.options.desiredRadius * 0.999f);
+    EXPECT_LE(s.sigma[i], 1.5f * sphere.options.desiredRadius * 1.001f);
+  }
+}
+
+TEST(TesselatorPhases, AddAndDeleteFusesTheYoungerOfTwoAndFissionsTheLargest) {
+  test::Sphere sphere(600);
+  auto& s = sphere.s;
+  const float h = sphere.options.desiredRadius;
+  // Particle "young" sits right next to "old" (and is younger: a larger id); particle "big" is at the largest radius.
+  const glm::vec3 p = s.pos[0], t = glm::normalize(glm::cross(p, glm::vec3(0.3f, 0.4f, 0.5f)));
+  s.add(glm::normalize(p + 0.1f * h * t) * test::kRadius, -p, h, 0);
+  const uint64_t youngId = s.id.back(), oldId = s.id[0];
+  findNeighbours(s, sphere.options);
+  computeForces(s, sphere.field, sphere.options, false);
+  const size_t big = 42;
+  s.sigma[big] = 1.5f * h;
+  const uint64_t bigId = s.id[big];
+  const size_t before = s.size();
+  TesselatorStats stats;
+  addAndDeleteParticles(s, sphere.options, stats);
+  EXPECT_EQ(stats.fusions, 1u);
+  EXPECT_EQ(stats.fissions, 1u);
+  EXPECT_EQ(stats.strays, 0u);
+  EXPECT_EQ(s.size(), before - 1 - stats.deaths + 1);
+  EXPECT_EQ(std::count(s.id.begin(), s.id.end(), youngId), 0) << "the younger one fused";
+  EXPECT_EQ(std::count(s.id.begin(), s.id.end(), oldId), 1);
+  const size_t parent = size_t(std::find(s.id.begin(), s.id.end(), bigId) - s.id.begin());
+  ASSERT_LT(parent, s.size());
+  EXPECT_NEAR(s.sigma[parent], 1.5f * h / std::sqrt(2.0f), 1e-5f);
+  EXPECT_EQ(s.sigma.back(), s.sigma[parent]) << "the child is appended with the same radius";
+  EXPECT_GT(s.id.back(), youngId);
+}
+
+// ---- settle(): cancel and progress ------------------------------------------------------------------------------
+
+TEST(TesselatorOptions, SettleReportsProgressOnTheCallingThreadAndStopsOnCancel) {
+  const Character& ch = test::exampleCharacter("transformed_blobs");
+  SkeletonCache skel(ch);
+  TesselatorOptions o;
+  o.numThreads = 2;
+  std::vector<float> reports;
+  bool otherThread = false;
+  const auto caller = std::this_thread::get_id();
+  std::atomic<bool> cancel{false};
+  size_t cancelAfter = 7;  // reports
+  o.cancel = &cancel;
+  o.progress = [&](float f) {
+    reports.push_back(f);
+    otherThread |= std::this_thread::get_id() != caller;
+    if (reports.size() == cancelAfter) cancel = true;
+  };
+  Tesselator tess(o);
+  Mesh mesh;
+  mesh.positions = {1, 2, 3};
+  EXPECT_EQ(tess.settle(skel, mesh, 200), 7) << "stops after the update under way";
+  EXPECT_TRUE(tess.stats().cancelled);
+  EXPECT_EQ(mesh.vertexCount(), 0u);
+  EXPECT_EQ(tess.stats().updates, 7u);
+  EXPECT_FALSE(otherThread);
+  EXPECT_TRUE(std::is_sorted(reports.begin(), reports.end()));
+  EXPECT_FLOAT_EQ(reports.back(), 7.0f / 200.0f);
+
+  // Not cancelled: goes on from the particles it has, and ends reporting 1 with a closed mesh.
+  cancel = false;
+  cancelAfter = 0;
+  reports.clear();
+  const int updates = tess.settle(skel, mesh, 200);
+  EXPECT_FALSE(tess.stats().cancelled);
+  EXPECT_GT(updates, 7);
+  EXPECT_EQ(reports.back(), 1.0f);
+  EXPECT_TRUE(std::is_sorted(reports.begin(), reports.end()));
+  EXPECT_GT(mesh.triangleCount(), 0u);
+}
+
+TEST(TesselatorOptions, ProgressAndCancelDoNotChangeTheParticles) {
+  const Character& ch = test::exampleCharacter("transformed_blobs");
+  SkeletonCache skel(ch);
+  TesselatorOptions quiet;
+  quiet.numThreads = 2;
+  TesselatorOptions watched = quiet;
+  std::atomic<bool> never{false};
+  watched.cancel = &never;
+  watched.progress = [](float) {};
+  Tesselator a(quiet), b(watched);
+  Mesh ma, mb;
+  EXPECT_EQ(a.settle(skel, ma, 60), b.settle(skel, mb, 60));
+  EXPECT_EQ(ma.positions, mb.positions);
+  EXPECT_EQ(ma.indices, mb.indices);
 }
 
 }  // namespace

@@ -1,0 +1,339 @@
+// The tesselator's triangulation passes (imps/src/tesselator_mesh.cpp, declared in tesselator_state.h) one at a
+// time: A vertices, B fans, C votes, D assembly, E hole repair and F pinches, each checked against its contract on
+// particles spread evenly over a sphere, and the half-edge bookkeeping on hand-built meshes (a closed octahedron, one
+// with a hole, a vertex pinched between two closed fans).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <tuple>
+
+#include "imps/mesh.h"
+#include "octahedron.h"
+#include "tesselator_sphere.h"
+#include "tesselator_state.h"
+
+namespace imps {
+namespace {
+
+using test::kRadius;
+using test::Sphere;
+
+bool fanHolds(const Tesselator::State& s, uint32_t a, uint32_t b, uint32_t c) {
+  const size_t m = s.fanCount[a];
+  for (size_t k = 0; k < m; ++k)
+    if (s.fan[a * kMaxFan + k] == int32_t(b) && s.fan[a * kMaxFan + (k + 1) % m] == int32_t(c)) return true;
+  return false;
+}
+
+// Directed edges of s.tris: every one used once at most; returns those without a twin.
+size_t openEdges(const Tesselator::State& s) {
+  std::map<std::pair<uint32_t, uint32_t>, int> used;
+  for (size_t t = 0; t < s.tris.size(); t += 3)
+    for (size_t k = 0; k < 3; ++k) ++used[{s.tris[t + k], s.tris[t + (k + 1) % 3]}];
+  size_t open = 0;
+  for (const auto& [e, count] : used) {
+    EXPECT_EQ(count, 1) << "directed edge " << e.first << " -> " << e.second << " used twice";
+    open += used.count({e.second, e.first}) == 0;
+  }
+  return open;
+}
+
+// Replaces s's triangles by `tris` and builds the half-edge table from them as the assembly leaves it (every vertex
+// flagged in s.openOut: a superset of those with an open outgoing edge, as the passes allow).
+void setTriangles(Tesselator::State& s, const std::vector<uint32_t>& tris) {
+  const size_t n = s.size();
+  s.heTo.assign(n * kMaxHalfEdges, 0);
+  s.heThird.assign(n * kMaxHalfEdges, 0);
+  s.heCount.assign(n, 0);
+  s.openOut.assign(n, 1);
+  s.tris = tris;
+  for (size_t t = 0; t < s.tris.size(); t += 3)
+    for (size_t k = 0; k < 3; ++k) {
+      const uint32_t a = s.tris[t + k], slot = uint32_t(a * kMaxHalfEdges + s.heCount[a]++);
+      s.heTo[slot] = s.tris[t + (k + 1) % 3];
+      s.heThird[slot] = s.tris[t + (k + 2) % 3];
+    }
+}
+
+using Triangle = std::tuple<uint32_t, uint32_t, uint32_t>;
+
+// Triangles as sets of rotations: (a, b, c), (b, c, a) and (c, a, b) are one triangle; (a, c, b) is another.
+std::set<Triangle> triangleSet(const std::vector<uint32_t>& tris) {
+  std::set<Triangle> out;
+  for (size_t t = 0; t < tris.size(); t += 3) {
+    const uint32_t* c = &tris[t];
+    const size_t r = size_t(std::min_element(c, c + 3) - c);
+    out.insert({c[r], c[(r + 1) % 3], c[(r + 2) % 3]});
+  }
+  return out;
+}
+
+TEST(TesselatorMesh, ProjectVerticesPutsEveryVertexOnTheSurfaceWithOutwardNormals) {
+  Sphere sphere(600);
+  auto& s = sphere.s;
+  for (size_t i = 0; i < s.size(); ++i) s.pos[i] *= 1.02f;  // a little off the surface
+  projectVertices(s, sphere.options);
+  ASSERT_EQ(s.vpos.size(), s.size());
+  for (size_t i = 0; i < s.size(); ++i) {
+    ASSERT_TRUE(s.vok[i]) << i;
+    EXPECT_NEAR(glm::length(s.vpos[i]), kRadius, 1e-3f * sphere.options.desiredRadius) << i;
+    EXPECT_GT(glm::dot(s.nrm[i], glm::normalize(s.vpos[i])), 0.9999f) << i;
+    EXPECT_NEAR(s.vcol[i].z, 0.75f, 1e-5f) << "the only primitive's colour";
+    EXPECT_EQ(s.cacheValue[i], sphere.field.value(s.pos[i])) << "the sample at the particle is kept";
+  }
+  EXPECT_TRUE(s.cacheValid);
+}
+
+TEST(TesselatorMesh, ProjectVerticesLeavesOutParticlesFarOffTheSurface) {
+  Sphere sphere(600);
+  sphere.s.pos[7] *= 1.0f + 2.0f * sphere.options.desiredRadius;  // beyond kVertexOff
+  projectVertices(sphere.s, sphere.options);
+  EXPECT_FALSE(sphere.s.vok[7]);
+  EXPECT_TRUE(sphere.s.vok[8]);
+}
+
+TEST(TesselatorMesh, FansAreCounterClockwiseRingsOfNeighbours) {
+  Sphere sphere(600);
+  auto& s = sphere.s;
+  projectVertices(s, sphere.options);
+  buildFans(s, sphere.options);
+  for (size_t i = 0; i < s.size(); ++i) {
+    const size_t m = s.fanCount[i];
+    ASSERT_GE(m, 4u) << i;
+    ASSERT_LE(m, kMaxFan);
+    std::set<int32_t> labels;
+    for (size_t k = 0; k < m; ++k) {
+      const int32_t a = s.fan[i * kMaxFan + k], b = s.fan[i * kMaxFan + (k + 1) % m];
+      ASSERT_GE(a, 0) << "an evenly sampled sphere closes every cell with neighbours";
+      EXPECT_NE(a, int32_t(i));
+      labels.insert(a);
+      const glm::vec3 ea = s.vpos[size_t(a)] - s.vpos[i], eb = s.vpos[size_t(b)] - s.vpos[i];
+      EXPECT_GT(glm::dot(glm::cross(ea, eb), s.nrm[i]), 0.0f) << "counter-clockwise seen from outside, particle " << i;
+      EXPECT_LT(glm::length(ea), kFanRadius * sphere.options.desiredRadius);
+    }
+    EXPECT_EQ(labels.size(), m) << "no label twice";
+  }
+}
+
+TEST(TesselatorMesh, VotesEmitEachTriangleOnceWithItsCornersCount) {
+  Sphere sphere(600);
+  auto& s = sphere.s;
+  sphere.fansAndVotes();
+  std::set<std::tuple<uint32_t, uint32_t, uint32_t>> emitted;  // rotated so the smallest corner comes first
+  size_t unanimous = 0;
+  for (uint32_t i = 0; i < s.size(); ++i)
+    for (size_t k = 0; k < s.candCount[i]; ++k) {
+      const uint32_t* slot = &s.cand[(size_t(i) * kMaxFan + k) * 3];
+      const uint32_t a = slot[0], b = slot[1];
+      ASSERT_TRUE(fanHolds(s, i, a, b)) << "the emitter proposes it";
+      const bool byA = fanHolds(s, a, b, i), byB = fanHolds(s, b, i, a);
+      EXPECT_EQ(slot[2], 1u + byA + byB) << "votes: the corners whose fans hold it";
+      EXPECT_TRUE(!(byA && a < i) && !(byB && b < i)) << "emitted by its smallest proposer";
+      EXPECT_TRUE(s.candVotes[i] >> slot[2] & 1u);
+      const uint32_t lo = std::min({i, a, b});
+      const auto key = lo == i ? std::tuple(i, a, b) : lo == a ? std::tuple(a, b, i) : std::tuple(b, i, a);
+      EXPECT_TRUE(emitted.insert(key).second) << "emitted twice";
+      unanimous += slot[2] == 3;
+    }
+  size_t counted = 0;
+  for (size_t c = 1; c < s.chunkUnanimous.size(); ++c) counted += s.chunkUnanimous[c];
+  EXPECT_EQ(counted, unanimous);
+  EXPECT_GT(unanimous, s.size()) << "on an even sampling most triangles are unanimous (about 2 per particle)";
+}
+
+TEST(TesselatorMesh, AssemblyNeverReusesADirectedEdgeAndCountsTheBoundary) {
+  for (int threads : {1, 2}) {
+    Sphere sphere(600, threads);
+    auto& s = sphere.s;
+    sphere.fansAndVotes();
+    const size_t boundary = assembleTriangles(s, sphere.options);
+    EXPECT_EQ(boundary, openEdges(s));
+    EXPECT_GT(s.tris.size() / 3, 2 * s.size() - 40) << "nearly closed already (a sphere has 2n - 4)";
+    for (size_t i = 0; i < s.size(); ++i) {
+      size_t outgoing = 0;
+      for (size_t t = 0; t < s.tris.size(); ++t) outgoing += s.tris[t] == i;
+      EXPECT_EQ(s.heCount[i], outgoing) << "the half-edge table holds every outgoing edge of " << i;
+    }
+  }
+}
+
+// Passes A-C, then every candidate triangle around the given particles is withdrawn (no votes), so the assembly
+// leaves a hole of about six edges around each. (A fan-repeat flag sends it down its sequential path, which reads
+// only the candidates.)
+void punchHoles(Sphere& sphere, std::initializer_list<uint32_t> centres) {
+  auto& s = sphere.s;
+  sphere.fansAndVotes();
+  for (uint32_t i = 0; i < s.size(); ++i)
+    for (size_t k = 0; k < s.candCount[i]; ++k) {
+      uint32_t* slot = &s.cand[(size_t(i) * kMaxFan + k) * 3];
+      for (uint32_t c : centres)
+        if (i == c || slot[0] == c || slot[1] == c) slot[2] = 0;
+    }
+  s.fanRepeat[0] = 1;
+}
+
+TEST(TesselatorMesh, HoleRepairClosesTheHolesAroundMissingTriangles) {
+  Sphere sphere(600);
+  auto& s = sphere.s;
+  punchHoles(sphere, {5, 300, 301});
+  size_t boundary = assembleTriangles(s, sphere.options);
+  ASSERT_GE(boundary, 9u) << "holes to repair (two of the three may share one)";
+  EXPECT_EQ(boundary, openEdges(s));
+  const size_t assembled = s.tris.size() / 3;
+  const size_t unfilled = repairHoles(s, sphere.options, boundary);
+  EXPECT_EQ(unfilled, 0u);
+  EXPECT_EQ(boundary, 0u);
+  EXPECT_EQ(openEdges(s), 0u);
+  EXPECT_GT(s.tris.size() / 3, assembled);
+  Mesh mesh;
+  writeMesh(s, sphere.options, mesh);
+  const MeshTopology t = analyzeTopology(mesh);
+  EXPECT_EQ(t.boundaryEdges, 0u);
+  EXPECT_EQ(t.nonManifoldEdges, 0u);
+  EXPECT_EQ(t.orientationConflicts, 0u);
+  EXPECT_LE(t.unusedVertices, 3u) << "at most the three centres are left out";
+}
+
+TEST(TesselatorMesh, RepairLeavesLoopsLongerThanMaxHoleLoopOpen) {
+  Sphere sphere(600);
+  auto& s = sphere.s;
+  sphere.options.maxHoleLoop = 3;
+  punchHoles(sphere, {5});  // a hole of about six edges
+  size_t boundary = assembleTriangles(s, sphere.options);
+  ASSERT_GT(boundary, 3u);
+  EXPECT_GT(repairHoles(s, sphere.options, boundary), 0u);
+  EXPECT_GT(boundary, 0u);
+  EXPECT_EQ(boundary, openEdges(s));
+}
+
+// F: a vertex whose triangles form two closed fans (a square pyramid and a tetrahedron sharing their apex 0: every
+// edge has its twin, yet the mesh is pinched at 0) is found, the smaller fan's slots are marked, and the pass leaves
+// no pinched vertex, with the larger fan untouched.
+TEST(TesselatorMesh, PinchedVertexLosesItsSmallerFan) {
+  Sphere sphere(600);
+  auto& s = sphere.s;
+  projectVertices(s, sphere.options);
+  const std::vector<uint32_t> pyramid = {0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 4, 1, 1, 4, 3, 1, 3, 2};
+  const std::vector<uint32_t> tetrahedron = {0, 5, 6, 0, 6, 7, 0, 7, 5, 5, 7, 6};
+  std::vector<uint32_t> both = pyramid;
+  both.insert(both.end(), tetrahedron.begin(), tetrahedron.end());
+  setTriangles(s, both);
+  ASSERT_EQ(markPinchedVertices(s, sphere.options), 1u);
+  EXPECT_TRUE(s.openUp[0]);
+  size_t dropped = 0;
+  for (size_t k = 0; k < s.heCount[0]; ++k) {
+    const uint32_t to = s.heTo[k];
+    EXPECT_EQ(bool(s.dropSlot[k]), to >= 5) << "slot to " << to << ": only the tetrahedron's (smaller) fan goes";
+    dropped += s.dropSlot[k];
+  }
+  EXPECT_EQ(dropped, 3u);
+  size_t boundary = 0, unfilled = 0;
+  EXPECT_EQ(unpinchVertices(s, sphere.options, boundary, unfilled), 0u);
+  EXPECT_EQ(markPinchedVertices(s, sphere.options), 0u);
+  const auto left = triangleSet(s.tris);
+  for (const auto& t : triangleSet(pyramid)) EXPECT_TRUE(left.count(t)) << "a pyramid triangle is gone";
+  for (size_t t = 0; t < s.tris.size(); t += 3) {
+    const uint32_t* c = &s.tris[t];
+    const bool apex = c[0] == 0 || c[1] == 0 || c[2] == 0, tetra = c[0] >= 5 || c[1] >= 5 || c[2] >= 5;
+    EXPECT_FALSE(apex && tetra) << "a tetrahedron triangle at the apex is left";
+  }
+}
+
+// ---- Hand-built meshes: the octahedron on the unit sphere (vertices +x -x +y -y +z -z) --------------------------
+
+struct Octahedron : Sphere {
+  std::vector<uint32_t> corner;  // the particle at each axis point (findNeighbours sorts the particles)
+  Octahedron() : Sphere({{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}}, test::sphereOptions(6)) {
+    projectVertices(s, options);
+    for (const glm::vec3& axis : test::octahedronAxes())
+      for (uint32_t i = 0; i < s.size(); ++i)
+        if (glm::length(s.pos[i] - axis) < 1e-3f) corner.push_back(i);
+    EXPECT_EQ(corner.size(), 6u);
+  }
+  // Triangles over axis points (0..5: +x -x +y -y +z -z) as triangles over particles.
+  std::vector<uint32_t> particles(const std::vector<uint32_t>& axisTris) const {
+    std::vector<uint32_t> out;
+    for (uint32_t a : axisTris) out.push_back(corner[a]);
+    return out;
+  }
+  std::vector<uint32_t> faces() const { return particles(test::octahedronFaces()); }
+  // The octahedron without the given faces (over axis points, each as triangleSet writes it: its smallest corner
+  // first).
+  void buildWithout(const std::set<Triangle>& missing) {
+    std::vector<uint32_t> kept;
+    const std::vector<uint32_t> all = test::octahedronFaces();
+    for (size_t t = 0; t < all.size(); t += 3) {
+      const std::vector<uint32_t> face(all.begin() + long(t), all.begin() + long(t) + 3);
+      if (!missing.count(*triangleSet(face).begin())) kept.insert(kept.end(), face.begin(), face.end());
+    }
+    ASSERT_EQ(kept.size(), all.size() - 3 * missing.size()) << "every missing face is an octahedron face";
+    setTriangles(s, particles(kept));
+  }
+};
+
+TEST(TesselatorMesh, OctahedronFacesAreOutwardAndClosed) {
+  // The test's own construction, checked before the passes are: outward windings, every directed edge twinned.
+  Octahedron o;
+  const std::vector<uint32_t> faces = o.faces();
+  for (size_t t = 0; t < faces.size(); t += 3) {
+    const glm::vec3 a = o.s.vpos[faces[t]], b = o.s.vpos[faces[t + 1]], c = o.s.vpos[faces[t + 2]];
+    EXPECT_GT(glm::dot(glm::cross(b - a, c - a), a + b + c), 0.0f) << "face " << t / 3;
+  }
+  setTriangles(o.s, faces);
+  EXPECT_EQ(openEdges(o.s), 0u);
+}
+
+TEST(TesselatorMesh, ClosedMeshHasNoPinchAndRepairLeavesItAlone) {
+  Octahedron o;
+  setTriangles(o.s, o.faces());
+  EXPECT_EQ(markPinchedVertices(o.s, o.options), 0u) << "every vertex's four triangles form one disk";
+  size_t boundary = 0;
+  EXPECT_EQ(repairHoles(o.s, o.options, boundary), 0u);
+  EXPECT_EQ(boundary, 0u);
+  EXPECT_EQ(triangleSet(o.s.tris), triangleSet(o.faces()));
+  size_t unfilled = 0;
+  EXPECT_EQ(unpinchVertices(o.s, o.options, boundary, unfilled), 0u);
+  EXPECT_EQ(o.s.tris.size(), o.faces().size()) << "nothing to unpinch: no triangle removed";
+}
+
+TEST(TesselatorMesh, ATriangularHoleIsClosedWithTheMissingFace) {
+  Octahedron o;
+  o.buildWithout({{0, 2, 4}});
+  size_t boundary = openEdges(o.s);
+  ASSERT_EQ(boundary, 3u);
+  EXPECT_EQ(markPinchedVertices(o.s, o.options), 0u) << "a half-disk on the boundary is not a pinch";
+  EXPECT_EQ(repairHoles(o.s, o.options, boundary), 0u);
+  EXPECT_EQ(boundary, 0u);
+  EXPECT_EQ(openEdges(o.s), 0u);
+  EXPECT_EQ(triangleSet(o.s.tris), triangleSet(o.faces())) << "the only face that closes it, wound outward";
+  for (uint32_t v : o.corner) EXPECT_EQ(o.s.heCount[v], 4u) << "the half-edge table follows the new face";
+}
+
+TEST(TesselatorMesh, ASquareHoleIsClosedByTwoOutwardTriangles) {
+  Octahedron o;
+  o.buildWithout({{0, 2, 4}, {0, 5, 2}});  // the two faces on edge +x +y: a loop 0 4 2 5 ... of four edges
+  size_t boundary = openEdges(o.s);
+  ASSERT_EQ(boundary, 4u);
+  EXPECT_EQ(repairHoles(o.s, o.options, boundary), 0u);
+  EXPECT_EQ(boundary, 0u);
+  EXPECT_EQ(openEdges(o.s), 0u);
+  ASSERT_EQ(o.s.tris.size(), 8u * 3);
+  for (size_t t = 0; t < o.s.tris.size(); t += 3) {
+    const glm::vec3 a = o.s.vpos[o.s.tris[t]], b = o.s.vpos[o.s.tris[t + 1]], c = o.s.vpos[o.s.tris[t + 2]];
+    EXPECT_GT(glm::dot(glm::cross(b - a, c - a), a + b + c), 0.0f) << "triangle " << t / 3 << " faces outward";
+  }
+  Mesh mesh;
+  writeMesh(o.s, o.options, mesh);
+  const MeshTopology t = analyzeTopology(mesh);
+  EXPECT_EQ(t.boundaryEdges, 0u);
+  EXPECT_EQ(t.nonManifoldEdges, 0u);
+  EXPECT_EQ(t.orientationConflicts, 0u);
+  EXPECT_EQ(t.eulerCharacteristic, 2) << "a sphere";
+  EXPECT_EQ(mesh.vertexCount(), 6u) << "writeMesh: one vertex per particle";
+}
+
+}  // namespace
+}  // namespace imps
