@@ -154,8 +154,10 @@ std::vector<TexturedPart> splitByTexture(const Mesh& mesh) {
       glm::vec2 uv[3];
       for (int c = 0; c < 3; ++c)
         uv[c] = layer >= 0 ? mesh.layerUv(mesh.indices[3 * t + size_t(c)], layer) : glm::vec2(0.0f);
+      // Only a sphere generator's u wraps (longitude); a plane projector's u runs on past 1 and must stay as it is.
+      const bool wraps = layer >= 0 && mesh.layerGens[size_t(layer)].type == TexGenType::Sphere;
       bool seam = false;
-      for (int c = 1; c < 3; ++c) {
+      for (int c = 1; c < 3 && wraps; ++c) {
         const float shift = std::round(uv[c].x - uv[0].x);
         if (shift != 0.0f) {
           uv[c].x -= shift;

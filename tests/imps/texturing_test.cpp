@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 
@@ -168,6 +169,49 @@ TEST(TextureMesh, TheParticleTesselatorsMeshGetsLayersToo) {
     mixed += std::min(weightOf(mesh, v, 0), weightOf(mesh, v, 1)) > 0.2f;
   }
   EXPECT_GT(mixed, 3u);
+}
+
+// One triangle owned by a single generator: every corner takes that generator's (u, v) unchanged unless the
+// generator wraps. A plane projector's u is a straight line across the slide (0.2 ... 0.8 here, spanning more than
+// half a turn), so it must not be "unwrapped"; a sphere generator's triangle across its seam (u 0.95 and 0.05) is.
+Mesh oneTriangleOf(const TexGen& gen, const std::array<glm::vec3, 3>& corners) {
+  Mesh mesh;
+  for (const glm::vec3& p : corners) {
+    mesh.positions.insert(mesh.positions.end(), {p.x, p.y, p.z});
+    const glm::vec2 uv = gen.map(p);
+    mesh.layers.insert(mesh.layers.end(), {0, -1});
+    mesh.layerWeights.insert(mesh.layerWeights.end(), {1.0f, 0.0f});
+    mesh.texcoords.insert(mesh.texcoords.end(), {uv.x, uv.y});
+  }
+  mesh.indices = {0, 1, 2};
+  mesh.layerGens = {gen};
+  mesh.layerImages = {0};
+  return mesh;
+}
+
+TEST(SplitByTexture, OnlyASphereGeneratorsUWrapsAtItsSeam) {
+  TexGen plane;
+  plane.type = TexGenType::Plane;
+  plane.width = 1.0f;
+  const Mesh flat = oneTriangleOf(plane, {glm::vec3(-0.3f, 0, 0), glm::vec3(0.3f, 0, 0), glm::vec3(0, 0.2f, 0)});
+  const auto flatParts = splitByTexture(flat);
+  ASSERT_EQ(flatParts.size(), 1u);
+  ASSERT_EQ(flatParts[0].uvs.size(), 6u);
+  for (uint32_t c = 0; c < 3; ++c) {
+    const glm::vec2 uv = plane.map(flat.position(c));
+    EXPECT_FLOAT_EQ(flatParts[0].uvs[2 * c], uv.x) << "corner " << c;
+    EXPECT_FLOAT_EQ(flatParts[0].uvs[2 * c + 1], uv.y) << "corner " << c;
+  }
+  EXPECT_NEAR(flatParts[0].uvs[2] - flatParts[0].uvs[0], 0.6f, 1e-6f);
+
+  TexGen sphere;  // seam behind, on -z: corners just either side of it
+  const Mesh round = oneTriangleOf(sphere, {glm::vec3(-0.05f, 0, -1), glm::vec3(0.05f, 0, -1), glm::vec3(0, 0.1f, -1)});
+  const float u0 = sphere.map(round.position(0)).x, u1 = sphere.map(round.position(1)).x;
+  ASSERT_GT(std::abs(u1 - u0), 0.5f);  // the seam lies between the first two corners
+  const auto roundParts = splitByTexture(round);
+  ASSERT_EQ(roundParts.size(), 1u);
+  for (uint32_t c = 1; c < 3; ++c)
+    EXPECT_LT(std::abs(roundParts[0].uvs[2 * c] - roundParts[0].uvs[0]), 0.5f) << "corner " << c << " unwrapped";
 }
 
 }  // namespace
