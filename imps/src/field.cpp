@@ -137,7 +137,8 @@ void Field::prepareSets(FieldScratch& scratch) const {
     }
   } else {
     // Restrict every set to the candidates (as positions in the candidate list, still ascending).
-    thread_local std::vector<uint32_t> offsets, members;
+    auto& offsets = scratch.restrictOffsets;
+    auto& members = scratch.restrictMembers;
     offsets.assign(1, 0);
     members.clear();
     scratch.globalToLocal.resize(primitives_.size(), -1);
@@ -171,7 +172,7 @@ void Field::prepareSets(FieldScratch& scratch) const {
   for (uint32_t m : scratch.setMembers) ++scratch.memberOffsets[m + 1];
   for (size_t k = 0; k < cand.size(); ++k) scratch.memberOffsets[k + 1] += scratch.memberOffsets[k];
   scratch.memberSets.resize(scratch.setMembers.size());
-  thread_local std::vector<uint32_t> fill;
+  auto& fill = scratch.fill;
   fill.assign(scratch.memberOffsets.begin(), scratch.memberOffsets.end() - 1);
   for (size_t s = 0; s < scratch.setCount(); ++s)
     for (uint32_t m = scratch.setOffsets[s]; m < scratch.setOffsets[s + 1]; ++m)
@@ -563,8 +564,9 @@ FieldSample Field::sample(const glm::vec3& x, FieldScratch& scratch) const {
   // the additive blends get each distance's gradient in the same pass.
   const bool additive = blend_.additive();
   const float none = additive ? 0.0f : -1.0f;
-  thread_local std::vector<float> t, dist;
-  thread_local std::vector<glm::vec3> dGrad;
+  auto& t = scratch.pointTerms;
+  auto& dist = scratch.pointDistances;
+  auto& dGrad = scratch.pointGradients;
   t.resize(cand.size());
   dist.resize(cand.size());
   dGrad.resize(cand.size());
@@ -633,7 +635,7 @@ void Field::contributions(const glm::vec3& x, FieldScratch& scratch,
   if (sets == 0) return;
   // sample()'s terms and winning set (the first maximum), without the gradient.
   const bool additive = blend_.additive();
-  thread_local std::vector<float> t;
+  auto& t = scratch.pointTerms;
   t.assign(cand.size(), additive ? 0.0f : -1.0f);
   for (size_t k = 0; k < cand.size(); ++k) {
     const uint32_t i = cand[k];
@@ -690,9 +692,7 @@ void Field::samples(std::span<const glm::vec3> points, std::span<FieldSample> ou
   // every point (vectorised): its distance gradient everywhere, then the points where it is a member of the
   // winning set with a positive term take its contribution. Per point this is sample()'s arithmetic in sample()'s
   // order (candidates ascending), so the bits are the same.
-  thread_local std::vector<float> d, dgx, dgy, dgz, gx, gy, gz, cr, cg, cb, weight, bestWeight;
-  thread_local std::vector<int32_t> owner;
-  thread_local std::vector<uint8_t> use, isMember;
+  auto& [d, dgx, dgy, dgz, gx, gy, gz, cr, cg, cb, weight, bestWeight, owner, use, isMember] = scratch.lanes;
   for (auto* v : {&d, &dgx, &dgy, &dgz}) v->resize(n);
   for (auto* v : {&gx, &gy, &gz, &cr, &cg, &cb, &weight}) v->assign(n, 0.0f);
   bestWeight.assign(n, -1.0f);
@@ -743,7 +743,7 @@ void Field::samples(std::span<const glm::vec3> points, std::span<FieldSample> ou
   }
 }
 
-float Field::upperBound(std::span<const float> minDistances, const FieldScratch& scratch) const {
+float Field::upperBound(std::span<const float> minDistances, FieldScratch& scratch) const {
   const auto& cand = scratch.candidates;
   IMPS_CHECK_EQ(minDistances.size(), cand.size());
   if (!blend_.additive()) {
@@ -752,7 +752,7 @@ float Field::upperBound(std::span<const float> minDistances, const FieldScratch&
     return 0.0f;
   }
   // Each set's sum is at most the sum of its members' largest terms in the box.
-  thread_local std::vector<float> t;
+  auto& t = scratch.pointTerms;
   t.resize(cand.size());
   for (size_t k = 0; k < cand.size(); ++k) t[k] = blend_.term(minDistances[k], params_[cand[k]]);
   float best = 0.0f;

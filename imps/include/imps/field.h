@@ -50,6 +50,16 @@ struct FieldScratch {
   uint32_t lastWinner = 0;                        // sample(): the winning local set of the last call
   std::vector<uint8_t> setStarted;               // accumulate(): which sets hold a value yet
   std::vector<int32_t> globalToLocal;
+  // Working storage of single calls, kept here so a worker reuses it from call to call (no allocation once grown)
+  // and no two workers share it. Each belongs to one function: calls that nest (samples() -> sample()) never alias.
+  std::vector<uint32_t> restrictOffsets, restrictMembers, fill;  // prepareSets()
+  std::vector<float> pointTerms, pointDistances;                 // sample(), contributions(), upperBound()
+  std::vector<glm::vec3> pointGradients;                         // sample()
+  struct Lanes {                                                 // samples(): one value per point
+    std::vector<float> d, dgx, dgy, dgz, gx, gy, gz, cr, cg, cb, weight, bestWeight;
+    std::vector<int32_t> owner;
+    std::vector<uint8_t> use, isMember;
+  } lanes;
   size_t setCount() const { return setOffsets.size() - 1; }
 };
 
@@ -108,7 +118,7 @@ class Field {
   // Conservative bounds of F over a box inside the prepared region: lower <= F(x) <= upper for all x in box.
   // upperBound() takes what it needs of the box, minDistances[k] <= the smallest kernel distance of candidate k
   // (scratch.candidates[k]) in the box, e.g. its Primitive::minDistance(box), which callers often have already.
-  float upperBound(std::span<const float> minDistances, const FieldScratch& scratch) const;
+  float upperBound(std::span<const float> minDistances, FieldScratch& scratch) const;
   float lowerBound(const Box& box, const FieldScratch& scratch) const;
 
  private:
