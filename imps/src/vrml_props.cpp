@@ -287,6 +287,8 @@ Mesh transformed(const Mesh& mesh, const Rigid& pose) {
   return out;
 }
 
+Mesh transformed(const Mesh& mesh, const glm::mat4& matrix) { return transformedBy(mesh, matrix); }
+
 std::vector<Prop> readProps(const VrmlFile& file, Diagnostics* warnings) {
   std::vector<Prop> props;
   Diagnostics d;

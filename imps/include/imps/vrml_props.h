@@ -41,5 +41,8 @@ Mesh coneMesh(float bottomRadius, float height);
 
 // `mesh` moved by the rigid transform `pose` (positions and normals).
 Mesh transformed(const Mesh& mesh, const Rigid& pose);
+// `mesh` moved by an affine `matrix` (normals by its inverse transpose, renormalised; a mirroring matrix turns the
+// triangles round so they keep facing outwards).
+Mesh transformed(const Mesh& mesh, const glm::mat4& matrix);
 
 }  // namespace imps
