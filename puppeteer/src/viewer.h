@@ -43,8 +43,19 @@ class PoseSource {
   virtual int exitCode() const { return 0; }
 };
 
+// Another character in the same window (a world, `puppeteer view WORLD`): its own pipeline (polygonizer, skeleton
+// cache, placement) and its own pose source (null: it keeps its pose). Neither is owned.
+struct ViewerActor {
+  ViewerPipeline* pipeline = nullptr;
+  PoseSource* source = nullptr;
+};
+
 struct ViewerOptions {
   int width = 1280, height = 720;  // window size in pixels
+  // More characters drawn beside the main pipeline's, each polygonized and posed every frame like it; their meshes
+  // (and textures) join the main mesh for upload. The modeller, painter and HUD serve the main pipeline; the camera
+  // frames them all. Not with `overlap`.
+  std::vector<ViewerActor> others;
   // Polygonal props drawn with the character's mesh, attached ones following their joints (`--prop`; not with
   // `overlap`, where the worker thread owns the skeleton cache).
   std::vector<AttachedProp> props;
