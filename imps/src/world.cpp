@@ -39,6 +39,7 @@ struct Inlined {
   SourceLoc loc;         // the url field
   std::string defName;   // the Inline's DEF name
   glm::mat4 matrix{1.0f};
+  std::vector<WorldTransform> chain;  // the Transforms above, outermost first
   std::string nearestDef;  // the nearest DEF'd Transform above
   std::optional<VrmlFile> file;  // Kind::Vrml
 };
@@ -48,20 +49,29 @@ class WorldReader {
   WorldReader(const VrmlFile& file, Diagnostics& d) : file_(file), d_(d), folder_(fs::path(file.fileName).parent_path()) {}
 
   // Walks the world's nodes; every children list's Inlines are resolved together (a clip drives its sibling).
+  // `chain_` holds the Transforms above the node (their DEF names and fields), so a world clip can move them.
   void walk(const VrmlNode& written, const std::string& nearest, const glm::mat4& matrix, int depth) {
     if (depth > 256) return;
     const VrmlNode& node = written.resolved();
+    if (node.type == "Shape") {
+      shape(written, nearest, matrix);
+      return;
+    }
     glm::mat4 here = matrix;
     std::string nearestDef = nearest;
-    if (node.type == "Transform") {
-      here = matrix * transformValuesOf(node).matrix();
+    const bool transform = node.type == "Transform";
+    if (transform) {
+      const TransformValues v = transformValuesOf(node);
+      here = matrix * v.matrix();
       if (!written.defName.empty()) nearestDef = written.defName;
+      chain_.push_back({written.defName, v});
     }
-    if (node.type != "Transform" && node.type != "Group" && node.type != "Anchor" && node.type != "Billboard" &&
-        node.type != "Collision" && !written.protoBody)
-      return;
-    for (const VrmlField& field : node.fields)
-      if (field.name == "children") siblings(field.nodes, nearestDef, here, depth);
+    if (transform || node.type == "Group" || node.type == "Anchor" || node.type == "Billboard" ||
+        node.type == "Collision" || written.protoBody) {
+      for (const VrmlField& field : node.fields)
+        if (field.name == "children") siblings(field.nodes, nearestDef, here, depth);
+    }
+    if (transform) chain_.pop_back();
   }
 
   void siblings(const std::vector<VrmlNodeRef>& nodes, const std::string& nearest, const glm::mat4& matrix, int depth) {
@@ -77,11 +87,31 @@ class WorldReader {
     group(std::move(inlined));
   }
 
+  // A Shape of the world: its mesh in its own coordinates (readProps of the Shape alone) under the current chain.
+  void shape(const VrmlNode& written, const std::string& nearest, const glm::mat4& matrix) {
+    VrmlFile alone;
+    alone.fileName = file_.fileName;
+    alone.roots.push_back(VrmlNodeRef(&written, [](const VrmlNode*) {}));  // not owned: the file outlives it
+    for (Prop& p : readProps(alone, &d_)) {
+      if (p.name == "prop1") p.name = nearest.empty() ? "prop" + std::to_string(props_.size() + 1) : nearest;
+      addProp(std::move(p), matrix);
+    }
+  }
+
+  void addProp(Prop p, const glm::mat4& matrix) {
+    propLocal_.push_back(p.mesh);
+    propChains_.push_back(chain_);
+    p.mesh = transformed(p.mesh, matrix);
+    props_.push_back(std::move(p));
+  }
+
   World finish() && {
     World world;
     world.fileName = file_.fileName;
     world.characters = std::move(characters_);
     world.props = std::move(props_);
+    world.propLocal = std::move(propLocal_);
+    world.propChains = std::move(propChains_);
     return world;
   }
 
@@ -130,6 +160,7 @@ class WorldReader {
       i.loc = at;
       i.defName = written.defName;
       i.matrix = matrix;
+      i.chain = chain_;
       i.nearestDef = nearest;
       const bool vrml = text.starts_with("#VRML") || text.starts_with("\xEF\xBB\xBF#VRML");
       if (!vrml) {
@@ -175,9 +206,10 @@ class WorldReader {
     for (Inlined& i : inlined) {
       if (i.kind != Inlined::Kind::Vrml) continue;
       nestedInlines(i);
-      for (Prop& p : readProps(*i.file, &d_)) {
-        p.mesh = transformed(p.mesh, i.matrix);
-        props_.push_back(std::move(p));
+      {
+        const std::vector<WorldTransform> outer = std::exchange(chain_, i.chain);
+        for (Prop& p : readProps(*i.file, &d_)) addProp(std::move(p), i.matrix);
+        chain_ = outer;
       }
       auto clips = readClips(*i.file, &d_);
       if (!clips) {
@@ -279,7 +311,7 @@ class WorldReader {
     used_[name] = 1;
     characters_.push_back(WorldCharacter{name, c.path, c.loc, placement, std::move(*scene), std::move(*character),
                                          std::move(clip), clipFrom ? clipFrom->path : std::string(),
-                                         clipFrom ? clipFrom->loc : SourceLoc{}});
+                                         clipFrom ? clipFrom->loc : SourceLoc{}, c.chain});
   }
 
   const VrmlFile& file_;
@@ -287,10 +319,54 @@ class WorldReader {
   fs::path folder_;
   std::vector<WorldCharacter> characters_;
   std::vector<Prop> props_;
+  std::vector<Mesh> propLocal_;
+  std::vector<std::vector<WorldTransform>> propChains_;
+  std::vector<WorldTransform> chain_;
   std::map<std::string, int, std::less<>> used_;
 };
 
+// The rotation of an affine matrix's linear part with its scale divided out.
+Rigid rigidOf(const glm::mat4& m) {
+  glm::mat3 r(m);
+  for (int k = 0; k < 3; ++k) {
+    const float length = glm::length(r[k]);
+    if (length > 0.0f) r[k] /= length;
+  }
+  Rigid out;
+  out.rotation = glm::normalize(glm::quat_cast(r));
+  out.translation = glm::vec3(m[3]);
+  return out;
+}
+
 }  // namespace
+
+std::map<std::string, TransformValues, std::less<>> World::transformsAt(double seconds) const {
+  std::map<std::string, TransformValues, std::less<>> out;
+  for (const Clip& c : clips)
+    for (auto& [name, values] : c.sample(c.fraction(seconds))) out[name] = values;
+  return out;
+}
+
+glm::mat4 World::chainMatrix(const std::vector<WorldTransform>& chain,
+                             const std::map<std::string, TransformValues, std::less<>>& moved) {
+  glm::mat4 m(1.0f);
+  for (const WorldTransform& t : chain) {
+    const auto it = t.def.empty() ? moved.end() : moved.find(t.def);
+    m = m * (it != moved.end() ? it->second : t.rest).matrix();
+  }
+  return m;
+}
+
+World::Pose World::poseAt(double seconds) const {
+  Pose pose;
+  const auto moved = transformsAt(seconds);
+  for (const WorldCharacter& c : characters)
+    pose.placements.push_back(clips.empty() ? c.placement : rigidOf(chainMatrix(c.chain, moved)));
+  for (size_t p = 0; p < props.size(); ++p)
+    pose.props.push_back(clips.empty() || p >= propLocal.size() ? props[p].mesh
+                                                                : transformed(propLocal[p], chainMatrix(propChains[p], moved)));
+  return pose;
+}
 
 int World::findCharacter(std::string_view name) const {
   for (size_t k = 0; k < characters.size(); ++k)
@@ -325,16 +401,9 @@ std::expected<World, Diagnostics> readWorldFile(const std::string& path, Diagnos
   WorldReader reader(*file, d);
   reader.siblings(file->roots, "", glm::mat4(1.0f), 0);
   World world = std::move(reader).finish();
-  {
-    // The world's own Shapes are props in world coordinates (readProps does not enter Inlines: none counts twice).
-    std::vector<Prop> own = readProps(*file, &d);
-    world.props.insert(world.props.begin(), std::make_move_iterator(own.begin()), std::make_move_iterator(own.end()));
-  }
-  if (auto clips = readClips(*file, &d); clips && !clips->clips.empty())
-    d.warning(clips->clips.front().loc, "the world's own clips (" + std::to_string(clips->clips.size()) +
-                                            ") are listed by `puppeteer check` but not played: a clip drives a "
-                                            "character when inlined beside it");
-  else if (!clips)
+  if (auto clips = readClips(*file, &d); clips)
+    world.clips = std::move(clips->clips);
+  else
     d.append(clips.error());
   if (!d.hasErrors() && world.characters.empty())
     d.warning(SourceLoc{path, 1, 1}, "the world places no character (an Inline of an IMPS scene file)");

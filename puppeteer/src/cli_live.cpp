@@ -392,10 +392,27 @@ int runWorldView(const LiveArgs& a) {
   ViewerOptions v = viewerOptions(a, "IMPS Puppeteer: " + a.scene);
   v.manipulators = false;  // a world is watched and driven; characters are edited in their own scene files
   for (const Prop& p : world->props) v.props.push_back({p.name, p.mesh, -1});
-  for (size_t k = 1; k < actors.size(); ++k) v.others.push_back({actors[k].pipeline.get(), actors[k].source.get()});
+  // The world's own clips move placements (each character's source wrapped) and props, on one time line.
+  const WorldTime time(a.frames > 0 ? 1.0 / 60.0 : 0.0);
+  std::vector<std::unique_ptr<PlacedPoseSource>> placed;
+  if (!world->clips.empty()) {
+    for (size_t k = 0; k < actors.size(); ++k)
+      placed.push_back(std::make_unique<PlacedPoseSource>(*world, k, actors[k].source.get(), time));
+    v.moveProps = [&world, time](int frame, std::vector<AttachedProp>& props) {
+      World::Pose pose = world->poseAt(time.seconds(frame));
+      for (size_t p = 0; p < props.size() && p < pose.props.size(); ++p) props[p].mesh = std::move(pose.props[p]);
+      return true;
+    };
+    std::printf("puppeteer: world %s: %zu clip%s of its own\n", a.scene.c_str(), world->clips.size(),
+                world->clips.size() == 1 ? "" : "s");
+  }
+  auto sourceOf = [&](size_t k) -> PoseSource* {
+    return placed.empty() ? actors[k].source.get() : placed[k].get();
+  };
+  for (size_t k = 1; k < actors.size(); ++k) v.others.push_back({actors[k].pipeline.get(), sourceOf(k)});
   v.script = std::move(*script);
   std::printf("puppeteer: world %s: %zu characters, %zu props\n", a.scene.c_str(), actors.size(), world->props.size());
-  return runViewer(*actors[0].pipeline, actors[0].source.get(), v);
+  return runViewer(*actors[0].pipeline, sourceOf(0), v);
 }
 
 int runView(const LiveArgs& a) {

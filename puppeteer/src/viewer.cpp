@@ -481,6 +481,8 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
     int64_t inFlightArrival = 0;  // arrival of the sample whose pose is being polygonized (0: none new)
     int64_t meshArrival = 0;      // arrival of the sample whose mesh is about to be drawn
     uint64_t uploadedVersion = ~uint64_t{0};
+    std::vector<AttachedProp> props = options.props;  // moved by options.moveProps
+    uint64_t propsVersion = 0;
     // 1. Newest pose: never waits for the source.
     auto pollPose = [&] {
       int64_t newArrival = 0;
@@ -534,14 +536,15 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
       }
       // 3. Upload, only a new mesh.
       const bool drawParticles = s.showParticles && pipeline.polygonizer() == Polygonizer::Particles;
-      uint64_t version = pipeline.meshVersion();
+      if (options.moveProps && options.moveProps(frame, props)) ++propsVersion;
+      uint64_t version = pipeline.meshVersion() * 1000003u + propsVersion;
       for (const ViewerActor& a : options.others) version = version * 1000003u + a.pipeline->meshVersion();
       if (version != uploadedVersion) {
-        if ((options.props.empty() && options.others.empty()) || worker) {
+        if ((props.empty() && options.others.empty()) || worker) {
           renderer->uploadMesh(pipeline.mesh());
         } else {
           Mesh withProps = pipeline.mesh();  // the props posed like the character this frame
-          appendPosedProps(withProps, options.props, pipeline.skeleton());
+          appendPosedProps(withProps, props, pipeline.skeleton());
           appendOthers(withProps, pipeline, options);
           renderer->uploadMesh(withProps);
         }

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 
 #include <vector>
@@ -59,6 +60,9 @@ struct ViewerOptions {
   // Polygonal props drawn with the character's mesh, attached ones following their joints (`--prop`; not with
   // `overlap`, where the worker thread owns the skeleton cache).
   std::vector<AttachedProp> props;
+  // Called once per frame before the upload with the frame's number and the props (a world's own clips moving
+  // them); returns true when it moved any. Null: the props stay.
+  std::function<bool(int frame, std::vector<AttachedProp>& props)> moveProps;
   // > 0: render this many frames (after the initial settle), then close; the headless mode for tests and docs.
   int frames = 0;
   // Written after the last frame when frames > 0 (PNG).

@@ -8,6 +8,7 @@
 #include "imps/skeleton_cache.h"
 #include "imps/texturing.h"
 #include "textures.h"
+#include "imps/clock.h"
 
 namespace imps::app {
 
@@ -68,10 +69,11 @@ std::optional<std::vector<WorldObject>> poseWorld(const World& world, const std:
                                                   double seconds, const MarchingCubesOptions& options,
                                                   std::vector<RgbaImage>* textures, const char* command) {
   std::vector<WorldObject> out;
+  World::Pose pose = world.poseAt(seconds);  // the world's own clips move placements and props
   for (size_t k = 0; k < world.characters.size(); ++k) {
     const WorldCharacter& c = world.characters[k];
     SkeletonCache skeleton(c.character);
-    skeleton.setPlacement(c.placement);
+    skeleton.setPlacement(pose.placements[k]);
     const std::string& source = k < sources.size() ? sources[k] : std::string();
     std::optional<ClipDriver> driver;
     if (!source.empty()) {
@@ -115,8 +117,48 @@ std::optional<std::vector<WorldObject>> poseWorld(const World& world, const std:
     }
     out.push_back({c.name, std::move(mesh), true});
   }
-  for (const Prop& p : world.props) out.push_back({p.name, p.mesh, false});
+  for (size_t p = 0; p < world.props.size(); ++p) out.push_back({world.props[p].name, std::move(pose.props[p]), false});
   return out;
+}
+
+WorldTime::WorldTime(double fixedStepSeconds) : fixedStep_(fixedStepSeconds), startNs_(steadyNowNs()) {}
+
+double WorldTime::seconds(int frame) const {
+  return fixedStep_ > 0.0 ? fixedStep_ * frame : double(steadyNowNs() - startNs_) * 1e-9;
+}
+
+PlacedPoseSource::PlacedPoseSource(const World& world, size_t character, PoseSource* inner, WorldTime time)
+    : world_(world), character_(character), inner_(inner), time_(time) {}
+
+bool PlacedPoseSource::poll(SkeletonCache& skeleton, int64_t* arrivalNs) {
+  bool changed = inner_ != nullptr && inner_->poll(skeleton, arrivalNs);
+  const auto moved = world_.transformsAt(time_.seconds(frames_));
+  glm::mat4 m = World::chainMatrix(world_.characters[character_].chain, moved);
+  glm::mat3 r(m);
+  for (int k = 0; k < 3; ++k)
+    if (const float length = glm::length(r[k]); length > 0.0f) r[k] /= length;
+  Rigid placement;
+  placement.rotation = glm::normalize(glm::quat_cast(r));
+  placement.translation = glm::vec3(m[3]);
+  if (placement.rotation != skeleton.placement().rotation || placement.translation != skeleton.placement().translation) {
+    skeleton.setPlacement(placement);
+    changed = true;
+  }
+  return changed;
+}
+
+void PlacedPoseSource::describe(HudInfo& info) {
+  if (inner_ != nullptr) {
+    inner_->describe(info);
+  } else {
+    info.source = world_.characters[character_].name + ": world clips";
+    info.state = "playing";
+  }
+}
+
+void PlacedPoseSource::frameDone() {
+  ++frames_;
+  if (inner_ != nullptr) inner_->frameDone();
 }
 
 }  // namespace imps::app

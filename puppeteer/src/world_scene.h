@@ -11,6 +11,7 @@
 #include "imps/mesh.h"
 #include "imps/world.h"
 #include "png.h"
+#include "viewer.h"
 
 namespace imps::app {
 
@@ -44,5 +45,41 @@ struct WorldObject {
 std::optional<std::vector<WorldObject>> poseWorld(const World& world, const std::vector<std::string>& sources,
                                                   double seconds, const MarchingCubesOptions& options,
                                                   std::vector<RgbaImage>* textures, const char* command);
+
+// The time of a world's own clips in the app: a fixed step per frame (headless runs, repeatable), else the steady
+// clock since construction.
+class WorldTime {
+ public:
+  explicit WorldTime(double fixedStepSeconds);
+  double seconds(int frame) const;
+
+ private:
+  double fixedStep_ = 0.0;
+  int64_t startNs_ = 0;
+};
+
+// A character's pose source in an animated world: its own source (may be null) plus its placement under the
+// world's clips (World::chainMatrix of its Transforms), set on the skeleton cache every frame it moves. Forwards
+// everything else to the inner source, which must outlive it.
+class PlacedPoseSource : public PoseSource {
+ public:
+  PlacedPoseSource(const World& world, size_t character, PoseSource* inner, WorldTime time);
+  bool poll(SkeletonCache& skeleton, int64_t* arrivalNs) override;
+  void describe(HudInfo& info) override;
+  void frameDone() override;
+  std::string toggleRecording() override { return inner_ ? inner_->toggleRecording() : PoseSource::toggleRecording(); }
+  std::string recalibrate() override { return inner_ ? inner_->recalibrate() : PoseSource::recalibrate(); }
+  bool handlesDeviceKeys() const override { return inner_ && inner_->handlesDeviceKeys(); }
+  std::string takeMessage() override { return inner_ ? inner_->takeMessage() : std::string(); }
+  std::string finish() override { return inner_ ? inner_->finish() : std::string(); }
+  int exitCode() const override { return inner_ ? inner_->exitCode() : 0; }
+
+ private:
+  const World& world_;
+  size_t character_;
+  PoseSource* inner_;
+  WorldTime time_;
+  int frames_ = 0;
+};
 
 }  // namespace imps::app

@@ -125,6 +125,35 @@ TEST_F(WorldFiles, ErrorsPointIntoTheWorld) {
   EXPECT_NE(w.error().str().find("bad.wrl:2:14: note:"), std::string::npos) << w.error().str();
 }
 
+// The world's own clip moves the Transforms it drives: a character's placement and a prop below them follow, the
+// rest stays; at 0 s the pose is the file's.
+TEST_F(WorldFiles, TheWorldsOwnClipsMovePlacementsAndProps) {
+  const std::string world = write("w.wrl",
+                                  "#VRML V2.0 utf8\n"
+                                  "DEF CART Transform { translation 1 0 0 children [\n"
+                                  "  DEF RIDER Transform { translation 0 1 0 children [ Inline { url \"ball.wrl\" } ] }\n"
+                                  "  Shape { geometry Box { size 0.1 0.1 0.1 } }\n"
+                                  "] }\n"
+                                  "DEF STILL Transform { children [ Inline { url \"ball.wrl\" } ] }\n"
+                                  "DEF T TimeSensor { cycleInterval 2 loop TRUE }\n"
+                                  "DEF P PositionInterpolator { key [ 0 1 ] keyValue [ 1 0 0, 5 0 0 ] }\n"
+                                  "ROUTE T.fraction_changed TO P.set_fraction\nROUTE P.value_changed TO CART.set_translation\n");
+  auto w = readWorldFile(world);
+  ASSERT_TRUE(w.has_value()) << w.error().str();
+  ASSERT_EQ(w->clips.size(), 1u);
+  ASSERT_EQ(w->characters.size(), 2u);
+  ASSERT_EQ(w->props.size(), 1u);
+  const World::Pose start = w->poseAt(0.0), half = w->poseAt(0.5);
+  EXPECT_NEAR(glm::length(start.placements[0].translation - w->characters[0].placement.translation), 0.0f, 1e-6f);
+  EXPECT_NEAR(glm::length(start.placements[0].translation - glm::vec3(1, 1, 0)), 0.0f, 1e-6f);
+  // 0.5 s of 2 s: a quarter of the way from x = 1 to x = 5.
+  EXPECT_NEAR(glm::length(half.placements[0].translation - glm::vec3(2, 1, 0)), 0.0f, 1e-5f);
+  EXPECT_NEAR(glm::length(half.placements[1].translation - w->characters[1].placement.translation), 0.0f, 1e-6f);
+  const glm::vec3 before = 0.5f * (bounds(start.props[0]).min + bounds(start.props[0]).max);
+  const glm::vec3 after = 0.5f * (bounds(half.props[0]).min + bounds(half.props[0]).max);
+  EXPECT_NEAR(glm::length(after - before - glm::vec3(1, 0, 0)), 0.0f, 1e-5f);
+}
+
 TEST(World, TheBundledWorldsRead) {
   for (const char* name : {"two_bipeds.wrl", "beanito_and_flubber.wrl"}) {
     Diagnostics warnings;

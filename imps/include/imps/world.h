@@ -5,6 +5,7 @@
 #pragma once
 
 #include <expected>
+#include <map>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -17,6 +18,12 @@
 #include "imps/vrml_props.h"
 
 namespace imps {
+
+// One Transform above a character or prop: its DEF name ("" without one) and its fields as the file gives them.
+struct WorldTransform {
+  std::string def;
+  TransformValues rest;
+};
 
 // One character of a world.
 struct WorldCharacter {
@@ -33,13 +40,33 @@ struct WorldCharacter {
   std::optional<Clip> clip;
   std::string clipPath;  // that file, resolved
   SourceLoc clipLoc;     // its Inline's url
+  std::vector<WorldTransform> chain;  // the Transforms above the Inline, outermost first (placement = their product)
 };
 
 struct World {
   std::string fileName;
   std::vector<WorldCharacter> characters;  // in file order (depth first)
-  // Every Shape of the world file and of the VRML 97 files it inlines, in world coordinates.
+  // Every Shape of the world file and of the VRML 97 files it inlines, in world coordinates (the file's pose).
   std::vector<Prop> props;
+  // The same meshes below their Transforms (propLocal[i] in the coordinates under propChains[i]).
+  std::vector<Mesh> propLocal;
+  std::vector<std::vector<WorldTransform>> propChains;
+  // The world file's own clips (its TimeSensors driving its Transforms), all played from 0 s: they move the
+  // characters' placements and the props under the Transforms they drive.
+  std::vector<Clip> clips;
+
+  // Where everything is `seconds` into the world's clips: each character's placement (rigid: a driven scale is
+  // divided out) and each prop's mesh in world coordinates. Without clips, the file's pose.
+  struct Pose {
+    std::vector<Rigid> placements;
+    std::vector<Mesh> props;
+  };
+  Pose poseAt(double seconds) const;
+  // The driven Transforms' fields at `seconds` (every clip sampled; a later clip wins a Transform both drive).
+  std::map<std::string, TransformValues, std::less<>> transformsAt(double seconds) const;
+  // The product of a chain's Transforms, those in `moved` taking its values.
+  static glm::mat4 chainMatrix(const std::vector<WorldTransform>& chain,
+                               const std::map<std::string, TransformValues, std::less<>>& moved);
 
   // The character called `name`, or -1.
   int findCharacter(std::string_view name) const;
@@ -60,8 +87,7 @@ bool namesImpsNodes(std::string_view text);
 // no readable file, an inlined file that is neither an IMPS scene nor VRML 97, a character under a scaling or
 // mirroring Transform, two characters in one children list, a `#NAME` naming no clip, an inlined world that inlines
 // further files (not followed). Warnings: a clip Inline with no character beside it (its Shapes are still props), a
-// world without characters, renamed duplicate names, the world file's own clips (not played yet), and the readers'
-// warnings. Thread-safe.
+// world without characters, renamed duplicate names, and the readers' warnings. Thread-safe.
 std::expected<World, Diagnostics> readWorldFile(const std::string& path, Diagnostics* warnings = nullptr);
 
 }  // namespace imps
