@@ -680,6 +680,12 @@ int runReplay(const LiveArgs& given) {
 
 int runLive(const LiveArgs& a) {
   if (int rc = checkOutputArgs(a, "live"); rc != kExitOk) return rc;
+  if (isWorldFile(a.scene)) {
+    std::fprintf(stderr, "puppeteer live: error: %s is a world: drive its characters with `puppeteer view %s "
+                         "--drive NAME=%s` (docs/world-format.md#worlds)\n",
+                 a.scene.c_str(), a.scene.c_str(), a.device.c_str());
+    return kExitUsage;
+  }
   if (!checkOscOutArgs(a)) return kExitUsage;
   // --rig alone is allowed here: key k calibrates it (and saves to --calibration-out); until then channels map by
   // name.
