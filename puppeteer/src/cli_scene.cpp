@@ -90,6 +90,10 @@ int runWorldMesh(const MeshArgs& a) {
   options.maxCells = a.maxCells;
   auto objects = poseWorld(*world, *sources, a.at, options, nullptr, "mesh");
   if (!objects) return kExitInvalidInput;
+  for (const WorldCharacter& c : world->characters)
+    if (c.character.textured())
+      std::fprintf(stderr, "puppeteer mesh: note: %s's textures are not written with the world's objects (its vertex "
+                           "colours are)\n", c.name.c_str());
   std::vector<NamedMesh> named;
   for (const WorldObject& o : *objects) named.push_back({o.name, &o.mesh});
   return writeObjects("mesh", a.scene, named, a.output, a.json);
