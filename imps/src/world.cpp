@@ -12,6 +12,7 @@
 #include "imps/file_read.h"
 #include "imps/gzip.h"
 #include "imps/scene_reader.h"
+#include "imps/skeleton_cache.h"
 #include "imps/vrml_file.h"
 
 namespace imps {
@@ -75,16 +76,42 @@ class WorldReader {
   }
 
   void siblings(const std::vector<VrmlNodeRef>& nodes, const std::string& nearest, const glm::mat4& matrix, int depth) {
+    // The Inlines first: a character among them claims the Transforms beside it named after its joints.
     std::vector<Inlined> inlined;
     for (const VrmlNodeRef& child : nodes) {
       const VrmlNode& n = child->resolved();
-      if (n.type == "Inline") {
+      if (n.type == "Inline")
         if (auto i = resolve(*child, n, nearest, matrix)) inlined.push_back(std::move(*i));
-      } else {
-        walk(*child, nearest, matrix, depth + 1);
-      }
     }
-    group(std::move(inlined));
+    const int character = group(std::move(inlined));
+    for (const VrmlNodeRef& child : nodes) {
+      const VrmlNode& n = child->resolved();
+      if (n.type == "Inline") continue;
+      const int joint = character >= 0 && n.type == "Transform" && !child->defName.empty()
+                            ? characters_[size_t(character)].character.findJoint(child->defName)
+                            : -1;
+      if (joint >= 0) {
+        attach(n, child->defName, character, joint, depth);
+        continue;
+      }
+      walk(*child, nearest, matrix, depth + 1);
+    }
+  }
+
+  // A Transform named after a joint of the character beside it: its children ride on that joint, in the joint's
+  // posed frame (the Transform's own fields are replaced by the joint's pose, as in a clip file).
+  void attach(const VrmlNode& transform, const std::string& name, int character, int joint, int depth) {
+    if (attachCharacter_ >= 0) {
+      d_.error(transform.loc, "Transform " + name + " rides on a joint inside another joint's Transform; attach it "
+                              "beside the character instead");
+      return;
+    }
+    const std::vector<WorldTransform> outer = std::exchange(chain_, {});
+    attachCharacter_ = character, attachJoint_ = joint;
+    for (const VrmlField& field : transform.fields)
+      if (field.name == "children") siblings(field.nodes, name, glm::mat4(1.0f), depth + 1);
+    attachCharacter_ = attachJoint_ = -1;
+    chain_ = outer;
   }
 
   // A Shape of the world: its mesh in its own coordinates (readProps of the Shape alone) under the current chain.
@@ -101,7 +128,18 @@ class WorldReader {
   void addProp(Prop p, const glm::mat4& matrix) {
     propLocal_.push_back(p.mesh);
     propChains_.push_back(chain_);
+    propCharacter_.push_back(attachCharacter_);
+    propJoint_.push_back(attachJoint_);
     p.mesh = transformed(p.mesh, matrix);
+    if (attachCharacter_ >= 0) {
+      // At rest, where the character stands: the joint's world transform (placement included), then the mesh.
+      const WorldCharacter& c = characters_[size_t(attachCharacter_)];
+      SkeletonCache rest(c.character);
+      rest.setPlacement(c.placement);
+      rest.update();
+      propLocal_.back() = p.mesh;  // in the joint's frame
+      p.mesh = transformed(p.mesh, rest.world(attachJoint_));
+    }
     props_.push_back(std::move(p));
   }
 
@@ -112,6 +150,8 @@ class WorldReader {
     world.props = std::move(props_);
     world.propLocal = std::move(propLocal_);
     world.propChains = std::move(propChains_);
+    world.propCharacter = std::move(propCharacter_);
+    world.propJoint = std::move(propJoint_);
     return world;
   }
 
@@ -188,7 +228,8 @@ class WorldReader {
   }
 
   // The Inlines of one children list: at most one character, driven by the clips inlined beside it.
-  void group(std::vector<Inlined> inlined) {
+  // Returns the character's index in characters_, or -1.
+  int group(std::vector<Inlined> inlined) {
     int character = -1;
     for (size_t k = 0; k < inlined.size(); ++k) {
       if (inlined[k].kind != Inlined::Kind::Character) continue;
@@ -197,7 +238,12 @@ class WorldReader {
                                      std::to_string(inlined[size_t(character)].loc.line) +
                                      "): give each character a Transform of its own, so its clip and placement are "
                                      "its alone");
-        return;
+        return -1;
+      }
+      if (attachCharacter_ >= 0) {
+        d_.error(inlined[k].loc, "a character inside a Transform riding on another character's joint; place it "
+                                 "beside, under a Transform of its own");
+        return -1;
       }
       character = int(k);
     }
@@ -247,9 +293,9 @@ class WorldReader {
       clip = *chosen;
       clipFrom = &i;
     }
-    if (character < 0) return;
+    if (character < 0) return -1;
     Inlined& c = inlined[size_t(character)];
-    addCharacter(c, std::move(clip), clipFrom);
+    return addCharacter(c, std::move(clip), clipFrom) ? int(characters_.size()) - 1 : -1;
   }
 
   // An inlined VRML file's own Inlines are not followed (a world is one level deep).
@@ -270,7 +316,8 @@ class WorldReader {
     }
   }
 
-  void addCharacter(Inlined& c, std::optional<Clip> clip, const Inlined* clipFrom) {
+  // False after reporting why the character could not be added.
+  bool addCharacter(Inlined& c, std::optional<Clip> clip, const Inlined* clipFrom) {
     // The placement must be rigid: IMPS characters' fields are not scaled.
     const glm::mat3 m(c.matrix);
     const float sx = glm::length(m[0]), sy = glm::length(m[1]), sz = glm::length(m[2]);
@@ -280,7 +327,7 @@ class WorldReader {
       d_.error(c.loc, "the Transforms above this character scale or mirror it (scale " + std::to_string(sx) + " " +
                           std::to_string(sy) + " " + std::to_string(sz) +
                           "); a character is placed rigidly: scale it in its own scene file");
-      return;
+      return false;
     }
     Diagnostics sceneWarnings;
     auto scene = readSceneFile(c.path, &sceneWarnings);
@@ -288,13 +335,13 @@ class WorldReader {
     if (!scene) {
       d_.note(c.loc, "in the character Inline'd here");
       d_.append(scene.error());
-      return;
+      return false;
     }
     auto character = Character::fromScene(*scene);
     if (!character) {
       d_.note(c.loc, "in the character Inline'd here");
       d_.append(character.error());
-      return;
+      return false;
     }
     Rigid placement;
     placement.rotation = glm::normalize(glm::quat_cast(m));
@@ -312,6 +359,7 @@ class WorldReader {
     characters_.push_back(WorldCharacter{name, c.path, c.loc, placement, std::move(*scene), std::move(*character),
                                          std::move(clip), clipFrom ? clipFrom->path : std::string(),
                                          clipFrom ? clipFrom->loc : SourceLoc{}, c.chain});
+    return true;
   }
 
   const VrmlFile& file_;
@@ -322,6 +370,8 @@ class WorldReader {
   std::vector<Mesh> propLocal_;
   std::vector<std::vector<WorldTransform>> propChains_;
   std::vector<WorldTransform> chain_;
+  std::vector<int> propCharacter_, propJoint_;
+  int attachCharacter_ = -1, attachJoint_ = -1;  // inside a Transform riding on a character's joint
   std::map<std::string, int, std::less<>> used_;
 };
 
@@ -362,9 +412,10 @@ World::Pose World::poseAt(double seconds) const {
   const auto moved = transformsAt(seconds);
   for (const WorldCharacter& c : characters)
     pose.placements.push_back(clips.empty() ? c.placement : rigidOf(chainMatrix(c.chain, moved)));
-  for (size_t p = 0; p < props.size(); ++p)
-    pose.props.push_back(clips.empty() || p >= propLocal.size() ? props[p].mesh
-                                                                : transformed(propLocal[p], chainMatrix(propChains[p], moved)));
+  for (size_t p = 0; p < props.size(); ++p) {
+    const bool still = clips.empty() || p >= propLocal.size() || (p < propCharacter.size() && propCharacter[p] >= 0);
+    pose.props.push_back(still ? props[p].mesh : transformed(propLocal[p], chainMatrix(propChains[p], moved)));
+  }
   return pose;
 }
 

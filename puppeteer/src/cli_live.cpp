@@ -391,16 +391,29 @@ int runWorldView(const LiveArgs& a) {
   }
   ViewerOptions v = viewerOptions(a, "IMPS Puppeteer: " + a.scene);
   v.manipulators = false;  // a world is watched and driven; characters are edited in their own scene files
-  for (const Prop& p : world->props) v.props.push_back({p.name, p.mesh, -1});
+  // The world's props (worldProp[i]: v.props[i]'s index in world->props), then those riding on the first
+  // character's joints; the others' ride with them (ViewerActor::props).
+  std::vector<size_t> worldProp;
+  std::vector<std::vector<AttachedProp>> riding(actors.size());
+  for (size_t p = 0; p < world->props.size(); ++p) {
+    const int c = p < world->propCharacter.size() ? world->propCharacter[p] : -1;
+    if (c < 0) {
+      worldProp.push_back(p);
+      v.props.push_back({world->props[p].name, world->props[p].mesh, -1});
+    } else {
+      riding[size_t(c)].push_back({world->props[p].name, world->propLocal[p], world->propJoint[p]});
+    }
+  }
+  v.props.insert(v.props.end(), riding[0].begin(), riding[0].end());
   // The world's own clips move placements (each character's source wrapped) and props, on one time line.
   const WorldTime time(a.frames > 0 ? 1.0 / 60.0 : 0.0);
   std::vector<std::unique_ptr<PlacedPoseSource>> placed;
   if (!world->clips.empty()) {
     for (size_t k = 0; k < actors.size(); ++k)
       placed.push_back(std::make_unique<PlacedPoseSource>(*world, k, actors[k].source.get(), time));
-    v.moveProps = [&world, time](int frame, std::vector<AttachedProp>& props) {
+    v.moveProps = [&world, &worldProp, time](int frame, std::vector<AttachedProp>& props) {
       World::Pose pose = world->poseAt(time.seconds(frame));
-      for (size_t p = 0; p < props.size() && p < pose.props.size(); ++p) props[p].mesh = std::move(pose.props[p]);
+      for (size_t i = 0; i < worldProp.size() && i < props.size(); ++i) props[i].mesh = std::move(pose.props[worldProp[i]]);
       return true;
     };
     std::printf("puppeteer: world %s: %zu clip%s of its own\n", a.scene.c_str(), world->clips.size(),
@@ -409,7 +422,7 @@ int runWorldView(const LiveArgs& a) {
   auto sourceOf = [&](size_t k) -> PoseSource* {
     return placed.empty() ? actors[k].source.get() : placed[k].get();
   };
-  for (size_t k = 1; k < actors.size(); ++k) v.others.push_back({actors[k].pipeline.get(), sourceOf(k)});
+  for (size_t k = 1; k < actors.size(); ++k) v.others.push_back({actors[k].pipeline.get(), sourceOf(k), riding[k]});
   v.script = std::move(*script);
   std::printf("puppeteer: world %s: %zu characters, %zu props\n", a.scene.c_str(), actors.size(), world->props.size());
   return runViewer(*actors[0].pipeline, sourceOf(0), v);

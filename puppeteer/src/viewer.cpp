@@ -335,6 +335,7 @@ void appendOthers(Mesh& mesh, const ViewerPipeline& pipeline, const ViewerOption
         if (image >= 0) image += offset;
       appendMesh(mesh, other);
     }
+    appendPosedProps(mesh, a.props, a.pipeline->skeleton());
     offset += int32_t(a.pipeline->textures().size());
   }
 }

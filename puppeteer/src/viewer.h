@@ -49,6 +49,7 @@ class PoseSource {
 struct ViewerActor {
   ViewerPipeline* pipeline = nullptr;
   PoseSource* source = nullptr;
+  std::vector<AttachedProp> props;  // riding on its joints (joint >= 0), posed by its skeleton cache
 };
 
 struct ViewerOptions {

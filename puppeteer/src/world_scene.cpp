@@ -6,6 +6,8 @@
 
 #include "clip_pose.h"
 #include "imps/skeleton_cache.h"
+#include "imps/vrml_props.h"
+#include <memory>
 #include "imps/texturing.h"
 #include "textures.h"
 #include "imps/clock.h"
@@ -70,9 +72,10 @@ std::optional<std::vector<WorldObject>> poseWorld(const World& world, const std:
                                                   std::vector<RgbaImage>* textures, const char* command) {
   std::vector<WorldObject> out;
   World::Pose pose = world.poseAt(seconds);  // the world's own clips move placements and props
+  std::vector<std::unique_ptr<SkeletonCache>> skeletons;  // kept for the props riding on joints
   for (size_t k = 0; k < world.characters.size(); ++k) {
     const WorldCharacter& c = world.characters[k];
-    SkeletonCache skeleton(c.character);
+    SkeletonCache& skeleton = *skeletons.emplace_back(std::make_unique<SkeletonCache>(c.character));
     skeleton.setPlacement(pose.placements[k]);
     const std::string& source = k < sources.size() ? sources[k] : std::string();
     std::optional<ClipDriver> driver;
@@ -117,7 +120,12 @@ std::optional<std::vector<WorldObject>> poseWorld(const World& world, const std:
     }
     out.push_back({c.name, std::move(mesh), true});
   }
-  for (size_t p = 0; p < world.props.size(); ++p) out.push_back({world.props[p].name, std::move(pose.props[p]), false});
+  for (size_t p = 0; p < world.props.size(); ++p) {
+    const int c = p < world.propCharacter.size() ? world.propCharacter[p] : -1;
+    if (c >= 0)  // riding on a joint: posed with its character
+      pose.props[p] = transformed(world.propLocal[p], skeletons[size_t(c)]->world(world.propJoint[p]));
+    out.push_back({world.props[p].name, std::move(pose.props[p]), false});
+  }
   return out;
 }
 

@@ -154,6 +154,44 @@ TEST_F(WorldFiles, TheWorldsOwnClipsMovePlacementsAndProps) {
   EXPECT_NEAR(glm::length(after - before - glm::vec3(1, 0, 0)), 0.0f, 1e-5f);
 }
 
+// A Transform beside a character named after one of its joints carries its children on that joint: the props
+// are kept in the joint's frame and, at rest, placed where the character's joint is.
+TEST_F(WorldFiles, ATransformNamedAfterAJointCarriesPropsOnIt) {
+  const std::string world = write("w.wrl",
+                                  "#VRML V2.0 utf8\n"
+                                  "DEF HERO Transform { translation 2 0 0 children [\n"
+                                  "  Inline { url \"ball.wrl\" }\n"
+                                  "  DEF ROOT Transform { translation 9 9 9 children [\n"
+                                  "    Transform { translation 0 0.5 0 children [ Shape { geometry Box { } } ] }\n"
+                                  "    Inline { url \"table.wrl\" } ] }\n"
+                                  "  DEF ELSEWHERE Transform { children [ Shape { geometry Sphere { } } ] }\n"
+                                  "] }\n");
+  auto w = readWorldFile(world);
+  ASSERT_TRUE(w.has_value()) << w.error().str();
+  ASSERT_EQ(w->characters.size(), 1u);
+  ASSERT_EQ(w->props.size(), 3u);
+  int riding = 0;
+  for (size_t p = 0; p < w->props.size(); ++p) {
+    const glm::vec3 centre = 0.5f * (bounds(w->props[p].mesh).min + bounds(w->props[p].mesh).max);
+    if (w->props[p].geometry == "Sphere") {
+      EXPECT_EQ(w->propCharacter[p], -1);
+      EXPECT_NEAR(glm::length(centre - glm::vec3(2, 0, 0)), 0.0f, 1e-5f);
+      continue;
+    }
+    ++riding;
+    EXPECT_EQ(w->propCharacter[p], 0);
+    EXPECT_EQ(w->propJoint[p], w->characters[0].character.findJoint("ROOT"));
+    // ROOT's own fields (9 9 9) are replaced by the joint: the box sits 0.5 m above the joint at (2, 0, 0).
+    const glm::vec3 local = 0.5f * (bounds(w->propLocal[p]).min + bounds(w->propLocal[p]).max);
+    EXPECT_NEAR(glm::length(centre - (local + glm::vec3(2, 0, 0))), 0.0f, 1e-5f);
+    const bool worldsBox = bounds(w->propLocal[p]).max.y - bounds(w->propLocal[p]).min.y > 1.0f;  // not the table
+    if (worldsBox) {
+      EXPECT_NEAR(glm::length(local - glm::vec3(0, 0.5f, 0)), 0.0f, 1e-5f);
+    }
+  }
+  EXPECT_EQ(riding, 2) << "the Box and the inlined table ride on ROOT";
+}
+
 TEST(World, TheBundledWorldsRead) {
   for (const char* name : {"two_bipeds.wrl", "beanito_and_flubber.wrl"}) {
     Diagnostics warnings;

@@ -170,6 +170,34 @@ TEST_F(WorldCli, DrivePosesOneCharacterAndAnInlinedClipPlaysByItself) {
   EXPECT_FALSE(fs::exists(path("never.png")));
 }
 
+// A prop on a character's joint (a Transform named after the joint, beside the character) moves with the joint
+// when the character's clip lifts it; a prop of the world stays.
+TEST_F(WorldCli, PropsOnAJointFollowItsClip) {
+  const std::string w = write("w.wrl", "#VRML V2.0 utf8\nDEF BLUE Transform { translation 1 0 0 children [\n"
+                                       "  Inline { url \"blue.wrl\" } Inline { url \"lift.wrl\" }\n"
+                                       "  DEF ROOT Transform { children [ Shape { geometry Box { size 0.2 0.2 0.2 } } ] } ] }\n"
+                                       "Shape { geometry Sphere { radius 0.1 } }\n");
+  auto world = readWorldFile(w);
+  ASSERT_TRUE(world.has_value()) << world.error().str();
+  MarchingCubesOptions options;
+  options.resolution = 16;
+  const std::vector<std::string> noDrives(world->characters.size());
+  auto start = poseWorld(*world, noDrives, 0.0, options, nullptr, "test");
+  auto half = poseWorld(*world, noDrives, 0.5, options, nullptr, "test");
+  ASSERT_TRUE(start && half);
+  auto centreOf = [](const std::vector<WorldObject>& objects, const std::string& name) {
+    for (const WorldObject& o : objects)
+      if (o.name == name) return 0.5f * (bounds(o.mesh).min + bounds(o.mesh).max);
+    return glm::vec3(-999.0f);
+  };
+  ASSERT_EQ(start->size(), 3u);
+  const std::string box = (*start)[1].name, sphere = (*start)[2].name;
+  EXPECT_NEAR(glm::length(centreOf(*start, box) - glm::vec3(1, 0, 0)), 0.0f, 1e-4f) << box;
+  // lift.wrl raises ROOT by 2 m over 1 s: 1 m at 0.5 s, the box with it; the world's sphere stays.
+  EXPECT_NEAR(glm::length(centreOf(*half, box) - glm::vec3(1, 1, 0)), 0.0f, 1e-4f);
+  EXPECT_NEAR(glm::length(centreOf(*half, sphere) - centreOf(*start, sphere)), 0.0f, 1e-6f);
+}
+
 TEST_F(WorldCli, BadWorldsFailWithTheirPosition) {
   const std::string missing = write("m.wrl", "#VRML V2.0 utf8\nTransform {\n  children [ Inline { url \"gone.wrl\" } ] }\n");
   const std::string notScene = write("n.wrl", "#VRML V2.0 utf8\nInline { url \"red.png\" }\n");

@@ -48,15 +48,19 @@ struct World {
   std::vector<WorldCharacter> characters;  // in file order (depth first)
   // Every Shape of the world file and of the VRML 97 files it inlines, in world coordinates (the file's pose).
   std::vector<Prop> props;
-  // The same meshes below their Transforms (propLocal[i] in the coordinates under propChains[i]).
+  // The same meshes below their Transforms (propLocal[i] in the coordinates under propChains[i]); for a prop riding
+  // on a character's joint (propCharacter[i] >= 0: under a Transform beside the character named after its joint
+  // propJoint[i]), in that joint's frame, props[i] holding it at the character's rest pose.
   std::vector<Mesh> propLocal;
   std::vector<std::vector<WorldTransform>> propChains;
+  std::vector<int> propCharacter, propJoint;
   // The world file's own clips (its TimeSensors driving its Transforms), all played from 0 s: they move the
   // characters' placements and the props under the Transforms they drive.
   std::vector<Clip> clips;
 
   // Where everything is `seconds` into the world's clips: each character's placement (rigid: a driven scale is
-  // divided out) and each prop's mesh in world coordinates. Without clips, the file's pose.
+  // divided out) and each prop's mesh in world coordinates. Without clips, the file's pose. Props riding on a joint
+  // are left at rest: their character's pose moves them (propLocal by the joint's world transform).
   struct Pose {
     std::vector<Rigid> placements;
     std::vector<Mesh> props;
