@@ -25,6 +25,7 @@ SkeletonCache::SkeletonCache(const Character& character) : character_(&character
   differential_.resize(local_.size());
   update();
   for (Rigid& d : differential_) d = Rigid{};
+  placementDifferential_ = Rigid{};
 }
 
 bool SkeletonCache::setRotation(std::string_view joint, const glm::quat& rotation) {
@@ -63,28 +64,34 @@ void SkeletonCache::resetPose() {
 void SkeletonCache::update() {
   const auto& joints = character_->joints();
   for (size_t j = 0; j < joints.size(); ++j) {  // parents precede children
-    const Rigid now = joints[j].parent >= 0 ? world_[joints[j].parent] * local_[j] : local_[j];
+    const Rigid now = joints[j].parent >= 0 ? world_[joints[j].parent] * local_[j] : placement_ * local_[j];
     differential_[j] = now * world_[j].inverse();
     world_[j] = now;
   }
+  // Joint-less primitives stay bit-identical without a placement (Marching Cubes' hashes do not move).
+  const bool placed = placement_.rotation != glm::quat(1.0f, 0.0f, 0.0f, 0.0f) || placement_.translation != glm::vec3(0.0f);
   std::vector<Primitive> prims(field_.size());
   const auto& cp = character_->primitives();
   for (size_t i = 0; i < prims.size(); ++i) {
     const int j = cp[i].joint;
-    prims[i] = j >= 0 ? cp[i].local.transformed(world_[j].rotation, world_[j].translation) : cp[i].local;
+    const Rigid& to = j >= 0 ? world_[j] : placement_;
+    prims[i] = j >= 0 || placed ? cp[i].local.transformed(to.rotation, to.translation) : cp[i].local;
   }
+  placementDifferential_ = placement_ * appliedPlacement_.inverse();
+  appliedPlacement_ = placement_;
   field_.setPrimitives(std::move(prims));
   for (size_t i = 0; i < texGens_.size(); ++i) {
     if (!hasTexGen_[i]) continue;
     const int j = cp[i].joint;
-    texGens_[i] = j >= 0 ? cp[i].texGen->transformed(world_[j].rotation, world_[j].translation) : *cp[i].texGen;
+    const Rigid& to = j >= 0 ? world_[j] : placement_;
+    texGens_[i] = j >= 0 || placed ? cp[i].texGen->transformed(to.rotation, to.translation) : *cp[i].texGen;
   }
   ++generation_;
 }
 
 Rigid SkeletonCache::primitiveDifferential(size_t i) const {
   const int j = character_->primitives()[i].joint;
-  return j >= 0 ? differential_[j] : Rigid{};
+  return j >= 0 ? differential_[j] : placementDifferential_;
 }
 
 }  // namespace imps

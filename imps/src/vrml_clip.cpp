@@ -401,4 +401,6 @@ std::expected<Clips, Diagnostics> readClips(const VrmlFile& file, Diagnostics* w
   return result;
 }
 
+TransformValues transformValuesOf(const VrmlNode& transform) { return restOf(transform); }
+
 }  // namespace imps

@@ -64,9 +64,49 @@ glm::vec3 colorOf(const VrmlNode& shape) {
           static_cast<float>(diffuse->numbers[2])};
 }
 
-// IndexedFaceSet: faces split at -1 (the last may omit it), fan-triangulated.
-Mesh faceSetMesh(const VrmlNode& g, const glm::vec3& color, Diagnostics& d) {
+// A node's MFVec3f/MFColor field (`vector`, `color`) as triples; empty when absent or not whole triples (warned).
+std::vector<glm::vec3> triplesOf(const VrmlNode* node, const char* field, Diagnostics& d) {
+  std::vector<glm::vec3> out;
+  const VrmlField* f = node != nullptr ? node->field(field) : nullptr;
+  if (f == nullptr) return out;
+  if (f->numbers.size() % 3 != 0) {
+    d.warning(f->loc, std::string(field) + " has " + std::to_string(f->numbers.size()) +
+                          " numbers, not a multiple of 3; it is ignored");
+    return out;
+  }
+  for (size_t i = 0; i + 2 < f->numbers.size(); i += 3)
+    out.emplace_back(float(f->numbers[i]), float(f->numbers[i + 1]), float(f->numbers[i + 2]));
+  return out;
+}
+
+// An IndexedFaceSet's per-face or per-vertex values (Color or Normal, ISO/IEC 14772-1 6.23): which entry of `values`
+// the corner `corner` (its place in coordIndex) of face `face` takes, or -1 when there is none.
+struct PerFaceOrVertex {
+  const std::vector<glm::vec3>* values = nullptr;
+  bool perVertex = true;
+  const VrmlField* index = nullptr;  // colorIndex / normalIndex (empty: coordIndex for per vertex, faces in order)
+  const VrmlField* coordIndex = nullptr;
+  long at(size_t face, size_t corner) const {
+    if (values == nullptr || values->empty()) return -1;
+    const bool indexed = index != nullptr && !index->numbers.empty();
+    double i = -1;
+    if (perVertex) {
+      const VrmlField* from = indexed ? index : coordIndex;
+      if (corner < from->numbers.size()) i = from->numbers[corner];
+    } else {
+      i = indexed ? (face < index->numbers.size() ? index->numbers[face] : -1) : double(face);
+    }
+    return i >= 0 && i < double(values->size()) ? long(i) : -1;
+  }
+};
+
+// IndexedFaceSet: faces split at -1 (the last may omit it), fan-triangulated. Colours from its Color node (per face
+// or per vertex, colorIndex) over the Material's; normals from its Normal node (per face or per vertex,
+// normalIndex), else smoothed across edges whose faces meet at less than creaseAngle, else the face's own.
+// *ownColors says whether a Color node coloured it.
+Mesh faceSetMesh(const VrmlNode& g, const glm::vec3& color, Diagnostics& d, bool* ownColors) {
   Mesh m;
+  *ownColors = false;
   const VrmlNode* coord = childNode(g, "coord");
   const VrmlField* point = coord != nullptr ? coord->field("point") : nullptr;
   const VrmlField* index = g.field("coordIndex");
@@ -81,27 +121,98 @@ Mesh faceSetMesh(const VrmlNode& g, const glm::vec3& color, Diagnostics& d) {
     return glm::vec3(point->numbers[3 * i], point->numbers[3 * i + 1], point->numbers[3 * i + 2]);
   };
   const bool ccw = flagOr(g, "ccw", true);
-  std::vector<size_t> face;
+
+  // Pass 1: the faces (point indices and where each corner is in coordIndex), bad ones left out with a warning.
+  struct Face {
+    std::vector<size_t> points, corners;
+    size_t ordinal = 0;  // the face's number among all faces, bad ones included (colorIndex counts them)
+    glm::vec3 normal{0.0f};
+  };
+  std::vector<Face> faces;
+  Face face;
+  size_t ordinal = 0;
   bool warned = false;
   auto flush = [&] {
-    bool ok = face.size() >= 3;
-    for (size_t i : face) ok = ok && i < points;
-    if (!ok && !warned && !face.empty()) {
+    if (face.points.empty()) return;
+    bool ok = face.points.size() >= 3;
+    for (size_t i : face.points) ok = ok && i < points;
+    if (!ok && !warned) {
       warned = true;
       d.warning(index->loc, "coordIndex has a face with fewer than 3 points or an index beyond the " +
                                 std::to_string(points) + " points; such faces are left out");
     }
-    for (size_t k = 1; ok && k + 1 < face.size() && m.triangleCount() < kMaxTriangles; ++k) {
-      if (ccw) addTriangle(m, at(face[0]), at(face[k]), at(face[k + 1]), color);
-      else addTriangle(m, at(face[0]), at(face[k + 1]), at(face[k]), color);
+    face.ordinal = ordinal++;
+    if (ok) {
+      // Newell's normal of the polygon, facing the side ccw says is the outside.
+      glm::vec3 n(0.0f);
+      for (size_t k = 0; k < face.points.size(); ++k) n += glm::cross(at(face.points[k]), at(face.points[(k + 1) % face.points.size()]));
+      const float length = glm::length(n);
+      face.normal = length > 0.0f ? (ccw ? n : -n) / length : glm::vec3(0, 1, 0);
+      faces.push_back(std::move(face));
     }
-    face.clear();
+    face = Face{};
   };
-  for (double i : index->numbers) {
-    if (i < 0) flush();
-    else face.push_back(i < 4e9 ? static_cast<size_t>(i) : points);
+  for (size_t k = 0; k < index->numbers.size(); ++k) {
+    const double i = index->numbers[k];
+    if (i < 0) {
+      flush();
+    } else {
+      face.points.push_back(i < 4e9 ? static_cast<size_t>(i) : points);
+      face.corners.push_back(k);
+    }
   }
   flush();
+
+  // Pass 2: colours and normals the file gives.
+  const VrmlNode* colorNode = childNode(g, "color");
+  const std::vector<glm::vec3> colors = triplesOf(colorNode, "color", d);
+  const PerFaceOrVertex colorOf{&colors, flagOr(g, "colorPerVertex", true), g.field("colorIndex"), index};
+  *ownColors = !colors.empty();
+  const VrmlNode* normalNode = childNode(g, "normal");
+  const std::vector<glm::vec3> normals = triplesOf(normalNode, "vector", d);
+  const PerFaceOrVertex normalOf{&normals, flagOr(g, "normalPerVertex", true), g.field("normalIndex"), index};
+  const float crease = numberOr(g, "creaseAngle", 0.0f);
+  const float cosCrease = std::cos(std::min(crease, std::numbers::pi_v<float>));
+
+  // Faces around each point, for smoothing below the crease angle.
+  std::vector<std::vector<uint32_t>> facesAt;
+  if (normals.empty() && crease > 0.0f) {
+    facesAt.resize(points);
+    for (size_t f = 0; f < faces.size(); ++f)
+      for (size_t p : faces[f].points)
+        if (facesAt[p].empty() || facesAt[p].back() != f) facesAt[p].push_back(uint32_t(f));
+  }
+  auto cornerNormal = [&](const Face& f, size_t k) {
+    if (const long i = normalOf.at(f.ordinal, f.corners[k]); i >= 0) {
+      const glm::vec3 n = (*normalOf.values)[size_t(i)];
+      const float length = glm::length(n);
+      return length > 0.0f ? n / length : f.normal;  // as the file gives it, whatever ccw says
+    }
+    if (facesAt.empty()) return f.normal;
+    glm::vec3 sum(0.0f);
+    for (uint32_t other : facesAt[f.points[k]])
+      if (glm::dot(faces[other].normal, f.normal) >= cosCrease - 1e-6f) sum += faces[other].normal;
+    const float length = glm::length(sum);
+    return length > 0.0f ? sum / length : f.normal;
+  };
+  auto cornerColor = [&](const Face& f, size_t k) {
+    const long i = colorOf.at(f.ordinal, f.corners[k]);
+    return i >= 0 ? colors[size_t(i)] : color;
+  };
+
+  // Pass 3: fan triangles, three vertices of their own each.
+  for (const Face& f : faces) {
+    for (size_t k = 1; k + 1 < f.points.size() && m.triangleCount() < kMaxTriangles; ++k) {
+      const size_t corners[3] = {0, ccw ? k : k + 1, ccw ? k + 1 : k};
+      for (size_t c : corners) {
+        const glm::vec3 p = at(f.points[c]), n = cornerNormal(f, c), rgb = cornerColor(f, c);
+        m.indices.push_back(static_cast<uint32_t>(m.vertexCount()));
+        m.positions.insert(m.positions.end(), {p.x, p.y, p.z});
+        m.normals.insert(m.normals.end(), {n.x, n.y, n.z});
+        m.colors.insert(m.colors.end(), {rgb.r, rgb.g, rgb.b});
+      }
+    }
+  }
   return m;
 }
 
@@ -140,9 +251,10 @@ struct Walker {
     if (g == nullptr) return;
     const glm::vec3 color = colorOf(node);
     Mesh local;
+    bool ownColors = false;  // an IndexedFaceSet's Color node coloured it
     const float positive = 1e-9f;
     if (g->type == "IndexedFaceSet") {
-      local = faceSetMesh(*g, color, d);
+      local = faceSetMesh(*g, color, d, &ownColors);
     } else if (g->type == "Box") {
       const VrmlField* size = g->field("size");
       const glm::vec3 s = size != nullptr && size->numbers.size() == 3
@@ -173,7 +285,7 @@ struct Walker {
       return;
     }
     triangles += local.triangleCount();
-    recolor(local, color);
+    if (!ownColors) recolor(local, color);
     std::string propName = !node.defName.empty() ? node.defName : !g->defName.empty() ? g->defName : name;
     if (propName.empty()) propName = "prop" + std::to_string(props.size() + 1);
     props.push_back({propName, g->type, transformedBy(local, matrix), node.loc});
@@ -286,6 +398,8 @@ Mesh transformed(const Mesh& mesh, const Rigid& pose) {
   }
   return out;
 }
+
+Mesh transformed(const Mesh& mesh, const glm::mat4& matrix) { return transformedBy(mesh, matrix); }
 
 std::vector<Prop> readProps(const VrmlFile& file, Diagnostics* warnings) {
   std::vector<Prop> props;

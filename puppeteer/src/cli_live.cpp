@@ -44,6 +44,7 @@
 #include "pose_argument.h"
 #include "map_option.h"
 #include "textures.h"
+#include "world_scene.h"
 
 namespace imps::app {
 namespace {
@@ -71,6 +72,7 @@ struct LiveArgs {
   bool overlap = false;
   std::vector<std::string> oscOut;  // live, replay: --osc-out targets
   std::vector<std::string> props;   // --prop FILE.wrl[@JOINT]
+  std::vector<std::string> drives;  // view WORLD: --drive NAME=SOURCE
   // replay
   std::string session;
   std::string rig, calibration;
@@ -267,8 +269,179 @@ std::optional<std::vector<ScriptedEvent>> parseScript(const LiveArgs& a) {
 }
 
 int runClip(const LiveArgs& a, const std::string& command);
+std::optional<sim::Session> loadSession(const std::string& path);
+std::optional<SampleMapper> replayMapper(const std::string& sessionPath, const sim::Session& session,
+                                         const Character& character, const std::string& calibrationPath,
+                                         const std::string& map, const std::string& scenePath, int* code);
+
+// One character of a world in the app, and what drives it.
+struct WorldActor {
+  std::unique_ptr<ViewerPipeline> pipeline;
+  std::unique_ptr<sim::Session> session;  // a replayed session or BVH clip (the source reads it)
+  std::unique_ptr<PoseSource> source;     // null: it keeps its pose
+};
+
+// The pose source `source` names for `actor` (--drive NAME=SOURCE, or the clip inlined beside it when ""): a VRML
+// clip FILE.wrl[#TIMESENSOR], a session or .bvh file, a device spec (docs/devices.md; channels by joint name), or
+// "hand"/"rest" for none. False after printing the error (*code set).
+bool driveActor(const LiveArgs& a, const WorldCharacter& c, const std::string& source, WorldActor& actor,
+                imps::Clock& clock, int* code) {
+  const Character& character = actor.pipeline->character();
+  const double step = a.frames > 0 ? 1.0 / 60.0 : 0.0;  // headless: a known moment per frame
+  if (source.empty() || source == "hand" || source == "rest") {
+    if (!source.empty() || !c.clip) return true;
+    ClipDriver driver(*c.clip, character);
+    std::printf("puppeteer: %s: playing %s of %s on %zu joints\n", c.name.c_str(), driver.describe().c_str(),
+                std::filesystem::path(c.clipPath).filename().string().c_str(), driver.bound().size());
+    actor.source = std::make_unique<ClipPoseSource>(std::move(driver), a.speed, step, c.name + ": " + c.clip->name);
+    return true;
+  }
+  if (isClipSource(source)) {
+    const auto [file, clipName] = splitClipSource(source);
+    auto driver = ClipDriver::load(file, clipName, "names", character);
+    if (!driver) {
+      std::fputs(driver.error().c_str(), stderr);
+      *code = kExitInvalidInput;
+      return false;
+    }
+    std::printf("puppeteer: %s: playing %s\n", c.name.c_str(), driver->describe().c_str());
+    actor.source = std::make_unique<ClipPoseSource>(std::move(*driver), a.speed, step,
+                                                    c.name + ": " + std::filesystem::path(file).filename().string());
+    return true;
+  }
+  std::error_code ec;
+  if (std::filesystem::is_regular_file(source, ec)) {
+    auto session = loadSession(source);
+    if (!session) {
+      *code = kExitInvalidInput;
+      return false;
+    }
+    actor.session = std::make_unique<sim::Session>(std::move(*session));
+    auto mapper = replayMapper(source, *actor.session, character, "", "auto", c.scenePath, code);
+    if (!mapper) return false;
+    const std::string name = c.name + ": " + std::filesystem::path(source).filename().string();
+    actor.source = std::make_unique<ReplayPoseSource>(*actor.session, std::move(*mapper), a.speed, name);
+    return true;
+  }
+  auto spec = drivers::parseDeviceSpec(source);
+  if (!spec) {
+    std::fprintf(stderr, "puppeteer view: error: --drive %s=%s: not a clip (.wrl), a session or .bvh file, or a "
+                         "device spec: %s\n", c.name.c_str(), source.c_str(), spec.error().c_str());
+    *code = kExitUsage;
+    return false;
+  }
+  if (spec->kind == drivers::DeviceKind::Osc) {
+    auto osc = OscPoseSource::open(*spec, character, std::nullopt);
+    if (!osc) {
+      std::fprintf(stderr, "puppeteer view: %s\n", osc.error().c_str());
+      *code = kExitIoError;
+      return false;
+    }
+    actor.source = std::move(*osc);
+    return true;
+  }
+  auto opener = openerForSpec(*spec, clock, "view");
+  if (!opener) {
+    *code = opener.error();
+    return false;
+  }
+  actor.source = std::make_unique<LivePoseSource>(*opener, drivers::sessionOptionsFor(*spec), character, source,
+                                                  std::nullopt);
+  return true;
+}
+
+// `puppeteer view WORLD`: every character of the world in one window, each with its own pipeline and source.
+int runWorldView(const LiveArgs& a) {
+  if (int rc = checkOutputArgs(a, "view"); rc != kExitOk) return rc;
+  if (a.overlap || !a.props.empty() || !a.poses.empty()) {
+    std::fprintf(stderr, "puppeteer view: error: %s is a world: --overlap, --prop and --pose apply to one character "
+                         "(inline props in the world; drive characters with --drive NAME=SOURCE)\n",
+                 a.scene.c_str());
+    return kExitUsage;
+  }
+  auto script = parseScript(a);
+  if (!script) return kExitUsage;
+  auto world = loadWorld(a.scene);
+  if (!world) return kExitInvalidInput;
+  if (world->characters.empty()) {
+    std::fprintf(stderr, "%s: error: the world places no character (an Inline of an IMPS scene file)\n",
+                 a.scene.c_str());
+    return kExitInvalidInput;
+  }
+  auto sources = driveSources(*world, a.drives);
+  if (!sources) return kExitUsage;
+  imps::SteadyClock clock;  // simulated armatures'; outlives the sources
+  std::vector<WorldActor> actors;
+  int code = kExitOk;
+  for (size_t k = 0; k < world->characters.size(); ++k) {
+    WorldCharacter& c = world->characters[k];
+    auto textures = loadTextures(c.character);
+    if (!textures) {
+      std::fprintf(stderr, "%s\n", textures.error().c_str());
+      return kExitInvalidInput;
+    }
+    PipelineOptions o;
+    const bool fileNamesMc = std::holds_alternative<MarchingCubesNode>(c.scene.polygonizer);
+    o.polygonizer = a.polygonizer == "mc" || (a.polygonizer.empty() && fileNamesMc) ? Polygonizer::MarchingCubes
+                                                                                   : Polygonizer::Particles;
+    o.threads = a.threads;
+    WorldActor actor;
+    actor.pipeline = std::make_unique<ViewerPipeline>(c.scene, std::move(c.character), o);
+    actor.pipeline->setTextures(std::move(*textures));
+    actor.pipeline->setPlacement(c.placement);
+    if (auto plan = planGrid(actor.pipeline->skeleton().field(), actor.pipeline->marchingCubesOptions()); !plan) {
+      std::fprintf(stderr, "%s: error: %s\n", c.scenePath.c_str(), plan.error().c_str());
+      return kExitInvalidInput;
+    }
+    if (!driveActor(a, c, (*sources)[k], actor, clock, &code)) return code;
+    actors.push_back(std::move(actor));
+  }
+  ViewerOptions v = viewerOptions(a, "IMPS Puppeteer: " + a.scene);
+  v.manipulators = false;  // a world is watched and driven; characters are edited in their own scene files
+  // The world's props (worldProp[i]: v.props[i]'s index in world->props), then those riding on the first
+  // character's joints; the others' ride with them (ViewerActor::props).
+  std::vector<size_t> worldProp;
+  std::vector<std::vector<AttachedProp>> riding(actors.size());
+  for (size_t p = 0; p < world->props.size(); ++p) {
+    const int c = p < world->propCharacter.size() ? world->propCharacter[p] : -1;
+    if (c < 0) {
+      worldProp.push_back(p);
+      v.props.push_back({world->props[p].name, world->props[p].mesh, -1});
+    } else {
+      riding[size_t(c)].push_back({world->props[p].name, world->propLocal[p], world->propJoint[p]});
+    }
+  }
+  v.props.insert(v.props.end(), riding[0].begin(), riding[0].end());
+  // The world's own clips move placements (each character's source wrapped) and props, on one time line.
+  const WorldTime time(a.frames > 0 ? 1.0 / 60.0 : 0.0);
+  std::vector<std::unique_ptr<PlacedPoseSource>> placed;
+  if (!world->clips.empty()) {
+    for (size_t k = 0; k < actors.size(); ++k)
+      placed.push_back(std::make_unique<PlacedPoseSource>(*world, k, actors[k].source.get(), time));
+    v.moveProps = [&world, &worldProp, time](int frame, std::vector<AttachedProp>& props) {
+      World::Pose pose = world->poseAt(time.seconds(frame));
+      for (size_t i = 0; i < worldProp.size() && i < props.size(); ++i) props[i].mesh = std::move(pose.props[worldProp[i]]);
+      return true;
+    };
+    std::printf("puppeteer: world %s: %zu clip%s of its own\n", a.scene.c_str(), world->clips.size(),
+                world->clips.size() == 1 ? "" : "s");
+  }
+  auto sourceOf = [&](size_t k) -> PoseSource* {
+    return placed.empty() ? actors[k].source.get() : placed[k].get();
+  };
+  for (size_t k = 1; k < actors.size(); ++k) v.others.push_back({actors[k].pipeline.get(), sourceOf(k), riding[k]});
+  v.script = std::move(*script);
+  std::printf("puppeteer: world %s: %zu characters, %zu props\n", a.scene.c_str(), actors.size(), world->props.size());
+  return runViewer(*actors[0].pipeline, sourceOf(0), v);
+}
 
 int runView(const LiveArgs& a) {
+  if (isWorldFile(a.scene) && a.clip.empty()) return runWorldView(a);
+  if (!a.drives.empty()) {
+    std::fprintf(stderr, "puppeteer view: error: --drive needs a world file (docs/world-format.md#worlds); for one "
+                         "character use replay, live or --clip\n");
+    return kExitUsage;
+  }
   if (!a.clip.empty()) return runClip(a, "view");
   if (int rc = checkOutputArgs(a, "view"); rc != kExitOk) return rc;
   auto script = parseScript(a);
@@ -415,6 +588,70 @@ int runClip(const LiveArgs& a, const std::string& command) {
   return runWithOscOut(a, *pipeline, source, v);
 }
 
+// How a replayed session's samples reach `character`'s joints: --calibration, else a clip's skeleton retargeted
+// (--map), else the calibration recorded with the session, else channel names. Prints what it chose; nullopt after
+// printing the error (*code set).
+std::optional<SampleMapper> replayMapper(const std::string& sessionPath, const sim::Session& session,
+                                         const Character& character, const std::string& calibrationPath,
+                                         const std::string& map, const std::string& scenePath, int* code) {
+  auto fail = [code]() -> std::optional<SampleMapper> {
+    *code = kExitInvalidInput;
+    return std::nullopt;
+  };
+  const std::string name = std::filesystem::path(sessionPath).filename().string();
+  const drivers::DeviceInfo* device = session.devices.empty() ? nullptr : &session.devices[0];
+  std::optional<SampleMapper> mapper;
+  if (!calibrationPath.empty()) {
+    mapper = readCalibration(calibrationPath, character, device, session.devices);
+    if (!mapper) return fail();
+  } else if (session.skeleton) {
+    auto clip = sim::readBvhText(session.skeleton->bvh, name + " skeleton");
+    if (!clip) {
+      std::fputs(clip.error().str().c_str(), stderr);
+      return fail();
+    }
+    const auto options = retargetOptionsFor(map, *clip, character);
+    if (!options) return fail();
+    auto clipMap = ClipPoseMap::create(session, character, *options);
+    if (!clipMap) {
+      std::fprintf(stderr, "puppeteer: error: %s: %s\n", sessionPath.c_str(), clipMap.error().c_str());
+      return fail();
+    }
+    printRetargetReport(name, map, clipMap->retargeter().report());
+    mapper.emplace(std::move(*clipMap), map);
+  } else {
+    // The calibration recorded with the first sample, if any (a BVH clip's channel mapping is none: by name).
+    auto c = calibrationForSample(session, 0, &character, name);
+    if (c && *c) {
+      mapper.emplace(std::move(**c), "recorded in " + name);
+    } else if (!c) {
+      std::printf("puppeteer: note: the session's recorded calibration does not apply to this scene (%s); "
+                  "mapping channels by name\n",
+                  c.error().all().empty() ? "unknown format" : c.error().all().front().message.c_str());
+    }
+  }
+  if (!mapper) mapper.emplace(session, character);
+  const ChannelPoseMap* byName = mapper->byName();
+  std::printf("puppeteer: replaying %zu samples of %s: %s", session.samples.size(), name.c_str(),
+              mapper->describe().c_str());
+  if (byName && !byName->unmatched().empty())
+    std::printf(", %zu channels ignored (no such joint or not a rotation)", byName->unmatched().size());
+  std::printf("\n");
+  if (mapper->mappedJoints() == 0 && mapper->clip()) {
+    std::fprintf(stderr, "puppeteer: error: %s: no clip joint drives a joint of %s (see the report above; pass --map "
+                         "FILE.json, docs/calibration.md)\n", sessionPath.c_str(), scenePath.c_str());
+    return fail();
+  }
+  if (mapper->mappedJoints() == 0) {
+    std::fprintf(stderr,
+                 "puppeteer: error: %s: no channel named JOINT:Xrotation/Yrotation/Zrotation matches a joint of %s "
+                 "(pass --calibration)\n",
+                 sessionPath.c_str(), scenePath.c_str());
+    return fail();
+  }
+  return mapper;
+}
+
 int runReplay(const LiveArgs& given) {
   // SESSION SCENE, or SCENE SESSION as view and live take the scene first: told apart by content.
   LiveArgs a = given;
@@ -441,59 +678,9 @@ int runReplay(const LiveArgs& given) {
   auto pipeline = makePipeline(a, &code);
   if (!pipeline) return code;
   const std::string name = std::filesystem::path(a.session).filename().string();
-  const drivers::DeviceInfo* device = session->devices.empty() ? nullptr : &session->devices[0];
-
-  // Samples → joints: --calibration, else a clip's skeleton retargeted (--map), else the calibration recorded with
-  // the session, else channel names.
-  std::optional<SampleMapper> mapper;
-  if (!a.calibration.empty()) {
-    mapper = readCalibration(a.calibration, pipeline->character(), device, session->devices);
-    if (!mapper) return kExitInvalidInput;
-  } else if (session->skeleton) {
-    auto clip = sim::readBvhText(session->skeleton->bvh, name + " skeleton");
-    if (!clip) {
-      std::fputs(clip.error().str().c_str(), stderr);
-      return kExitInvalidInput;
-    }
-    const auto options = retargetOptionsFor(a.map, *clip, pipeline->character());
-    if (!options) return kExitInvalidInput;
-    auto clipMap = ClipPoseMap::create(*session, pipeline->character(), *options);
-    if (!clipMap) {
-      std::fprintf(stderr, "puppeteer: error: %s: %s\n", a.session.c_str(), clipMap.error().c_str());
-      return kExitInvalidInput;
-    }
-    printRetargetReport(name, a.map, clipMap->retargeter().report());
-    mapper.emplace(std::move(*clipMap), a.map);
-  } else {
-    // The calibration recorded with the first sample, if any (a BVH clip's channel mapping is none: by name).
-    auto c = calibrationForSample(*session, 0, &pipeline->character(), name);
-    if (c && *c) {
-      mapper.emplace(std::move(**c), "recorded in " + name);
-    } else if (!c) {
-      std::printf("puppeteer: note: the session's recorded calibration does not apply to this scene (%s); "
-                  "mapping channels by name\n",
-                  c.error().all().empty() ? "unknown format" : c.error().all().front().message.c_str());
-    }
-  }
-  if (!mapper) mapper.emplace(*session, pipeline->character());
-  const ChannelPoseMap* byName = mapper->byName();
-  std::printf("puppeteer: replaying %zu samples of %s: %s", session->samples.size(), name.c_str(),
-              mapper->describe().c_str());
-  if (byName && !byName->unmatched().empty())
-    std::printf(", %zu channels ignored (no such joint or not a rotation)", byName->unmatched().size());
-  std::printf("\n");
-  if (mapper->mappedJoints() == 0 && mapper->clip()) {
-    std::fprintf(stderr, "puppeteer: error: %s: no clip joint drives a joint of %s (see the report above; pass --map "
-                         "FILE.json, docs/calibration.md)\n", a.session.c_str(), a.scene.c_str());
-    return kExitInvalidInput;
-  }
-  if (mapper->mappedJoints() == 0) {
-    std::fprintf(stderr,
-                 "puppeteer: error: %s: no channel named JOINT:Xrotation/Yrotation/Zrotation matches a joint of %s "
-                 "(pass --calibration)\n",
-                 a.session.c_str(), a.scene.c_str());
-    return kExitInvalidInput;
-  }
+  std::optional<SampleMapper> mapper = replayMapper(a.session, *session, pipeline->character(), a.calibration, a.map,
+                                                    a.scene, &code);
+  if (!mapper) return code;
   std::unique_ptr<PoseSource> source;
   if (a.stepped)
     source = std::make_unique<SteppedReplayPoseSource>(*session, std::move(*mapper), name);
@@ -513,6 +700,12 @@ int runReplay(const LiveArgs& given) {
 
 int runLive(const LiveArgs& a) {
   if (int rc = checkOutputArgs(a, "live"); rc != kExitOk) return rc;
+  if (isWorldFile(a.scene)) {
+    std::fprintf(stderr, "puppeteer live: error: %s is a world: drive its characters with `puppeteer view %s "
+                         "--drive NAME=%s` (docs/world-format.md#worlds)\n",
+                 a.scene.c_str(), a.scene.c_str(), a.device.c_str());
+    return kExitUsage;
+  }
   if (!checkOscOutArgs(a)) return kExitUsage;
   // --rig alone is allowed here: key k calibrates it (and saves to --calibration-out); until then channels map by
   // name.
@@ -607,6 +800,9 @@ void addLiveCommands(CLI::App& app, Commands& commands) {
   viewCmd->add_option("--clip", view->clip, "Play a VRML 97 clip file's keyframes on the scene (docs/world-format.md)")
       ->check(inputFile());
   addClipOptions(viewCmd, *view);
+  viewCmd->add_option("--drive", view->drives,
+                      "With a world: NAME=SOURCE drives the character NAME from a clip FILE.wrl[#TIMESENSOR], a "
+                      "session or .bvh file, or a device spec (repeatable; docs/world-format.md#worlds)");
   addCommonOptions(viewCmd, *view);
   commands.push_back({viewCmd, [view] { return runView(*view); }});
 

@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 
 #include <chrono>
+#include <filesystem>
 #include <memory>
 #include <cstdio>
 #include <string>
@@ -24,6 +25,8 @@
 #include "snapshot.h"
 #include "textured_export.h"
 #include "textures.h"
+#include "world_scene.h"
+#include "imps/mesh_objects.h"
 
 namespace imps::app {
 namespace {
@@ -40,7 +43,61 @@ struct MeshArgs {
   size_t maxParticles = TesselatorOptions{}.maxParticles;
   bool check = false;
   bool json = false;
+  std::vector<std::string> props;   // --prop FILE.wrl[@JOINT]: props written as objects of their own
+  std::vector<std::string> drives;  // a world: --drive NAME=CLIP
+  double at = 0.0;                  // a world: the time its clips are sampled at
 };
+
+// The objects of `objects` written to `output` (each its own glTF node / OBJ object; PLY merged). Prints the result.
+int writeObjects(const char* command, const std::string& input, const std::vector<NamedMesh>& objects,
+                 const std::string& output, bool json) {
+  std::string error;
+  if (!writeMeshObjects(objects, output, &error)) {
+    std::fprintf(stderr, "puppeteer %s: error: %s\n", command, error.c_str());
+    return kExitIoError;
+  }
+  size_t triangles = 0;
+  Json list = Json::array();
+  for (const NamedMesh& o : objects) {
+    triangles += o.mesh->triangleCount();
+    list.push_back({{"name", o.name}, {"triangles", o.mesh->triangleCount()}});
+  }
+  if (json) {
+    printJson(Json{{"scene", input}, {"output", output}, {"objects", std::move(list)}, {"triangles", triangles}});
+  } else {
+    std::printf("%s: %zu objects, %zu triangles, written to %s%s\n", input.c_str(), objects.size(), triangles,
+                output.c_str(), extensionOf(output) == ".ply" ? " (merged: PLY has no objects)" : "");
+  }
+  return kExitOk;
+}
+
+// `mesh WORLD`: every character posed at --at and every prop, each its own object.
+int runWorldMesh(const MeshArgs& a) {
+  if (!a.props.empty() || a.polygonizer != "mc" || a.check) {
+    std::fprintf(stderr, "puppeteer mesh: error: %s is a world: --prop, --polygonizer particles and --check apply to "
+                         "one character scene\n", a.scene.c_str());
+    return kExitUsage;
+  }
+  auto world = loadWorld(a.scene);
+  if (!world) return kExitInvalidInput;
+  auto sources = driveSources(*world, a.drives);
+  if (!sources) return kExitUsage;
+  MarchingCubesOptions options;
+  options.threads = a.threads;
+  options.preserveThinFeatures = !a.noThin;
+  options.cellSize = a.cell;
+  if (a.res > 0) options.resolution = a.res;
+  options.maxCells = a.maxCells;
+  auto objects = poseWorld(*world, *sources, a.at, options, nullptr, "mesh");
+  if (!objects) return kExitInvalidInput;
+  for (const WorldCharacter& c : world->characters)
+    if (c.character.textured())
+      std::fprintf(stderr, "puppeteer mesh: note: %s's textures are not written with the world's objects (its vertex "
+                           "colours are)\n", c.name.c_str());
+  std::vector<NamedMesh> named;
+  for (const WorldObject& o : *objects) named.push_back({o.name, &o.mesh});
+  return writeObjects("mesh", a.scene, named, a.output, a.json);
+}
 
 Json topologyJson(const MeshTopology& t) {
   return Json{{"closedManifold", t.closedManifold()}, {"boundaryEdges", t.boundaryEdges},
@@ -191,6 +248,15 @@ int runParticleMesh(const MeshArgs& a, const Scene& scene, const SkeletonCache& 
 
 int runMesh(const MeshArgs& a) {
   if (int rc = checkOutputPath("mesh", "-o", a.output, {".obj", ".ply", ".glb"}); rc != kExitOk) return rc;
+  if (isWorldFile(a.scene)) return runWorldMesh(a);
+  if (!a.drives.empty() || a.at != 0.0) {
+    std::fprintf(stderr, "puppeteer mesh: error: --drive and --at need a world file (docs/world-format.md#worlds)\n");
+    return kExitUsage;
+  }
+  if (!a.props.empty() && a.polygonizer != "mc") {
+    std::fprintf(stderr, "puppeteer mesh: error: --prop is written with Marching Cubes meshes only\n");
+    return kExitUsage;
+  }
   auto loaded = loadScene(a.scene);
   if (!loaded) return kExitInvalidInput;
   const Scene& scene = loaded->scene;
@@ -228,6 +294,27 @@ int runMesh(const MeshArgs& a) {
   Mesh mesh = polygonize(skeleton.field(), options, &stats);
   textureMesh(mesh, skeleton, options.threads);
 
+  if (!a.props.empty()) {
+    // The character and each prop its own object (glTF node, OBJ object); textures are not written then.
+    std::string propWarnings;
+    auto props = loadProps(a.props, character, &propWarnings);
+    std::fputs(propWarnings.c_str(), stderr);
+    progress.done();
+    if (!props) {
+      std::fputs(props.error().c_str(), stderr);
+      return kExitInvalidInput;
+    }
+    std::vector<Mesh> posed;
+    posed.reserve(props->size());
+    for (const AttachedProp& p : *props)
+      posed.push_back(p.joint >= 0 ? transformed(p.mesh, skeleton.world(p.joint)) : p.mesh);
+    std::vector<NamedMesh> named{{std::filesystem::path(a.scene).stem().string(), &mesh}};
+    for (size_t k = 0; k < props->size(); ++k) named.push_back({(*props)[k].name, &posed[k]});
+    if (character.textured())
+      std::fprintf(stderr, "puppeteer mesh: note: with --prop the character's textures are not written (its vertex "
+                           "colours are)\n");
+    return writeObjects("mesh", a.scene, named, a.output, a.json);
+  }
   progress.phase("writing " + std::to_string(mesh.triangleCount()) + " triangles to " + a.output);
   std::string error;
   const auto writeStart = std::chrono::steady_clock::now();
@@ -354,6 +441,7 @@ struct RenderArgs {
   double at = 0.0;
   std::vector<std::string> props;  // --prop FILE.wrl[@JOINT]: polygonal props, attached to a joint or in the world
   std::vector<std::string> grabs;  // --grab FILE.wrl@JOINT@PICK:DROP: props picked up and put down (with --clip)
+  std::vector<std::string> drives;  // a world: --drive NAME=CLIP
 };
 
 // Appends the props of every --grab, moved as the clip's joint carries them at --at (grabbedMotion). False after
@@ -390,9 +478,66 @@ bool addGrabbedProps(const RenderArgs& a, const Character& character, Mesh& mesh
   return true;
 }
 
+glm::vec3 viewDirection(const std::string& view) {
+  return view == "front" ? glm::vec3(0, 0, 1) : view == "side" ? glm::vec3(1, 0, 0)
+         : view == "top" ? glm::vec3(0, 1, 0) : kFrontThreeQuarter;
+}
+
+// `render WORLD`: every character posed at --at by its clip, and every prop, in one picture.
+int runWorldRender(const RenderArgs& a) {
+  if (!a.clip.empty() || !a.props.empty() || !a.grabs.empty()) {
+    std::fprintf(stderr, "puppeteer render: error: %s is a world: --clip, --prop and --grab apply to one character "
+                         "scene (inline clips and props in the world; drive characters with --drive NAME=CLIP)\n",
+                 a.scene.c_str());
+    return kExitUsage;
+  }
+  auto world = loadWorld(a.scene);
+  if (!world) return kExitInvalidInput;
+  auto sources = driveSources(*world, a.drives);
+  if (!sources) return kExitUsage;
+  MarchingCubesOptions options;
+  options.cellSize = a.cell;
+  options.resolution = a.res;
+  options.maxCells = a.maxCells;
+  std::vector<RgbaImage> textures;
+  auto objects = poseWorld(*world, *sources, a.at, options, &textures, "render");
+  if (!objects) return kExitInvalidInput;
+  Mesh mesh;
+  for (const WorldObject& o : *objects) appendMesh(mesh, o.mesh);
+  SnapshotOptions snap;
+  snap.textures = &textures;
+  snap.width = a.width;
+  snap.height = a.height;
+  snap.camera = frameMesh(mesh, viewDirection(a.view), float(a.width) / float(a.height));
+  std::string error;
+  if (!renderMeshToPng(mesh, snap, a.output, &error)) {
+    std::fprintf(stderr, "puppeteer render: error: %s\n", error.c_str());
+    return kExitIoError;
+  }
+  if (a.json) {
+    printJson(Json{{"scene", a.scene}, {"output", a.output}, {"triangles", mesh.triangleCount()},
+                   {"characters", world->characterNames()}, {"props", world->props.size()},
+                   {"width", a.width}, {"height", a.height}, {"view", a.view}});
+    return kExitOk;
+  }
+  std::printf("%s: %zu characters, %zu props, %zu triangles rendered to %s (%dx%d, %s view, at %g s)\n",
+              a.scene.c_str(), world->characters.size(), world->props.size(), mesh.triangleCount(), a.output.c_str(),
+              a.width, a.height, a.view.c_str(), a.at);
+  return kExitOk;
+}
+
 // Renders the scene's Marching Cubes mesh in software to a PNG: a quick look without a GPU or a display.
 int runRender(const RenderArgs& a) {
   if (int rc = checkOutputPath("render", "-o", a.output, {".png"}); rc != kExitOk) return rc;
+  if (isWorldFile(a.scene)) return runWorldRender(a);
+  if (!a.drives.empty()) {
+    std::fprintf(stderr, "puppeteer render: error: --drive needs a world file (docs/world-format.md#worlds)\n");
+    return kExitUsage;
+  }
+  if (a.clip.empty() && a.at != 0.0) {
+    std::fprintf(stderr, "puppeteer render: error: --at needs --clip (or a world file)\n");
+    return kExitUsage;
+  }
   auto loaded = loadScene(a.scene);
   if (!loaded) return kExitInvalidInput;
   const Character& character = loaded->character;
@@ -439,9 +584,7 @@ int runRender(const RenderArgs& a) {
   snap.textures = &*textures;
   snap.width = a.width;
   snap.height = a.height;
-  const glm::vec3 direction = a.view == "front" ? glm::vec3(0, 0, 1) : a.view == "side" ? glm::vec3(1, 0, 0)
-                              : a.view == "top" ? glm::vec3(0, 1, 0) : kFrontThreeQuarter;
-  snap.camera = frameMesh(mesh, direction, float(a.width) / float(a.height));
+  snap.camera = frameMesh(mesh, viewDirection(a.view), float(a.width) / float(a.height));
   std::string error;
   const bool rendered = renderMeshToPng(mesh, snap, a.output, &error);
   progress.done();
@@ -483,6 +626,13 @@ void addSceneCommands(CLI::App& app, Commands& commands) {
   meshCmd->add_option("--max-particles", mesh->maxParticles, "particles: the most particles (default 2^18)")
       ->check(CLI::PositiveNumber);
   meshCmd->add_flag("--json", mesh->json, "Print the report as JSON (for scripts)");
+  meshCmd->add_option("--prop", mesh->props,
+                      "Also write a VRML 97 file's props, FILE.wrl@JOINT attached to a joint, each its own object "
+                      "(glTF node, OBJ object; repeatable)");
+  meshCmd->add_option("--drive", mesh->drives,
+                      "With a world: NAME=FILE.wrl[#TIMESENSOR] poses the character NAME by that clip (repeatable)");
+  meshCmd->add_option("--at", mesh->at, "With a world: the time into the clips, seconds (looping)")
+      ->check(nonNegativeNumber());
   commands.push_back({meshCmd, [mesh] { return runMesh(*mesh); }});
 
   auto checkPath = std::make_shared<std::string>();
@@ -506,8 +656,11 @@ void addSceneCommands(CLI::App& app, Commands& commands) {
   renderCmd->add_flag("--json", render->json, "Print the report as JSON (for scripts)");
   auto* renderClip = renderCmd->add_option("--clip", render->clip, "Pose the character from a VRML 97 clip file "
                                                                    "(docs/world-format.md)")->check(inputFile());
-  renderCmd->add_option("--at", render->at, "With --clip: the time into the clip, seconds (looping)")
-      ->check(nonNegativeNumber())->needs(renderClip);
+  renderCmd->add_option("--at", render->at, "With --clip or a world: the time into the clips, seconds (looping)")
+      ->check(nonNegativeNumber());
+  renderCmd->add_option("--drive", render->drives,
+                        "With a world: NAME=FILE.wrl[#TIMESENSOR] poses the character NAME by that clip (repeatable; "
+                        "docs/world-format.md#worlds)");
   renderCmd->add_option("--clip-name", render->clipName, "With --clip: the TimeSensor to play (default: the first)")
       ->needs(renderClip);
   renderCmd->add_option("--map", render->map, "With --clip: names or a joint map FILE.json")->needs(renderClip);

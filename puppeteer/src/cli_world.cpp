@@ -11,6 +11,7 @@
 #include "imps/gzip.h"
 #include "imps/vrml_clip.h"
 #include "imps/vrml_file.h"
+#include "imps/world.h"
 #include "json_output.h"
 
 namespace imps::app {
@@ -25,23 +26,6 @@ struct PropInfo {
 };
 
 constexpr size_t kMaxListedProps = 1000;
-
-// The node types only the IMPS scene dialect has (docs/scene-format.md).
-constexpr std::string_view kImpsNodes[] = {"Tesselator3MP", "MarchingCubes", "RigidTransform", "Metaball", "LineSeg",
-                                           "Ellipsoid", "ExponentialBlend", "BlancSchlickBlend", "EllipticalBlend",
-                                           "BlendGroup", "UniformHash"};
-
-bool isNameChar(char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_' || c == '-'; }
-
-// Does `text` contain `word` as a whole name (not inside a longer one)?
-bool namesWord(std::string_view text, std::string_view word) {
-  for (size_t at = text.find(word); at != std::string_view::npos; at = text.find(word, at + 1)) {
-    const bool before = at == 0 || !isNameChar(text[at - 1]);
-    const bool after = at + word.size() == text.size() || !isNameChar(text[at + word.size()]);
-    if (before && after) return true;
-  }
-  return false;
-}
 
 std::string numbersText(const VrmlField* f) {
   std::string out;
@@ -137,9 +121,7 @@ bool isWorldFile(const std::string& path) {
     text = std::move(*inflated);
   }
   if (!text.starts_with("#VRML") && !text.starts_with("\xEF\xBB\xBF#VRML")) return false;
-  for (std::string_view node : kImpsNodes)
-    if (namesWord(text, node)) return false;
-  return true;
+  return !namesImpsNodes(text);
 }
 
 int runWorldCheck(const std::string& path, bool json) {
@@ -157,8 +139,24 @@ int runWorldCheck(const std::string& path, bool json) {
   }
   std::vector<PropInfo> props;
   for (const VrmlNodeRef& root : file->roots) collectProps(*root, "", props, 0);
+  // The characters its Inlines place (docs/world-format.md#worlds), with their errors.
+  Diagnostics worldWarnings;
+  auto world = readWorldFile(path, &worldWarnings);
+  if (!world) {
+    std::fputs(world.error().str().c_str(), stderr);
+    return kExitInvalidInput;
+  }
+  Json characters = Json::array();
+  for (const WorldCharacter& c : world->characters) {
+    const glm::vec3 t = c.placement.translation;
+    characters.push_back({{"name", c.name}, {"scene", c.scenePath}, {"translation", {t.x, t.y, t.z}},
+                          {"clip", c.clip ? Json(c.clip->name) : Json(nullptr)},
+                          {"joints", c.character.joints().size()}});
+  }
   if (json) {
-    printJson(worldJson(path, *clips, props));
+    Json report = worldJson(path, *clips, props);
+    report["characters"] = std::move(characters);
+    printJson(report);
     return kExitOk;
   }
   std::printf("%s: valid VRML 97 world, %zu clip%s, %zu prop%s\n", path.c_str(), clips->clips.size(),
@@ -180,6 +178,15 @@ int runWorldCheck(const std::string& path, bool json) {
   for (const PropInfo& p : props)
     std::printf("  %-30s %-16s %s\n", p.path.empty() ? "(top level)" : p.path.c_str(), p.geometry.c_str(),
                 p.size.c_str());
+  if (!world->characters.empty()) {
+    std::printf("characters (%zu):\n", world->characters.size());
+    for (const WorldCharacter& c : world->characters) {
+      const glm::vec3 t = c.placement.translation;
+      std::printf("  %-16s %s at %g %g %g, %zu joints%s\n", c.name.c_str(), c.scenePath.c_str(), double(t.x),
+                  double(t.y), double(t.z), c.character.joints().size(),
+                  c.clip ? (", clip " + c.clip->name + " from " + c.clipPath).c_str() : "");
+    }
+  }
   return kExitOk;
 }
 

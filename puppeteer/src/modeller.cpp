@@ -33,7 +33,11 @@ Camera OrbitCamera::camera() const {
 }
 
 OrbitCamera initialOrbit(const ViewerPipeline& pipeline, int width, int height, float* sceneRadius) {
-  const MeshBounds box = pipeline.restBounds().empty() ? bounds(pipeline.mesh()) : pipeline.restBounds();
+  return initialOrbit(pipeline.restBounds().empty() ? bounds(pipeline.mesh()) : pipeline.restBounds(), width, height,
+                      sceneRadius);
+}
+
+OrbitCamera initialOrbit(const MeshBounds& box, int width, int height, float* sceneRadius) {
   const Camera cam = frameBox(box, kFrontThreeQuarter, float(width) / float(std::max(1, height)));
   const glm::vec3 d = glm::normalize(cam.eye - cam.target);
   OrbitCamera orbit;

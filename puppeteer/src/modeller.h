@@ -37,6 +37,8 @@ struct OrbitCamera {
 // The app's first camera: the pipeline's rest bounds (else the mesh's) framed from the front three-quarter view in
 // a width x height window; *sceneRadius (optional) receives the radius the clip planes use.
 OrbitCamera initialOrbit(const ViewerPipeline& pipeline, int width, int height, float* sceneRadius);
+// The same for a box (a world of several characters).
+OrbitCamera initialOrbit(const MeshBounds& box, int width, int height, float* sceneRadius);
 
 enum class ManipulatorMode { Translate, Rotate, Scale };
 const char* modeName(ManipulatorMode mode);

@@ -315,6 +315,52 @@ class PolygonizeWorker {
   std::thread thread_;
 };
 
+// Every character's texture images, the main pipeline's first (appendOthers offsets the others' layers to match).
+std::vector<RgbaImage> allTextures(const ViewerPipeline& pipeline, const ViewerOptions& options) {
+  std::vector<RgbaImage> images = pipeline.textures();
+  for (const ViewerActor& a : options.others)
+    images.insert(images.end(), a.pipeline->textures().begin(), a.pipeline->textures().end());
+  return images;
+}
+
+// The other characters' meshes appended to the main one, their layers naming their images in allTextures' order.
+void appendOthers(Mesh& mesh, const ViewerPipeline& pipeline, const ViewerOptions& options) {
+  int32_t offset = int32_t(pipeline.textures().size());
+  for (const ViewerActor& a : options.others) {
+    if (a.pipeline->textures().empty()) {
+      appendMesh(mesh, a.pipeline->mesh());
+    } else {
+      Mesh other = a.pipeline->mesh();
+      for (int32_t& image : other.layerImages)
+        if (image >= 0) image += offset;
+      appendMesh(mesh, other);
+    }
+    appendPosedProps(mesh, a.props, a.pipeline->skeleton());
+    offset += int32_t(a.pipeline->textures().size());
+  }
+}
+
+// The union of every character's rest bounds (a world's camera frames them all).
+MeshBounds worldBounds(const ViewerPipeline& pipeline, const ViewerOptions& options) {
+  MeshBounds box;
+  auto add = [&box](const ViewerPipeline& p) {
+    const MeshBounds b = p.restBounds().empty() ? bounds(p.mesh()) : p.restBounds();
+    if (b.empty()) return;
+    box.min = glm::min(box.min, b.min);
+    box.max = glm::max(box.max, b.max);
+  };
+  add(pipeline);
+  for (const ViewerActor& a : options.others) add(*a.pipeline);
+  for (const AttachedProp& p : options.props) {
+    if (p.joint >= 0) continue;
+    const MeshBounds b = bounds(p.mesh);
+    if (b.empty()) continue;
+    box.min = glm::min(box.min, b.min);
+    box.max = glm::max(box.max, b.max);
+  }
+  return box;
+}
+
 struct GlfwSession {
   bool ok = false;
   GlfwSession() { ok = glfwInit() == GLFW_TRUE; }
@@ -383,7 +429,7 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
       glfwDestroyWindow(window);
       return kExitIoError;
     }
-    renderer->uploadTextures(pipeline.textures());
+    renderer->uploadTextures(allTextures(pipeline, options));
     std::unique_ptr<Hud> hud = options.hud ? std::make_unique<Hud>(window) : nullptr;
     s.hud = hud.get();
 
@@ -392,7 +438,12 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
     int64_t arrivalNs = 0;
     if (source && source->poll(pipeline.skeleton(), &arrivalNs)) pipeline.skeleton().update();
     pipeline.frame();
-    s.orbit = initialOrbit(pipeline, s.width, s.height, &s.sceneRadius);
+    for (const ViewerActor& a : options.others) {
+      if (a.source && a.source->poll(a.pipeline->skeleton(), &arrivalNs)) a.pipeline->skeleton().update();
+      a.pipeline->frame();
+    }
+    s.orbit = options.others.empty() ? initialOrbit(pipeline, s.width, s.height, &s.sceneRadius)
+                                     : initialOrbit(worldBounds(pipeline, options), s.width, s.height, &s.sceneRadius);
     renderer->setSceneRadius(s.sceneRadius);
     renderer->setPointSize(options.pointSize);
     Modeller modeller(pipeline);
@@ -431,6 +482,8 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
     int64_t inFlightArrival = 0;  // arrival of the sample whose pose is being polygonized (0: none new)
     int64_t meshArrival = 0;      // arrival of the sample whose mesh is about to be drawn
     uint64_t uploadedVersion = ~uint64_t{0};
+    std::vector<AttachedProp> props = options.props;  // moved by options.moveProps
+    uint64_t propsVersion = 0;
     // 1. Newest pose: never waits for the source.
     auto pollPose = [&] {
       int64_t newArrival = 0;
@@ -471,24 +524,36 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
         pollPose();
         lap(kPose);
         pipeline.frame();
+        for (const ViewerActor& a : options.others) {
+          int64_t arrival = 0;
+          if (a.source && a.source->poll(a.pipeline->skeleton(), &arrival)) {
+            a.pipeline->skeleton().update();
+            if (inFlightArrival == 0) inFlightArrival = arrival;
+          }
+          a.pipeline->frame();
+        }
         lap(kPolygonize);
         meshArrival = std::exchange(inFlightArrival, 0);
       }
       // 3. Upload, only a new mesh.
       const bool drawParticles = s.showParticles && pipeline.polygonizer() == Polygonizer::Particles;
-      if (pipeline.meshVersion() != uploadedVersion) {
-        if (options.props.empty() || worker) {
+      if (options.moveProps && options.moveProps(frame, props)) ++propsVersion;
+      uint64_t version = pipeline.meshVersion() * 1000003u + propsVersion;
+      for (const ViewerActor& a : options.others) version = version * 1000003u + a.pipeline->meshVersion();
+      if (version != uploadedVersion) {
+        if ((props.empty() && options.others.empty()) || worker) {
           renderer->uploadMesh(pipeline.mesh());
         } else {
           Mesh withProps = pipeline.mesh();  // the props posed like the character this frame
-          appendPosedProps(withProps, options.props, pipeline.skeleton());
+          appendPosedProps(withProps, props, pipeline.skeleton());
+          appendOthers(withProps, pipeline, options);
           renderer->uploadMesh(withProps);
         }
-        uploadedVersion = pipeline.meshVersion();
+        uploadedVersion = version;
       }
       if (drawParticles) renderer->uploadParticles(pipeline.tesselator().particles().positions);
       if (s.texturesDirty) {
-        renderer->uploadTextures(pipeline.textures());
+        renderer->uploadTextures(allTextures(pipeline, options));
         s.texturesDirty = false;
       }
       lap(kUpload);
@@ -500,6 +565,7 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
       info.updatesPerRender = pipeline.updatesPerRender();
       info.particles = pipeline.polygonizer() == Polygonizer::Particles ? ts.particles : 0;
       info.triangles = pipeline.mesh().triangleCount();
+      for (const ViewerActor& a : options.others) info.triangles += a.pipeline->mesh().triangleCount();
       if (options.printMeshHashes)
         std::printf("frame %d hash %016llx triangles %zu\n", frame, static_cast<unsigned long long>(meshHash(pipeline.mesh())),
                     pipeline.mesh().triangleCount());
@@ -576,6 +642,8 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
         meshArrival = 0;
       }
       if (source) source->frameDone();
+      for (const ViewerActor& a : options.others)
+        if (a.source) a.source->frameDone();
       frameTimes.push_back(double(now - lastFrameEnd) * 1e-6);
       if (info.fps == 0.0 && frameTimes.back() > 0.0) info.frameMs = frameTimes.back(), info.fps = 1e3 / info.frameMs;
       lastFrameEnd = now;
@@ -596,13 +664,18 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
     if (worker) worker->wait();
     if (source) report(s, source->finish());
     if (source && exitCode == kExitOk) exitCode = source->exitCode();
+    for (const ViewerActor& a : options.others) {
+      if (!a.source) continue;
+      report(s, a.source->finish());
+      if (exitCode == kExitOk) exitCode = a.source->exitCode();
+    }
 
     // Summary: frame rate over the whole loop (the settle before it excluded).
     const double seconds = double(lastFrameEnd - loopStart) * 1e-9;
     const auto [frameMedian, frameP99] = medianP99(frameTimes);
     std::printf("puppeteer: %d frames in %.2f s: %.1f FPS (frame time median %.1f ms, p99 %.1f ms), %zu triangles, %dx%d\n",
-                frame, seconds, seconds > 0 ? frame / seconds : 0.0, frameMedian, frameP99,
-                pipeline.mesh().triangleCount(), s.width, s.height);
+                frame, seconds, seconds > 0 ? frame / seconds : 0.0, frameMedian, frameP99, info.triangles, s.width,
+                s.height);
     static const char* const kPhaseNames[kPhases] = {"pose", "polygonize", "upload", "draw", "hud", "swap"};
     std::printf("puppeteer: median ms per phase%s:", options.syncPhases ? " (GL finished after each)" : "");
     for (int p = 0; p < kPhases; ++p) std::printf(" %s %.2f", kPhaseNames[p], medianP99(phaseTimes[p]).first);

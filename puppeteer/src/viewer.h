@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 
 #include <vector>
@@ -43,11 +44,26 @@ class PoseSource {
   virtual int exitCode() const { return 0; }
 };
 
+// Another character in the same window (a world, `puppeteer view WORLD`): its own pipeline (polygonizer, skeleton
+// cache, placement) and its own pose source (null: it keeps its pose). Neither is owned.
+struct ViewerActor {
+  ViewerPipeline* pipeline = nullptr;
+  PoseSource* source = nullptr;
+  std::vector<AttachedProp> props;  // riding on its joints (joint >= 0), posed by its skeleton cache
+};
+
 struct ViewerOptions {
   int width = 1280, height = 720;  // window size in pixels
+  // More characters drawn beside the main pipeline's, each polygonized and posed every frame like it; their meshes
+  // (and textures) join the main mesh for upload. The modeller, painter and HUD serve the main pipeline; the camera
+  // frames them all. Not with `overlap`.
+  std::vector<ViewerActor> others;
   // Polygonal props drawn with the character's mesh, attached ones following their joints (`--prop`; not with
   // `overlap`, where the worker thread owns the skeleton cache).
   std::vector<AttachedProp> props;
+  // Called once per frame before the upload with the frame's number and the props (a world's own clips moving
+  // them); returns true when it moved any. Null: the props stay.
+  std::function<bool(int frame, std::vector<AttachedProp>& props)> moveProps;
   // > 0: render this many frames (after the initial settle), then close; the headless mode for tests and docs.
   int frames = 0;
   // Written after the last frame when frames > 0 (PNG).

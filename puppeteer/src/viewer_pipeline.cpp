@@ -36,6 +36,13 @@ ViewerPipeline::ViewerPipeline(Scene scene, Character character, const PipelineO
   }
 }
 
+void ViewerPipeline::setPlacement(const Rigid& placement) {
+  skeleton_->setPlacement(placement);
+  skeleton_->update();
+  const Box rest = skeleton_->field().surfaceBounds();
+  restBounds_ = rest.empty() ? MeshBounds{} : MeshBounds{rest.lo, rest.hi};
+}
+
 void ViewerPipeline::setPolygonizer(Polygonizer p) {
   if (p == options_.polygonizer) return;
   options_.polygonizer = p;
@@ -89,6 +96,7 @@ std::optional<Diagnostics> ViewerPipeline::setState(DocumentState state) {
   if (!compiled) return compiled.error();
   auto character = std::make_unique<Character>(std::move(*compiled));
   auto skeleton = std::make_unique<SkeletonCache>(*character);
+  skeleton->setPlacement(skeleton_->placement());
   for (size_t j = 0; j < character->joints().size() && j < state.pose.size(); ++j) {
     skeleton->setRotation(int(j), state.pose[j].rotation);
     skeleton->setTranslation(int(j), state.pose[j].translation);

@@ -46,6 +46,10 @@ class ViewerPipeline {
   SkeletonCache& skeleton() { return *skeleton_; }
   const SkeletonCache& skeleton() const { return *skeleton_; }
 
+  // Places the character in the world (a world file's Transform; SkeletonCache::setPlacement), updates the skeleton
+  // cache and moves restBounds() with it. Call before the first frame.
+  void setPlacement(const Rigid& placement);
+
   // Runs the active polygonizer against the skeleton cache's current field (call skeleton().update() first when
   // the pose changed): updatesPerRender particle updates and a triangulation, or one Marching Cubes pass.
   void frame();

@@ -80,6 +80,39 @@ TEST(SkeletonCache, DifferentialTransformsCarryParticlesWithTheirPrimitives) {
   expectNear(cache.primitiveDifferential(1).apply(moved), particle, 1e-4f);
 }
 
+// A placement (a world's Transform above the character) moves every world transform and primitive rigidly, joint-less
+// ones too, and the differentials carry particles along when it changes.
+TEST(SkeletonCache, APlacementMovesTheWholeCharacter) {
+  const Character c = arm();
+  SkeletonCache home(c), placed(c);
+  Rigid where;
+  where.rotation = glm::angleAxis(0.8f, glm::normalize(glm::vec3(0, 1, 0.2f)));
+  where.translation = {3.0f, -1.0f, 2.0f};
+  const glm::vec3 particle(1.5f, 0.15f, 0.0f);
+  placed.setPlacement(where);
+  placed.update();
+  for (size_t j = 0; j < c.joints().size(); ++j) {
+    expectNear(placed.world(int(j)).translation, where.apply(home.world(int(j)).translation));
+  }
+  const glm::vec3 moved = placed.primitiveDifferential(1).apply(particle);
+  expectNear(moved, where.apply(particle));
+  EXPECT_NEAR(placed.field().primitive(1).distance(moved), 1.0f, 1e-4f);
+  const Box a = home.field().surfaceBounds(), b = placed.field().surfaceBounds();
+  EXPECT_GT(glm::length(b.center() - a.center()), 1.0f) << "the surface moved with the placement";
+
+  // A flat scene's joint-less primitive is placed too; without a placement it stays bit-identical.
+  auto flat = readScene("#VRML V2.0 utf8\nMetaball { center 1 2 3 radius 0.5 }\n", "flat.wrl");
+  ASSERT_TRUE(flat.has_value());
+  auto ball = Character::fromScene(*flat);
+  ASSERT_TRUE(ball.has_value());
+  SkeletonCache still(*ball), moving(*ball);
+  still.update();
+  EXPECT_EQ(still.field().primitive(0).center, glm::vec3(1, 2, 3));
+  moving.setPlacement(where);
+  moving.update();
+  expectNear(moving.field().primitive(0).center, where.apply(glm::vec3(1, 2, 3)), 1e-4f);
+}
+
 // Thesis 3.9: the generator is centred on its primitive and follows it through the skeleton cache, so a point fixed
 // to the forearm keeps its texture coordinates however the arm is posed.
 TEST(SkeletonCache, TexGensFollowTheirPrimitives) {

@@ -99,3 +99,67 @@ TEST(Props, TransformedMovesPositionsAndTurnsNormals) {
 
 }  // namespace
 }  // namespace imps
+
+namespace imps {
+namespace {
+
+// A unit cube as an IndexedFaceSet (8 points, 6 quads, ccw seen from outside) with `extra` fields.
+std::string cube(const std::string& extra) {
+  return kHeader + "Shape { geometry IndexedFaceSet {\n"
+                   "  coord Coordinate { point [ 0 0 0, 1 0 0, 1 1 0, 0 1 0, 0 0 1, 1 0 1, 1 1 1, 0 1 1 ] }\n"
+                   "  coordIndex [ 0 3 2 1 -1, 4 5 6 7 -1, 0 1 5 4 -1, 2 3 7 6 -1, 0 4 7 3 -1, 1 2 6 5 -1 ]\n" +
+         extra + "\n} }\n";
+}
+
+TEST(Props, ColorNodesColourFacesOrCorners) {
+  // Per face, by colorIndex: faces 0-5 take colours 1 0 1 0 1 0.
+  const auto perFace = propsOf(cube("color Color { color [ 1 0 0, 0 0 1 ] } colorPerVertex FALSE "
+                                    "colorIndex [ 1 0 1 0 1 0 ]"));
+  ASSERT_EQ(perFace.size(), 1u);
+  const Mesh& f = perFace[0].mesh;
+  ASSERT_EQ(f.triangleCount(), 12u);
+  for (size_t t = 0; t < 12; ++t) {
+    const glm::vec3 expected = (t / 2) % 2 == 0 ? glm::vec3(0, 0, 1) : glm::vec3(1, 0, 0);
+    for (size_t c = 0; c < 3; ++c)
+      for (int k = 0; k < 3; ++k) EXPECT_EQ(f.colors[3 * (3 * t + c) + size_t(k)], expected[k]) << t;
+  }
+  // Per vertex, through coordIndex: point i's colour is colour i, wherever the point is a corner.
+  std::string eight = "color Color { color [ ";
+  for (int i = 0; i < 8; ++i) eight += std::to_string(i / 8.0) + " 0 0, ";
+  const auto perVertex = propsOf(cube(eight + "] }"));
+  const Mesh& v = perVertex[0].mesh;
+  for (size_t i = 0; i < v.vertexCount(); ++i) {
+    const glm::vec3 p = v.position(i);
+    const float expected = float(int(p.x) + 2 * int(p.y) + 4 * int(p.z));  // which of the 8 points, by layout
+    const int which[8] = {0, 1, 3, 2, 4, 5, 7, 6};  // point index of (x, y, z) bits
+    EXPECT_NEAR(v.colors[3 * i], float(which[int(expected)]) / 8.0f, 1e-6f) << i;
+  }
+  // Without a Color node the Material's colour stays.
+  EXPECT_EQ(propsOf(cube(""))[0].mesh.colors[0], 0.8f);
+}
+
+TEST(Props, CreaseAngleSmoothsAndNormalNodesAreUsed) {
+  // creaseAngle 0 (default): every corner has its face's normal, which faces outwards.
+  const Mesh flat = propsOf(cube(""))[0].mesh;
+  for (size_t i = 0; i < flat.vertexCount(); ++i) {
+    const glm::vec3 n = flat.normal(i), p = flat.position(i);
+    EXPECT_NEAR(std::abs(n.x) + std::abs(n.y) + std::abs(n.z), 1.0f, 1e-5f);
+    EXPECT_GT(glm::dot(n, p - glm::vec3(0.5f)), 0.0f);
+  }
+  // Above 90 degrees the cube's faces are smoothed: each corner's normal is its point's diagonal.
+  const Mesh smooth = propsOf(cube("creaseAngle 1.6"))[0].mesh;
+  for (size_t i = 0; i < smooth.vertexCount(); ++i) {
+    const glm::vec3 expected = glm::normalize(smooth.position(i) - glm::vec3(0.5f));
+    EXPECT_NEAR(glm::dot(smooth.normal(i), expected), 1.0f, 1e-5f) << i;
+  }
+  // Just below 90 degrees nothing is smoothed.
+  const Mesh crease = propsOf(cube("creaseAngle 1.5"))[0].mesh;
+  for (size_t i = 0; i < crease.vertexCount(); ++i) EXPECT_EQ(crease.normal(i), flat.normal(i));
+  // A Normal node per face wins over the faces' own.
+  const Mesh given = propsOf(cube("normal Normal { vector [ 0 1 0 ] } normalPerVertex FALSE "
+                                  "normalIndex [ 0 0 0 0 0 0 ]"))[0].mesh;
+  for (size_t i = 0; i < given.vertexCount(); ++i) EXPECT_EQ(given.normal(i), glm::vec3(0, 1, 0));
+}
+
+}  // namespace
+}  // namespace imps

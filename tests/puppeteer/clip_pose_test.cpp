@@ -14,6 +14,9 @@
 #include "imps/marching_cubes.h"
 #include "imps/scene_reader.h"
 #include "imps/vrml_props.h"
+#include "imps/vrml_file.h"
+
+#include <algorithm>
 #include "subprocess.h"
 
 namespace imps::app {
@@ -163,6 +166,36 @@ TEST(Grab, AGrabbedPropStaysPutThenFollowsTheHandThenStaysWhereDropped) {
   }
   // After the drop it stays where the hand left it.
   expectNear(grabbedMotion(grab, 5.0, hand).apply(p), grabbedMotion(grab, 2.0, hand).apply(p));
+}
+
+// The bundled ball touches the tip of Flubber's left hand at the pick time its comment gives (1.0 s into the dance),
+// so a grab there carries it in the hand instead of at a distance; half a second earlier the hand is elsewhere.
+TEST(Grab, TheBundledBallIsInFlubbersHandAtThePickTime) {
+  const Character flubber = characterOf(kFlubber);
+  auto driver = ClipDriver::load(kDance, "", "names", flubber);
+  ASSERT_TRUE(driver.has_value()) << driver.error();
+  auto file = readVrmlFile(kSource + "/examples/flubber_ball.wrl");
+  ASSERT_TRUE(file.has_value());
+  const auto props = readProps(*file);
+  ASSERT_EQ(props.size(), 1u);
+  const MeshBounds b = bounds(props[0].mesh);
+  const glm::vec3 ball = 0.5f * (b.min + b.max);
+  const float ballRadius = 0.5f * (b.max.y - b.min.y);
+  const int arm = flubber.findJoint("L_ARM_JOINT");
+  ASSERT_GE(arm, 0);
+  const Primitive& hand = flubber.primitives()[size_t(
+      std::find_if(flubber.primitives().begin(), flubber.primitives().end(),
+                   [&](const CharacterPrimitive& p) { return p.joint == arm; }) -
+      flubber.primitives().begin())].local;
+  auto tipAt = [&](double seconds) {
+    SkeletonCache skeleton(flubber);
+    driver->apply(seconds, skeleton);
+    skeleton.update();
+    return skeleton.world(arm).apply(hand.p2);
+  };
+  const float touching = ballRadius + hand.r2;
+  EXPECT_LT(glm::length(tipAt(1.0) - ball), touching + 0.03f) << "in the hand at the pick";
+  EXPECT_GT(glm::length(tipAt(0.5) - ball), touching + 0.1f) << "the hand is elsewhere before";
 }
 
 TEST(Grab, SpecsAreChecked) {

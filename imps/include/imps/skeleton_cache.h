@@ -42,6 +42,12 @@ class SkeletonCache {
   // Back to the file's pose.
   void resetPose();
 
+  // Where the character stands in the world (a world file's Transform above its Inline): applied above every root
+  // joint and to joint-less primitives, so world(), field() and texGen() are in world space. The identity by
+  // default. Takes effect at the next update(), whose differentials include the move (particles follow it).
+  void setPlacement(const Rigid& placement) { placement_ = placement; }
+  const Rigid& placement() const { return placement_; }
+
   // Recomputes world transforms, differential transforms and the field's world-space primitives.
   void update();
 
@@ -49,7 +55,8 @@ class SkeletonCache {
   const Rigid& world(int joint) const { return world_[joint]; }
   // world(now) * inverse(world(previous update)); the identity after the first update.
   const Rigid& differential(int joint) const { return differential_[joint]; }
-  // Differential transform for the particles owned by primitive i (identity for joint-less primitives).
+  // Differential transform for the particles owned by primitive i (for joint-less primitives the placement's move
+  // since the previous update, usually the identity).
   Rigid primitiveDifferential(size_t i) const;
   const Field& field() const { return field_; }
   // Primitive i's texture-coordinate generator in world space (it follows the primitive's joint), or null when the
@@ -61,6 +68,7 @@ class SkeletonCache {
  private:
   const Character* character_;
   std::vector<Rigid> local_, world_, differential_;
+  Rigid placement_, appliedPlacement_, placementDifferential_;
   Field field_;
   std::vector<TexGen> texGens_;   // empty when no primitive has a generator
   std::vector<uint8_t> hasTexGen_;

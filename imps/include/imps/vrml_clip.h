@@ -44,6 +44,10 @@ struct TransformValues {
   glm::vec3 rigidTranslation() const { return translation + center - rotation * center; }
 };
 
+// A Transform node's fields as written (defaults where absent): translation, rotation, scale, scaleOrientation,
+// center.
+TransformValues transformValuesOf(const VrmlNode& transform);
+
 // Which field of its target a track drives.
 enum class ClipProperty { Translation, Rotation, Scale, ScaleOrientation, Center };
 // "translation", "rotation", "scale", "scaleOrientation", "center".

@@ -18,9 +18,12 @@ namespace imps {
 struct Prop {
   std::string name;      // the DEF name of the Shape, else of its geometry, else of the nearest Transform; or "propN"
   std::string geometry;  // "IndexedFaceSet", "Box", "Sphere", "Cylinder", "Cone"
-  // Triangles in the file's coordinates (every Transform above the Shape applied), flat-shaded: three vertices of
-  // its own per triangle with the face normal, counter-clockwise seen from outside (an IndexedFaceSet with
-  // `ccw FALSE` is turned round). colors: the Material's diffuseColor (0.8 grey without one), or the Color node's.
+  // Triangles in the file's coordinates (every Transform above the Shape applied): three vertices of its own per
+  // triangle, counter-clockwise seen from outside (an IndexedFaceSet with `ccw FALSE` is turned round). Normals:
+  // the face's for primitives; an IndexedFaceSet's Normal node (normalPerVertex,
+  // normalIndex) when it has one, else each corner's average over the faces around its point that meet this face
+  // at no more than creaseAngle (0, the default: flat). colors: an IndexedFaceSet's Color node (colorPerVertex,
+  // colorIndex) when it has one, else the Material's diffuseColor (0.8 grey without one).
   Mesh mesh;
   SourceLoc loc;  // the Shape
 };
@@ -41,5 +44,8 @@ Mesh coneMesh(float bottomRadius, float height);
 
 // `mesh` moved by the rigid transform `pose` (positions and normals).
 Mesh transformed(const Mesh& mesh, const Rigid& pose);
+// `mesh` moved by an affine `matrix` (normals by its inverse transpose, renormalised; a mirroring matrix turns the
+// triangles round so they keep facing outwards).
+Mesh transformed(const Mesh& mesh, const glm::mat4& matrix);
 
 }  // namespace imps
