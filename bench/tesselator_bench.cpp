@@ -29,7 +29,7 @@ void BM_BipedUpdateAndTriangulate(benchmark::State& state) {
   o.desiredRadius *= scale;
   o.queryRadius *= scale;
   o.cubeSize *= scale;
-  o.numThreads = int(state.range(1));
+  o.threads = int(state.range(1));
   SkeletonCache skel(*ch);
   Tesselator tess(o);
   Mesh mesh;
@@ -53,7 +53,7 @@ void BM_SphereScaling(benchmark::State& state) {
   o.queryRadius = 2.5f * o.desiredRadius;
   o.cubeSize = o.queryRadius;
   o.bitsPerDim = 7;
-  o.numThreads = 2;
+  o.threads = 2;
   Field field({Primitive::metaball(glm::vec3(0.0f), 1.0f)}, {-1.0f}, {glm::vec3(0.8f)}, BlendFunction{},
               BlendSets::all(1));
   Tesselator tess(o);

@@ -70,7 +70,7 @@ int main(int argc, char** argv) {
       imps::TesselatorOptions to;
       if (const auto* node = std::get_if<imps::Tesselator3MPNode>(&scene->polygonizer))
         to = imps::TesselatorOptions::fromNode(*node);
-      to.numThreads = threads;
+      to.threads = threads;
       imps::Tesselator tess(to);
       imps::Mesh mesh;
       const int joint = ch->joints().empty() ? -1 : int(ch->joints().size() / 2);

@@ -19,7 +19,7 @@ SkeletonCache::SkeletonCache(const Character& character) : character_(&character
     for (size_t i = 0; i < n; ++i) hasTexGen_[i] = character.primitives()[i].texGen.has_value();
   }
   field_ = Field(std::move(prims), std::move(params), std::move(colors), character.blend(), character.blendSets(),
-                 character.isoValue());
+                 character.iso());
   resetPose();
   world_.resize(local_.size());
   differential_.resize(local_.size());

@@ -107,7 +107,7 @@ void findNeighbours(Tesselator::State& s, const TesselatorOptions& o) {
   s.nbrCount.resize(n);
   const size_t chunks = (n + kChunk - 1) / kChunk;
   const float cube = s.hash.cubeSize();
-  parallelFor(chunks, o.numThreads, [&](size_t c) {
+  parallelFor(chunks, o.threads, [&](size_t c) {
     const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
     constexpr size_t kFound = 512;  // a denser crowd than this keeps the first kFound visited
     uint64_t found[kFound];
@@ -186,9 +186,8 @@ TesselatorOptions TesselatorOptions::fromNode(const Tesselator3MPNode& n) {
   o.energyCoeff = n.energyCoeff;
   o.surfaceCoeff = n.surfaceCoeff;
   o.fissioningFrac = n.fissioningFrac;
-  o.isoValue = n.isoValue;
   o.useSimpleRadii = n.useSimpleRadii;
-  o.numThreads = n.numThreads;
+  o.threads = n.numThreads;
   o.updatesPerRender = n.updatesPerRender;
   o.colorWidth = n.colorWidth;
   o.doDifferentialTransforms = n.doDifferentialTransforms;
@@ -508,7 +507,7 @@ void computeForces(Tesselator::State& s, const Field& field, const TesselatorOpt
   if (s.scratch.size() < chunks) s.scratch.resize(chunks);
   s.chunkTransfers.assign(chunks, 0);
   s.chunkBlocked.assign(chunks, 0);
-  parallelFor(chunks, o.numThreads, [&](size_t c) {
+  parallelFor(chunks, o.threads, [&](size_t c) {
     const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
     FieldScratch& scratch = s.scratch[c];
     if (!cached) field.prepare(chunkBox(s.pos, begin, end, 0.0f), scratch);
@@ -551,7 +550,7 @@ void computeForces(Tesselator::State& s, const Field& field, const TesselatorOpt
 void integrateParticles(Tesselator::State& s, const Field& field, const TesselatorOptions& o) {
   const size_t n = s.size();
   const float h = o.desiredRadius, invH = 1.0f / h, iso = field.iso();
-  parallelFor((n + kChunk - 1) / kChunk, o.numThreads, [&](size_t c) {
+  parallelFor((n + kChunk - 1) / kChunk, o.threads, [&](size_t c) {
     const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
     FieldScratch& scratch = s.scratch[c];
     for (size_t i = begin; i < end; ++i) {

@@ -638,7 +638,7 @@ void projectVertices(Tesselator::State& s, const TesselatorOptions& o) {
   s.cacheGrad.resize(n);
   s.cacheOwner.resize(n);
   const float colorExp = 1.0f / o.colorWidth;
-  parallelFor(chunks, o.numThreads, [&](size_t c) {
+  parallelFor(chunks, o.threads, [&](size_t c) {
     const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
     FieldScratch& scratch = s.scratch[c];
     Box box;
@@ -661,7 +661,7 @@ void buildFans(Tesselator::State& s, const TesselatorOptions& o) {
   const size_t n = s.size();
   s.fan.resize(n * kMaxFan);
   s.fanCount.resize(n);
-  parallelFor((n + kChunk - 1) / kChunk, o.numThreads, [&](size_t c) {
+  parallelFor((n + kChunk - 1) / kChunk, o.threads, [&](size_t c) {
     Cell cell;
     for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
       if (s.vok[i]) buildFan(s, i, o.desiredRadius, cell);
@@ -678,7 +678,7 @@ void voteTriangles(Tesselator::State& s, const TesselatorOptions& o) {
   s.fanRepeat.resize(n);
   s.candVotes.resize(n);
   s.chunkUnanimous.assign(chunks + 1, 0);
-  parallelFor(chunks, o.numThreads, [&](size_t c) {
+  parallelFor(chunks, o.threads, [&](size_t c) {
     size_t unanimousOut = 0;
     for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) unanimousOut += voteFan(s, i);
     s.chunkUnanimous[c + 1] = unanimousOut;
@@ -704,7 +704,7 @@ size_t assembleTriangles(Tesselator::State& s, const TesselatorOptions& o) {
     for (size_t c = 0; c < chunks; ++c) s.chunkUnanimous[c + 1] += s.chunkUnanimous[c];
     s.tris.resize(3 * s.chunkUnanimous[chunks]);
     s.chunkOpen.assign(chunks, 0);
-    parallelFor(chunks, o.numThreads, [&](size_t c) {
+    parallelFor(chunks, o.threads, [&](size_t c) {
       uint32_t* tri = s.tris.data() + 3 * s.chunkUnanimous[c];
       size_t chunkBoundary = 0;
       for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) chunkBoundary += placeUnanimous(s, i, tri);
@@ -766,7 +766,7 @@ size_t markPinchedVertices(Tesselator::State& s, const TesselatorOptions& o) {
   s.openUp.resize(n);
   s.dropSlot.resize(n * kMaxHalfEdges);
   s.chunkOpen.assign(chunks, 0);
-  parallelFor(chunks, o.numThreads, [&](size_t c) {
+  parallelFor(chunks, o.threads, [&](size_t c) {
     size_t pinched = 0;
     for (size_t v = c * kChunk; v < std::min(n, (c + 1) * kChunk); ++v) pinched += markIfPinched(s, v);
     s.chunkOpen[c] = pinched;
@@ -829,7 +829,7 @@ void writeMesh(const Tesselator::State& s, const TesselatorOptions& o, Mesh& mes
   mesh.positions.resize(3 * n);
   mesh.normals.resize(3 * n);
   mesh.colors.resize(3 * n);
-  parallelFor((n + kChunk - 1) / kChunk, o.numThreads, [&](size_t c) {
+  parallelFor((n + kChunk - 1) / kChunk, o.threads, [&](size_t c) {
     for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i)
       for (int a = 0; a < 3; ++a) {
         mesh.positions[3 * i + size_t(a)] = s.vpos[i][a];
@@ -843,7 +843,7 @@ void writeMesh(const Tesselator::State& s, const TesselatorOptions& o, Mesh& mes
 void writeFallbackMesh(const Tesselator::State& s, const TesselatorOptions& o, Mesh& mesh) {
   MarchingCubesOptions mc;
   mc.cellSize = o.desiredRadius;
-  mc.threads = o.numThreads;
+  mc.threads = o.threads;
   mesh = polygonize(*s.field, mc);
 }
 

@@ -36,7 +36,7 @@ void updateTexGens(Tesselator::State& s, const SkeletonCache& skeleton) {
 
 void advectTexcoords(Tesselator::State& s, const TesselatorOptions& o) {
   const size_t n = s.size(), layers = s.texGens.size();
-  parallelFor((n + kChunk - 1) / kChunk, o.numThreads, [&](size_t c) {
+  parallelFor((n + kChunk - 1) / kChunk, o.threads, [&](size_t c) {
     for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
       if (s.dead[i]) continue;
       for (size_t k = 0; k < 2; ++k) {
@@ -71,7 +71,7 @@ void Tesselator::carryTexcoords(Mesh& mesh) {
   s.texGens = mesh.layerGens;  // the pose of this mesh; update(skeleton) refreshes them
   const size_t n = s.size();
   mesh.layerTexcoords.assign(4 * n, 0.0f);
-  parallelFor((n + kChunk - 1) / kChunk, options_.numThreads, [&](size_t c) {
+  parallelFor((n + kChunk - 1) / kChunk, options_.threads, [&](size_t c) {
     for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
       const int32_t oldLayer[2] = {s.texLayer[2 * i], s.texLayer[2 * i + 1]};
       const glm::vec2 oldUv[2] = {s.texUv[2 * i], s.texUv[2 * i + 1]};

@@ -164,7 +164,7 @@ std::string particleCoverage(const Mesh& mesh, const Field& field, const Tessela
   const MeshTopology t = analyzeTopology(mesh);
   MarchingCubesOptions mc;
   mc.cellSize = 0.5f * options.desiredRadius;
-  mc.threads = options.numThreads;
+  mc.threads = options.threads;
   const size_t reference = planGrid(field, mc) ? analyzeTopology(polygonize(field, mc)).components : 0;
   progress.done();
   if (json) {
@@ -188,7 +188,7 @@ int runParticleMesh(const MeshArgs& a, const Scene& scene, const SkeletonCache& 
                     const std::vector<RgbaImage>& images, Progress& progress) {
   TesselatorOptions options;
   if (const auto* node = std::get_if<Tesselator3MPNode>(&scene.polygonizer)) options = TesselatorOptions::fromNode(*node);
-  if (a.threads > 0) options.numThreads = a.threads;
+  if (a.threads > 0) options.threads = a.threads;
   options.maxParticles = a.maxParticles;
   options.closedFallback = false;  // the particles' own triangulation is written, and checked below
   Tesselator tess(options);
@@ -205,7 +205,7 @@ int runParticleMesh(const MeshArgs& a, const Scene& scene, const SkeletonCache& 
     updates = tess.settle(skeleton, mesh);
   }
   progress.phase("writing " + a.output);
-  textureMesh(mesh, skeleton, options.numThreads);
+  textureMesh(mesh, skeleton, options.threads);
   tess.carryTexcoords(mesh);
   std::string error;
   if (!writeTexturedMesh(mesh, skeleton.character(), images, a.output, &error)) {
@@ -389,7 +389,7 @@ Json checkJson(const std::string& path, const Character& c) {
     sets.push_back(std::move(members));
   }
   return Json{{"file", path},        {"valid", true},           {"hierarchical", c.hierarchical()},
-              {"blend", blendName(c.blend().kind)}, {"isoValue", c.isoValue()}, {"joints", std::move(joints)},
+              {"blend", blendName(c.blend().kind)}, {"isoValue", c.iso()}, {"joints", std::move(joints)},
               {"primitives", std::move(primitives)}, {"blendSets", std::move(sets)}};
 }
 
@@ -404,7 +404,7 @@ int runCheck(const std::string& path, bool json) {
     return kExitOk;
   }
   std::printf("%s: valid, %s scene, %s, iso-value %g\n", path.c_str(), c.hierarchical() ? "hierarchical" : "flat",
-              blendName(c.blend().kind), double(c.isoValue()));
+              blendName(c.blend().kind), double(c.iso()));
 
   std::printf("joints (%zu):\n", c.joints().size());
   std::vector<int> depth(c.joints().size(), 0);

@@ -35,7 +35,7 @@ int runStretch(StretchArgs& a) {
   TesselatorOptions o;
   if (const auto* node = std::get_if<Tesselator3MPNode>(&loaded->scene.polygonizer))
     o = TesselatorOptions::fromNode(*node);
-  if (a.threads >= 0) o.numThreads = a.threads;
+  if (a.threads >= 0) o.threads = a.threads;
   std::vector<TextureMode> modes;
   if (a.mode != "carried") modes.push_back(TextureMode::Projective);
   if (a.mode != "projective") modes.push_back(TextureMode::Carried);

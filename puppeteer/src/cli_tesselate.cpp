@@ -274,7 +274,7 @@ std::optional<Report> benchScene(const std::string& path, const Motion& motion, 
   }
   TesselatorOptions o;
   if (const auto* node = std::get_if<Tesselator3MPNode>(&loaded->scene.polygonizer)) o = TesselatorOptions::fromNode(*node);
-  if (a.threads >= 0) o.numThreads = a.threads;
+  if (a.threads >= 0) o.threads = a.threads;
   if (a.desiredRadius > 0) {
     const float scale = float(a.desiredRadius) / o.desiredRadius;
     o.desiredRadius *= scale;

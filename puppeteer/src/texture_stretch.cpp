@@ -29,7 +29,7 @@ bool blendsLayer(const Mesh& mesh, uint32_t v, int32_t l) {
 // One frame as the app draws it: updatesPerRender updates, triangulation, texture layers, carried coordinates.
 void drawFrame(Tesselator& tess, const SkeletonCache& cache, Mesh& mesh) {
   tess.frame(cache, mesh);
-  textureMesh(mesh, cache, tess.options().numThreads);
+  textureMesh(mesh, cache, tess.options().threads);
   tess.carryTexcoords(mesh);
 }
 
@@ -98,7 +98,7 @@ std::expected<StretchResult, std::string> measureStretch(const Character& charac
   Tesselator tess(tesselator);
   Mesh mesh;
   tess.settle(cache, mesh);
-  textureMesh(mesh, cache, tess.options().numThreads);
+  textureMesh(mesh, cache, tess.options().threads);
   tess.carryTexcoords(mesh);
   for (int f = 0; f < options.restFrames; ++f) drawFrame(tess, cache, mesh);
   if (!mesh.textured()) return std::unexpected(std::string("the mesh has no texture layers"));

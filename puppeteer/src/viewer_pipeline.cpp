@@ -24,11 +24,11 @@ ViewerPipeline::ViewerPipeline(Scene scene, Character character, const PipelineO
   if (!rest.empty()) restBounds_ = MeshBounds{rest.lo, rest.hi};
   TesselatorOptions t;
   if (const auto* node = std::get_if<Tesselator3MPNode>(&scene_.polygonizer)) t = TesselatorOptions::fromNode(*node);
-  if (options_.threads >= 0) t.numThreads = options_.threads;
+  if (options_.threads >= 0) t.threads = options_.threads;
   if (options_.textureMode) t.textureMode = *options_.textureMode;
   tesselator_ = std::make_unique<Tesselator>(t);
   mcOptions_.resolution = options_.mcResolution;
-  mcOptions_.threads = t.numThreads;
+  mcOptions_.threads = t.threads;
   if (const auto* node = std::get_if<MarchingCubesNode>(&scene_.polygonizer)) {
     mcOptions_.cellSize = node->cellSize;
     mcOptions_.gridResolution = {node->xResolution, node->yResolution, node->zResolution};
@@ -65,7 +65,7 @@ void ViewerPipeline::frame() {
     } else {
       tesselator_->frame(*skeleton_, mesh_);
     }
-    textureMesh(mesh_, *skeleton_, tesselator_->options().numThreads);
+    textureMesh(mesh_, *skeleton_, tesselator_->options().threads);
     tesselator_->carryTexcoords(mesh_);  // a no-op unless the texture mode is carried
     ++meshVersion_;
   } else if (!mcValid_ || mcGeneration_ != skeleton_->generation()) {

@@ -48,7 +48,7 @@ void particles(const imps::Scene& scene, const imps::SkeletonCache& skeleton) {
   imps::TesselatorOptions o;
   if (const auto* t = std::get_if<imps::Tesselator3MPNode>(&scene.polygonizer))
     o = imps::TesselatorOptions::fromNode(*t);
-  o.numThreads = 1;
+  o.threads = 1;
   o.maxParticles = 512;
   imps::Tesselator tess(o);
   for (int u = 0; u < 2; ++u) {

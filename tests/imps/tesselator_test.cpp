@@ -120,7 +120,7 @@ INSTANTIATE_TEST_SUITE_P(Examples, PerExample,
 // Runs `updates` frames of the biped, swinging the upper arms, and returns the last mesh.
 Mesh runBiped(int threads, uint64_t seed, int updates, std::vector<size_t>* boundary = nullptr) {
   Example e = load("simple_biped.wrl");
-  e.options.numThreads = threads;
+  e.options.threads = threads;
   e.options.seed = seed;
   SkeletonCache skel(*e.character);
   Tesselator tess(e.options);
@@ -761,7 +761,7 @@ TEST(TesselatorOptions, SettleReportsProgressOnTheCallingThreadAndStopsOnCancel)
   const Character& ch = test::exampleCharacter("transformed_blobs");
   SkeletonCache skel(ch);
   TesselatorOptions o;
-  o.numThreads = 2;
+  o.threads = 2;
   std::vector<float> reports;
   bool otherThread = false;
   const auto caller = std::this_thread::get_id();
@@ -800,7 +800,7 @@ TEST(TesselatorOptions, ProgressAndCancelDoNotChangeTheParticles) {
   const Character& ch = test::exampleCharacter("transformed_blobs");
   SkeletonCache skel(ch);
   TesselatorOptions quiet;
-  quiet.numThreads = 2;
+  quiet.threads = 2;
   TesselatorOptions watched = quiet;
   std::atomic<bool> never{false};
   watched.cancel = &never;

@@ -37,14 +37,14 @@ Loaded load(const std::string& name) {
 
 void drawFrame(Tesselator& tess, const SkeletonCache& cache, Mesh& mesh) {
   tess.frame(cache, mesh);
-  textureMesh(mesh, cache, tess.options().numThreads);
+  textureMesh(mesh, cache, tess.options().threads);
   tess.carryTexcoords(mesh);
 }
 
 // The textured biped bending its left elbow up and down for `frames` frames (carried mode), the last mesh.
 Mesh bendingElbow(int threads, int frames) {
   Loaded l = load("textured_biped.wrl");
-  l.options.numThreads = threads;
+  l.options.threads = threads;
   l.options.textureMode = TextureMode::Carried;
   SkeletonCache cache(l.character);
   Tesselator tess(l.options);

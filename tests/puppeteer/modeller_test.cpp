@@ -229,14 +229,14 @@ TEST(Modeller, TranslatingAJointHandleMovesTheJointUnderTheCursor) {
 TEST(Modeller, MenuEditsArePreviewedLiveAndUndoneAsOne) {
   auto p = load("examples/textured_blobs.wrl");
   Modeller m(*p);
-  const float iso = p->character().isoValue();
+  const float iso = p->character().iso();
   for (float v : {1.1f, 1.2f, 1.3f})
     EXPECT_EQ(m.editDocument([v](Scene& s) { *isoValueOf(s) = v; }, false), "");
-  EXPECT_FLOAT_EQ(p->character().isoValue(), 1.3f);
+  EXPECT_FLOAT_EQ(p->character().iso(), 1.3f);
   EXPECT_EQ(m.editDocument([](Scene& s) { blendInForce(s)->variance = 2.0f; }, true), "");
   EXPECT_EQ(m.history().undoCount(), 1u);
   m.undo();
-  EXPECT_FLOAT_EQ(p->character().isoValue(), iso);
+  EXPECT_FLOAT_EQ(p->character().iso(), iso);
   EXPECT_FLOAT_EQ(blendInForce(const_cast<Scene&>(p->scene()))->variance, 1.0f);
   // A document that does not compile is refused and changes nothing.
   const Scene before = p->scene();

@@ -50,7 +50,7 @@ struct Sphere {
   Tesselator::State s;
   explicit Sphere(size_t n, int threads = 1) : Sphere(fibonacciSphere(n), sphereOptions(n), threads) {}
   Sphere(const std::vector<glm::vec3>& points, const TesselatorOptions& o, int threads = 1) : options(o), s(options) {
-    options.numThreads = threads;
+    options.threads = threads;
     for (const glm::vec3& p : points) s.add(p, -p, options.desiredRadius, 0);
     s.field = &field;
     s.eHat = 1.0f;

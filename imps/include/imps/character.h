@@ -87,7 +87,7 @@ class Character {
   // Whether any primitive has a texture-coordinate generator (texGen or texture).
   bool textured() const { return textured_; }
   const BlendFunction& blend() const { return blend_; }
-  float isoValue() const { return iso_; }
+  float iso() const { return iso_; }  // the iso-value, as Field::iso()
   bool hierarchical() const { return hierarchical_; }
   // Index of the joint with this name, or -1.
   int findJoint(std::string_view name) const;

@@ -51,9 +51,8 @@ struct TesselatorOptions {
   float energyCoeff = 10.0f;     // alpha: repulsion energy amplitude
   float surfaceCoeff = 30.0f;    // phi: feedback pulling particles onto the surface
   float fissioningFrac = 0.5f;   // nu: a large particle fissions once its energy exceeds nu * E-hat
-  float isoValue = 1.0f;         // informative: the field's own iso-value is used (they agree for scene files)
   bool useSimpleRadii = true;    // Pedersen's radius rule (true) or Witkin-Heckbert's original (false)
-  int numThreads = 1;            // worker threads for the compute phase (0: all cores)
+  int threads = 1;               // worker threads for the compute phase (0: all cores), as MarchingCubesOptions
   int updatesPerRender = 1;      // updates per frame() (the triangulation runs once per frame)
   float colorWidth = 3.0f;       // > 0: colour blending width; larger blends primitive colours over a wider band
   bool doDifferentialTransforms = true;
