@@ -223,7 +223,9 @@ TesselatorOptions TesselatorOptions::forField(const Field& field, float cellSize
 TesselatorOptions TesselatorOptions::forScene(const Scene& scene, const Field& field) {
   if (const auto* node = std::get_if<Tesselator3MPNode>(&scene.polygonizer)) return fromNode(*node);
   const auto* mc = std::get_if<MarchingCubesNode>(&scene.polygonizer);
-  return forField(field, mc ? mc->cellSize : 0.0f);
+  TesselatorOptions o = forField(field, mc ? mc->cellSize : 0.0f);
+  if (mc) o.numThreads = mc->numThreads;  // the scene's own thread count (0: all cores); results do not depend on it
+  return o;
 }
 
 TesselatorOptions TesselatorOptions::fromNode(const Tesselator3MPNode& n) {

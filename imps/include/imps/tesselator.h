@@ -90,7 +90,8 @@ struct TesselatorOptions {
   // the plain defaults.
   static constexpr size_t kDefaultParticleBudget = size_t{1} << 19;
   static TesselatorOptions forField(const Field& field, float cellSize = 0.0f);
-  // The scene's Tesselator3MP node if it has one (fromNode), else forField(field, its MarchingCubes cellSize if any).
+  // The scene's Tesselator3MP node if it has one (fromNode), else forField(field, its MarchingCubes cellSize if any)
+  // with that MarchingCubes node's numThreads.
   static TesselatorOptions forScene(const Scene& scene, const Field& field);
 };
 
