@@ -30,7 +30,9 @@ constexpr float kMaxNewton = 0.5f;     // the longest Newton projection step
 constexpr float kStrayDistance = 1.0f; // |F - iso| / |grad F| beyond this: the particle left the surface
 // Coming to rest on a still field: after kStillAfter updates of an unchanged field with a particle count stable to
 // 1 % over the last kCountWindow updates, fission, fusion and death stop and the step halves every update; after
-// kCalmUpdates such updates the particles are frozen until the field moves again.
+// kCalmUpdates such updates the particles are frozen until the field moves again. Not while the last triangulation
+// of the particles had a hole or a pinched vertex (State::lastMeshOpen): on a scene whose thin parts need churn to be
+// covered (issue 15's swarm), the particles would otherwise freeze on a hole.
 constexpr uint32_t kStillAfter = 20;
 constexpr uint32_t kCalmUpdates = 12;
 constexpr size_t kCountWindow = 10;
@@ -178,6 +180,54 @@ void findNeighbours(Tesselator::State& s, const TesselatorOptions& o) {
   s.nbrValid = true;
 }
 
+TesselatorOptions TesselatorOptions::forField(const Field& field, float cellSize) {
+  TesselatorOptions o;
+  if (field.primitives().empty()) return o;
+  constexpr double kPi = 3.14159265358979;
+  float smallest = 1e30f;
+  double area = 0.0;  // summed over the primitives, overlaps counted twice: an upper bound for blended scenes
+  for (const Primitive& p : field.primitives()) {
+    smallest = std::min(smallest, p.minRadius());
+    switch (p.kind) {
+      case PrimitiveKind::Metaball: area += 4.0 * kPi * double(p.radius) * double(p.radius); break;
+      case PrimitiveKind::Ellipsoid: {
+        const double r = (double(p.radii.x) + double(p.radii.y) + double(p.radii.z)) / 3.0;
+        area += 4.0 * kPi * r * r;
+        break;
+      }
+      case PrimitiveKind::LineSeg:
+        area += 4.0 * kPi * (double(p.r1) * p.r1 + double(p.r2) * p.r2) +
+                2.0 * kPi * std::max(double(p.r1), double(p.r2)) * double(p.length);
+        break;
+    }
+  }
+  if (!(smallest > 0.0f) || !std::isfinite(smallest)) return o;
+  // Hexagonal packing: one particle per 0.866 h^2 of surface.
+  const double floorForBudget = std::sqrt(area / (0.866 * double(kDefaultParticleBudget)));
+  double wanted = 0.5 * double(smallest);
+  if (cellSize > 0.0f && std::isfinite(cellSize)) wanted = std::min(wanted, 2.0 * double(cellSize));
+  const float h = float(std::max(wanted, floorForBudget));
+  const float scale = h / o.desiredRadius;
+  o.desiredRadius = h;
+  o.queryRadius *= scale;
+  o.cubeSize *= scale;
+  const Box box = field.surfaceBounds();
+  if (!box.empty()) {
+    const glm::vec3 extent = box.hi - box.lo;
+    const float longest = std::max(extent.x, std::max(extent.y, extent.z));
+    while (o.bitsPerDim < 7 && float(1 << o.bitsPerDim) * o.cubeSize < longest) ++o.bitsPerDim;
+  }
+  return o;
+}
+
+TesselatorOptions TesselatorOptions::forScene(const Scene& scene, const Field& field) {
+  if (const auto* node = std::get_if<Tesselator3MPNode>(&scene.polygonizer)) return fromNode(*node);
+  const auto* mc = std::get_if<MarchingCubesNode>(&scene.polygonizer);
+  TesselatorOptions o = forField(field, mc ? mc->cellSize : 0.0f);
+  if (mc) o.threads = mc->numThreads;  // the scene's own thread count (0: all cores); results do not depend on it
+  return o;
+}
+
 TesselatorOptions TesselatorOptions::fromNode(const Tesselator3MPNode& n) {
   TesselatorOptions o;
   o.deltaT = n.deltaT;
@@ -262,6 +312,7 @@ void Tesselator::reset() {
   s_->lastGeneration = ~0ull;
   s_->fieldMoved = true;
   s_->stillUpdates = s_->calm = 0;
+  s_->lastMeshOpen = false;
   s_->recentCounts.clear();
   s_->stepScale = 1.0f;
   stats_ = {};
@@ -297,7 +348,7 @@ bool comeToRest(Tesselator::State& s) {
   if (s.stillUpdates == 0) s.calm = 0;
   const auto [lo, hi] = std::minmax_element(s.recentCounts.begin(), s.recentCounts.end());
   const bool stable = s.recentCounts.size() == kCountWindow && double(*hi - *lo) <= 0.01 * double(*hi);
-  if (s.size() == 0) s.calm = 0;
+  if (s.size() == 0 || s.lastMeshOpen) s.calm = 0;  // never rest on a mesh with a hole: the dynamics may close it
   else if (s.calm > 0 || (s.stillUpdates >= kStillAfter && stable)) ++s.calm;
   s.stepScale = s.calm > 0 ? std::ldexp(1.0f, -int(std::min(s.calm, kCalmUpdates))) : 1.0f;
   return s.calm > kCalmUpdates;

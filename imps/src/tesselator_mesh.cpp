@@ -870,6 +870,7 @@ void Tesselator::triangulate(Mesh& mesh) {
   stats_.unfilledLoops = unfilled;
   stats_.pinchedVertices = pinched;
   stats_.openEdges = boundary;
+  s.lastMeshOpen = boundary > 0 || pinched > 0;
   stats_.fallback = o.closedFallback && (boundary > 0 || pinched > 0);
   if (stats_.fallback) {  // G: never show a hole (docs/tesselator.md, "The fallback")
     ++stats_.fallbacks;

@@ -103,6 +103,9 @@ struct Tesselator::State {
   uint32_t stillUpdates = 0, calm = 0;
   std::vector<size_t> recentCounts;
   float stepScale = 1.0f;
+  // The last triangulate() left the particles' own triangulation open or pinched (before any fallback): the particles
+  // must not come to rest on it (a frozen hole would stay for good); set by triangulate(), read by the rest schedule.
+  bool lastMeshOpen = false;
 
   // Reorder scratch.
   std::vector<glm::vec3> tmpV;

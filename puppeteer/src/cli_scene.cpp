@@ -186,8 +186,9 @@ std::string particleCoverage(const Mesh& mesh, const Field& field, const Tessela
 // --polygonizer particles: the tesselator run until settled (or --updates N), its triangulation written.
 int runParticleMesh(const MeshArgs& a, const Scene& scene, const SkeletonCache& skeleton,
                     const std::vector<RgbaImage>& images, Progress& progress) {
-  TesselatorOptions options;
-  if (const auto* node = std::get_if<Tesselator3MPNode>(&scene.polygonizer)) options = TesselatorOptions::fromNode(*node);
+  // Without a Tesselator3MP node the lengths follow the scene's feature size (TesselatorOptions::forScene).
+  const auto* node = std::get_if<Tesselator3MPNode>(&scene.polygonizer);
+  TesselatorOptions options = TesselatorOptions::forScene(scene, skeleton.field());
   if (a.threads > 0) options.threads = a.threads;
   options.maxParticles = a.maxParticles;
   options.closedFallback = false;  // the particles' own triangulation is written, and checked below
@@ -215,12 +216,13 @@ int runParticleMesh(const MeshArgs& a, const Scene& scene, const SkeletonCache& 
   }
   progress.done();
   Json json{{"scene", a.scene}, {"output", a.output}, {"polygonizer", "particles"},
-            {"particles", mesh.vertexCount()}, {"triangles", mesh.triangleCount()}, {"updates", updates}};
+            {"particles", mesh.vertexCount()}, {"triangles", mesh.triangleCount()}, {"updates", updates},
+            {"desiredRadius", options.desiredRadius}};
   if (!a.json)
-    std::printf("%s: %zu particles, %zu triangles after %d updates, written to %s\n", a.scene.c_str(),
-                mesh.vertexCount(), mesh.triangleCount(), updates, a.output.c_str());
+    std::printf("%s: %zu particles, %zu triangles after %d updates (desiredRadius %g m%s), written to %s\n",
+                a.scene.c_str(), mesh.vertexCount(), mesh.triangleCount(), updates, double(options.desiredRadius),
+                node ? "" : ", from the scene's feature size", a.output.c_str());
   if (tess.particles().size() >= options.maxParticles) {
-    const auto* node = std::get_if<Tesselator3MPNode>(&scene.polygonizer);
     const SourceLoc at = node ? node->desiredRadiusLoc : SourceLoc{};
     std::fprintf(stderr,
                  "%s: warning: the particles reached their limit of %zu (desiredRadius %g m is small for this "

@@ -272,8 +272,8 @@ std::optional<Report> benchScene(const std::string& path, const Motion& motion, 
     take = loadTake(motion.file, a.map, ch, a.hz);
     if (!take) return std::nullopt;
   }
-  TesselatorOptions o;
-  if (const auto* node = std::get_if<Tesselator3MPNode>(&loaded->scene.polygonizer)) o = TesselatorOptions::fromNode(*node);
+  SkeletonCache skel(ch);
+  TesselatorOptions o = TesselatorOptions::forScene(loaded->scene, skel.field());
   if (a.threads >= 0) o.threads = a.threads;
   if (a.desiredRadius > 0) {
     const float scale = float(a.desiredRadius) / o.desiredRadius;
@@ -281,7 +281,6 @@ std::optional<Report> benchScene(const std::string& path, const Motion& motion, 
     o.queryRadius *= scale;
     o.cubeSize *= scale;
   }
-  SkeletonCache skel(ch);
   Driver driver(skel, motion, take ? &*take : nullptr, a.hz);
   Tesselator tess(o);
   Mesh mesh;

@@ -26,8 +26,7 @@ bool writeSurfaceSequence(const Scene& scene, const Character& character, const 
   SkeletonCache skeleton(character);
   std::optional<Tesselator> tesselator;
   if (options.particles) {
-    TesselatorOptions t;
-    if (const auto* node = std::get_if<Tesselator3MPNode>(&scene.polygonizer)) t = TesselatorOptions::fromNode(*node);
+    TesselatorOptions t = TesselatorOptions::forScene(scene, skeleton.field());
     tesselator.emplace(t);
   }
   // The pattern's folder is made when missing ("skin/take_####.ply").

@@ -22,8 +22,7 @@ ViewerPipeline::ViewerPipeline(Scene scene, Character character, const PipelineO
       options_(options) {
   const Box rest = skeleton_->field().surfaceBounds();
   if (!rest.empty()) restBounds_ = MeshBounds{rest.lo, rest.hi};
-  TesselatorOptions t;
-  if (const auto* node = std::get_if<Tesselator3MPNode>(&scene_.polygonizer)) t = TesselatorOptions::fromNode(*node);
+  TesselatorOptions t = TesselatorOptions::forScene(scene_, skeleton_->field());
   if (options_.threads >= 0) t.threads = options_.threads;
   if (options_.textureMode) t.textureMode = *options_.textureMode;
   tesselator_ = std::make_unique<Tesselator>(t);

@@ -19,6 +19,7 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include "imps/character.h"
+#include "imps/marching_cubes.h"
 #include "imps/mesh.h"
 #include "imps/scene_reader.h"
 #include "imps/skeleton_cache.h"
@@ -691,6 +692,69 @@ TEST(Tesselator, FlatFieldWithoutSkeletonAndReset) {
   EXPECT_EQ(tess.particles().size(), 0u);
   tess.triangulate(mesh);
   EXPECT_EQ(mesh.triangleCount(), 0u);
+}
+
+// Issue 15, "any scene": a scene without a Tesselator3MP node gets its lengths from its feature size
+// (TesselatorOptions::forField). Twelve separate small metaballs (radii 0.15-0.35 m, 1.2 m apart) and two clusters of
+// five blended ones, variance 0.25 like swarm_1000.wrl: with the old default desiredRadius of 0.3 m the small balls
+// had 3-10 particles and no triangle; now settle() gives a closed, manifold mesh with as many components as Marching
+// Cubes finds at half desiredRadius (14), every particle but a few in a triangle, on 1 and 2 threads alike.
+TEST(Tesselator, ManySmallBlobsMeshClosedWithEveryComponent) {
+  std::string text = "#VRML V2.0 utf8\nExponentialBlend {\n  variance 0.25\n  children [\n";
+  uint32_t rng = 12345u;
+  auto uniform = [&](float lo, float hi) {
+    rng = rng * 1664525u + 1013904223u;
+    return lo + (hi - lo) * float(rng >> 8) / float(1u << 24);
+  };
+  auto ball = [&](float x, float y, float z, float r) {
+    text += "    Metaball { center " + std::to_string(x) + " " + std::to_string(y) + " " + std::to_string(z) +
+            " radius " + std::to_string(r) + " }\n";
+  };
+  for (int i = 0; i < 12; ++i) ball(1.2f * float(i % 4), 1.2f * float(i / 4), 0.0f, uniform(0.15f, 0.35f));
+  for (int c = 0; c < 2; ++c)
+    for (int k = 0; k < 5; ++k)
+      ball(2.0f * float(c) + uniform(-0.3f, 0.3f), uniform(-0.3f, 0.3f), 2.0f + uniform(-0.3f, 0.3f),
+           uniform(0.15f, 0.35f));
+  text += "  ]\n}\n";
+  auto scene = readScene(text, "many_blobs.wrl");
+  ASSERT_TRUE(scene) << scene.error().str();
+  auto character = Character::fromScene(*scene);
+  ASSERT_TRUE(character) << character.error().str();
+  SkeletonCache skel(*character);
+
+  TesselatorOptions o = TesselatorOptions::forField(skel.field());
+  EXPECT_NEAR(o.desiredRadius, 0.5f * 0.15f, 0.5f * 0.05f);  // half the smallest radius (>= 0.15 m)
+  EXPECT_FLOAT_EQ(o.queryRadius / o.desiredRadius, 0.8f / 0.3f);
+  EXPECT_GE(float(1 << o.bitsPerDim) * o.cubeSize, 4.0f);  // the hash spans the scene
+  MarchingCubesOptions mc;
+  mc.cellSize = 0.5f * o.desiredRadius;
+  const size_t reference = analyzeTopology(polygonize(skel.field(), mc)).components;
+  EXPECT_EQ(reference, 14u);
+
+  std::vector<uint32_t> indices[2];
+  for (int threads : {1, 2}) {
+    o.threads = threads;
+    o.closedFallback = false;  // the particles' own triangulation
+    Tesselator tess(o);
+    Mesh mesh;
+    const int updates = tess.settle(skel, mesh, 400);
+    EXPECT_LT(updates, 400) << threads << " threads";
+    const MeshTopology t = analyzeTopology(mesh);
+    EXPECT_TRUE(t.closedManifold()) << t.boundaryEdges << " boundary edges, " << t.nonManifoldVertices
+                                    << " non-manifold vertices";
+    EXPECT_EQ(t.components, reference);
+    EXPECT_LE(t.unusedVertices * 50, mesh.vertexCount()) << t.unusedVertices << " of " << mesh.vertexCount();
+    indices[threads - 1] = mesh.indices;
+  }
+  EXPECT_EQ(indices[0], indices[1]);
+
+  // The old default spacing misses components (what issue 15 measured on the swarm).
+  TesselatorOptions coarse;
+  coarse.closedFallback = false;
+  Tesselator tess(coarse);
+  Mesh mesh;
+  tess.settle(skel, mesh, 100);
+  EXPECT_LT(analyzeTopology(mesh).components, reference);
 }
 
 // ---- The update's phases one at a time (tesselator_state.h), on particles spread evenly over a sphere ---------

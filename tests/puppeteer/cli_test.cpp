@@ -469,10 +469,11 @@ TEST_F(CliTest, BenchChecksEveryRenderOfASwingAClipAndASession) {
 }
 
 // mesh --polygonizer particles always checks its mesh: a scene where the particles miss a small blob that Marching
-// Cubes finds (twelve metaballs, the default desiredRadius of 0.3 m against radii of 0.15-0.35 m) exits 4 and says
-// so; the mesh is written all the same.
+// Cubes finds (twelve metaballs, a desiredRadius of 0.3 m against radii of 0.15-0.35 m) exits 4 and says so; the mesh
+// is written all the same. The same scene without its Tesselator3MP node gets a desiredRadius from its smallest
+// metaball (issue 15) and meshes closed with every component, exit 0.
 TEST_F(CliTest, ParticleMeshMissingPartOfTheSurfaceExits4) {
-  write("blobs12.wrl", "#VRML V2.0 utf8\nExponentialBlend {\n  variance 0.25\n  children [\n"
+  const std::string balls = "ExponentialBlend {\n  variance 0.25\n  children [\n"
                        "    Metaball { center 0.939 -1.308 0.851 radius 0.267 }\n"
                        "    Metaball { center 0.146 -1.031 -0.394 radius 0.176 }\n"
                        "    Metaball { center 1.202 -0.405 0.604 radius 0.250 }\n"
@@ -484,12 +485,20 @@ TEST_F(CliTest, ParticleMeshMissingPartOfTheSurfaceExits4) {
                        "    Metaball { center 0.302 0.066 1.391 radius 0.337 }\n"
                        "    Metaball { center -1.275 0.467 0.285 radius 0.214 }\n"
                        "    Metaball { center 0.016 0.553 -0.792 radius 0.158 }\n"
-                       "    Metaball { center -0.388 -1.448 0.955 radius 0.296 }\n  ]\n}\n");
+                       "    Metaball { center -0.388 -1.448 0.955 radius 0.296 }\n  ]\n}\n";
+  write("blobs12.wrl", "#VRML V2.0 utf8\nTesselator3MP {\n  desiredRadius 0.3\n  sceneGraph " + balls + "}\n");
   const test::ProgramRun run =
       runProgram(puppeteer(), {"mesh", at("blobs12.wrl"), "--polygonizer", "particles", "-o", at("blobs12.ply")});
   EXPECT_EQ(run.exitCode, 4) << run.err;
   EXPECT_NE(run.err.find("Marching Cubes finds"), std::string::npos) << run.err;
   EXPECT_TRUE(std::filesystem::exists(at("blobs12.ply")));
+  write("blobs12_default.wrl", "#VRML V2.0 utf8\n" + balls);
+  const test::ProgramRun fine = runProgram(
+      puppeteer(), {"mesh", at("blobs12_default.wrl"), "--polygonizer", "particles", "-o", at("blobs12_default.ply")});
+  EXPECT_EQ(fine.exitCode, kOk) << fine.out << fine.err;
+  EXPECT_NE(fine.out.find("from the scene's feature size"), std::string::npos) << fine.out;
+  EXPECT_NE(fine.out.find("closed 2-manifold"), std::string::npos) << fine.out;
+  EXPECT_NE(fine.out.find("12 components (Marching Cubes at"), std::string::npos) << fine.out;
   const test::ProgramRun biped = runProgram(puppeteer(), {"mesh", kBiped, "--polygonizer", "particles", "--updates",
                                                           "3", "-o", at("biped.ply")});
   EXPECT_EQ(biped.exitCode, kOk) << biped.err;

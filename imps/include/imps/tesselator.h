@@ -79,6 +79,19 @@ struct TesselatorOptions {
 
   // From a scene's Tesselator3MP node (every figure A-1 field plus seed).
   static TesselatorOptions fromNode(const Tesselator3MPNode& node);
+  // For a scene without a Tesselator3MP node: the defaults above with the lengths scaled to the field's feature size,
+  // so that the particles can reach every part of it. desiredRadius is half the smallest primitive's minRadius() (a
+  // ball of that primitive's size gets about 60 particles; the default 0.3 m gave a 0.15 m metaball 3), and at most
+  // twice `cellSize` when that is > 0 (a MarchingCubes node's cell: the particles then resolve what its grid
+  // resolves); raised only if the primitives' summed surface area (overlaps counted twice) would need more than
+  // kDefaultParticleBudget particles. queryRadius and the hash cube keep their ratios to it (8/3 and 2), and
+  // bitsPerDim grows until the hash covers the field's surfaceBounds() (at most 7). A field without primitives gets
+  // the plain defaults.
+  static constexpr size_t kDefaultParticleBudget = size_t{1} << 19;
+  static TesselatorOptions forField(const Field& field, float cellSize = 0.0f);
+  // The scene's Tesselator3MP node if it has one (fromNode), else forField(field, its MarchingCubes cellSize if any)
+  // with that MarchingCubes node's numThreads.
+  static TesselatorOptions forScene(const Scene& scene, const Field& field);
 };
 
 // Milliseconds and counts, per call (the phases of thesis Table 3.1).
