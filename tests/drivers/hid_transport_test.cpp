@@ -256,7 +256,11 @@ TEST(HidTransport, SessionStreamsSurvivesGarbageTimesOutAndReconnects) {
   const uint64_t before = session.stats().samples;
   bed.unplug(0);
   ASSERT_TRUE(session.waitForState(ConnectionState::Lost, 3000)) << toString(session.state());
-  EXPECT_NE(session.lastError().find("hidraw0"), std::string::npos) << session.lastError();
+  // lastError() is the latest problem: the failed read naming the node, or already (on a loaded machine) the first
+  // retry's failure to find the device again.
+  const std::string lost = session.lastError();
+  EXPECT_TRUE(lost.find("hidraw0") != std::string::npos || lost.find("no such HID device") != std::string::npos)
+      << lost;
   auto last = mailbox.takeNewest();
   ASSERT_TRUE(last.has_value());
   EXPECT_EQ(last->sequence, 153u);
