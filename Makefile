@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # The README's two commands live here: `make demo` and `make test`. Both install what is missing first.
 BUILD      ?= build
 ASAN_BUILD ?= build-asan

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Benchmarks for the drivers' pure path: decode + hand-off cost per 64-channel sample (issue 4's goal: <= 2 µs),
 // decoder throughput in MB/s, and the pieces on their own (encode, line decode, mailbox).
 #include <benchmark/benchmark.h>

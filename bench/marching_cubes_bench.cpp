@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Marching Cubes on every example and on the 1000-ball swarm, at several cell sizes.
 // Reference points (issue 2, same scenes and cell sizes on this machine's kind): Blender 3.4's metaball polygonizer
 // 7.2 ms for a 19-capsule biped at 0.025 m and 5.5 s for the 1000 balls at 0.025 m; the thesis's MC 2.6 s for its

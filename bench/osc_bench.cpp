@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Benchmarks for OSC pose streaming (docs/osc.md) over loopback: the decoder's cost per pose, poses per second
 // sustained sender → receiver, and the latency streaming adds at 1 kHz (issue 13's goal: < 1 ms median), measured
 // from the frame loop's send() to the receiver's publish.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The whole device path under a sustained 1 kHz × 64-channel stream (issue 4): a simulated armature on a
 // pseudo-terminal (served as `puppeteer sim --pty` serves it) → SerialTransport (termios) → the DeviceSession's I/O
 // thread → PoseMailbox → a 60 FPS consumer that takes the newest pose and drains the in-order queue each frame.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Particle tesselator benchmarks (issue 3 goals): one update plus one triangulation of the settled biped at about
 // 900 particles and 4x that, the same for the biped swinging its limbs (issue 15's speed guard), and the cost growth
 // from 1k to 64k particles on a sphere. Report CPU time.
@@ -8,7 +9,9 @@
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <optional>
 #include <string>
+#include <utility>
 
 #include <glm/gtc/quaternion.hpp>
 
@@ -21,20 +24,30 @@ namespace {
 
 using namespace imps;
 
-// Biped with desiredRadius scaled so that about `particles` particles cover it (2685 at the file's 0.025 m).
-void BM_BipedUpdateAndTriangulate(benchmark::State& state) {
+// The biped and its tesselator options with desiredRadius scaled so that about `particles` particles cover it
+// (2685 at the file's 0.025 m), on `threads` threads; nullopt (and the benchmark skipped) when the file does not read.
+std::optional<std::pair<Character, TesselatorOptions>> scaledBiped(benchmark::State& state, int particles, int threads) {
   auto scene = readSceneFile(std::string(IMPS_SOURCE_DIR) + "/examples/simple_biped.wrl");
-  if (!scene) {
+  auto ch = scene ? Character::fromScene(*scene) : std::expected<Character, Diagnostics>(std::unexpect);
+  if (!ch) {
     state.SkipWithError("cannot read simple_biped.wrl");
-    return;
+    return std::nullopt;
   }
-  auto ch = Character::fromScene(*scene);
   TesselatorOptions o = TesselatorOptions::fromNode(std::get<Tesselator3MPNode>(scene->polygonizer));
-  const float scale = std::sqrt(2685.0f / float(state.range(0)));
+  const float scale = std::sqrt(2685.0f / float(particles));
   o.desiredRadius *= scale;
   o.queryRadius *= scale;
   o.cubeSize *= scale;
-  o.threads = int(state.range(1));
+  o.threads = threads;
+  return std::pair{std::move(*ch), o};
+}
+
+// The settled biped: range(0) particles, range(1) threads.
+void BM_BipedUpdateAndTriangulate(benchmark::State& state) {
+  auto biped = scaledBiped(state, int(state.range(0)), int(state.range(1)));
+  if (!biped) return;
+  auto& [character, o] = *biped;
+  const Character* ch = &character;
   SkeletonCache skel(*ch);
   Tesselator tess(o);
   Mesh mesh;
@@ -57,18 +70,10 @@ BENCHMARK(BM_BipedUpdateAndTriangulate)->Args({900, 1})->Args({900, 2})->Args({3
 // Cubes fallback included when a render needs it; counted in "fallbacks"). range(0): particles as above (2685 is the
 // file's own desiredRadius); range(1): threads.
 void BM_SwingingBipedUpdateAndTriangulate(benchmark::State& state) {
-  auto scene = readSceneFile(std::string(IMPS_SOURCE_DIR) + "/examples/simple_biped.wrl");
-  if (!scene) {
-    state.SkipWithError("cannot read simple_biped.wrl");
-    return;
-  }
-  auto ch = Character::fromScene(*scene);
-  TesselatorOptions o = TesselatorOptions::fromNode(std::get<Tesselator3MPNode>(scene->polygonizer));
-  const float scale = std::sqrt(2685.0f / float(state.range(0)));
-  o.desiredRadius *= scale;
-  o.queryRadius *= scale;
-  o.cubeSize *= scale;
-  o.threads = int(state.range(1));
+  auto biped = scaledBiped(state, int(state.range(0)), int(state.range(1)));
+  if (!biped) return;
+  auto& [character, o] = *biped;
+  const Character* ch = &character;
   o.updatesPerRender = 1;
   SkeletonCache skel(*ch);
   std::vector<int> joints;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Texturing (issue 11): what textureMesh adds to a frame of the biped, and the frame without textures (which must
 // cost what it did before texturing existed: compare BM_BipedFrame/textured:0 with the same benchmark built from
 // the commit before, run interleaved).

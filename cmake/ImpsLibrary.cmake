@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # imps_library(NAME SOURCES...): the static library of one module folder, `imps_NAME` with the alias `imps::NAME`
 # (the core, NAME `imps`, is target `imps`), its public headers include/<folder>/ beside the calling CMakeLists.txt
 # on the include path, the project's warnings at build time only, and `cmake --install` of the library and its

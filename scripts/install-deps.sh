@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Installs every Debian package the project needs to build, test and run. The one place that knows them.
 # Usage: scripts/install-deps.sh [fuzz]   (as root, or with sudo available; skips what is already installed)
 #   fuzz: also the clang that builds the libFuzzer targets (make fuzz)

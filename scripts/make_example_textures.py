@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Writes the example textures of examples/textured_blobs.wrl (thesis figure 3-4: two metaballs with very different
 textures): a checkerboard wrapped by a TexGenSphere and diagonal stripes projected by a TexGenPlane; and the blank
 canvases flubber's suit, tie and face were painted on in the app (flubber_blank.png: its skin colour). Plain Python

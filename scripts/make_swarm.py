@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Writes examples/swarm_1000.wrl: the benchmark swarm of issue 2 (1000 metaballs, centres uniform in [-2, 2]^3,
 radii uniform in [0.15, 0.35]), as a flat scene. Deterministic (fixed seed); rerun only to change the swarm."""
 import random

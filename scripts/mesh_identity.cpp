@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Prints a hash of every mesh the two polygonizers make of the examples, so that two builds can be compared for
 // bit-identical output (used to check refactors that must not change behaviour):
 //   g++ -std=c++23 -O2 -Iimps/include scripts/mesh_identity.cpp build/imps/libimps.a -ltbb -o mesh_identity

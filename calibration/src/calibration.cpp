@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Counts → angles → joint rotations (Calibration), and the stateful per-stream filter (Calibrator).
 #include "calibration/calibration.h"
 

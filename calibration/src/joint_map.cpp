@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Joint map files: clip joint → character joint, parsed with source locations and checked against both skeletons.
 #include "calibration/joint_map.h"
 

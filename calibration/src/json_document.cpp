@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A location-tracking JSON reader for the calibration files (see json_document.h).
 #include "json_document.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A small JSON reader that remembers where every value and key is (file:line:column), for the calibration
 // files' diagnostics. Private to calibration/; writing goes through nlohmann-json.
 #pragma once

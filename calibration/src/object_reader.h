@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Reading one JSON object's members with diagnostics: unknown keys (with "did you mean"), missing fields, wrong
 // types, and angles given in radians (`key`) or degrees (`key_deg`). Private to calibration/.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Offsets from a window held in the calibration pose (circular mean, noise rejection), and the check-pose test of
 // signs and gains.
 #include "calibration/offset_calibration.h"

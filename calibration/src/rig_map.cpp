@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Rig map / calibration files: parsing with source locations, validation against a character and a device,
 // writing (nlohmann-json) and atomic saves.
 #include "calibration/rig_map.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The IMPS armature binary protocol: CRC, frame encoder and resynchronising decoder (format: docs/protocol.md).
 #include "drivers/binary_protocol.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The device session's I/O thread: open, handshake, poll or stream, publish, and recover from faults.
 #include "drivers/device_session.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Device spec parsing and formatting (grammar in docs/devices.md).
 #include "drivers/device_spec.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The HID armature codec: report descriptor parser, input layout, report decoder and the device-side encoders.
 // Based on: USB-IF, "Device Class Definition for Human Interface Devices (HID)", version 1.11 (2001), 6.2.2.
 #include "drivers/hid_report.h"

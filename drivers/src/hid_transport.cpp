@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The HID adapter: the only file that touches hidapi. Also reads the hidraw node's report descriptor from sysfs
 // (hidapi 0.13 has no hid_get_report_descriptor; this is how hidapi 0.14 reads it on Linux).
 #include "drivers/hid_transport.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The DIY line protocol decoder: banner, sample lines, timestamps, channel-count locking (docs/protocol.md).
 #include "drivers/line_protocol.h"
 

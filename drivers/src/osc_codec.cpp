@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // OSC 1.0 datagrams → pose frames or raw channels (address space in docs/osc.md).
 // Based on: M. Wright, "The Open Sound Control 1.0 Specification", 2002.
 #include "drivers/osc_codec.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The OSC pose source's I/O thread: read datagrams, decode, order, publish; count every fault.
 #include "drivers/osc_receiver.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The OSC pose sender: liblo bundles on a thread of their own, fed by a wait-free queue.
 #include "drivers/osc_sender.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The pose mailbox: triple buffer for the newest sample, SPSC ring for the in-order queue, and their counters.
 #include "drivers/pose_mailbox.h"
 

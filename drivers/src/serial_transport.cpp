@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The serial-port adapter: the only file that touches libserialport. Also reads the port's sysfs entries (driver,
 // FTDI latency timer) because they belong to the same "what is this port" question.
 #include "drivers/serial_transport.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Small text helpers for messages in drivers/ (private; g++ 12 has no <format>).
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The vendor-USB adapter: the only file that touches libusb (listing, the transport, hotplug). The USB framing is in
 // docs/protocol.md ("USB transport"); everything above the bytes (codec, handshake, reconnects) is DeviceSession's.
 #include "drivers/usb_transport.h"

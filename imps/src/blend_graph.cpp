@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The blend graph over twin classes and its maximal cliques (the field's blend sets).
 #include "imps/blend_graph.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Character compilation: scene graph -> joints, joint-local primitives and the blend graph (thesis 3.7).
 #include "imps/character.h"
 

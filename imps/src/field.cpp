@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Field evaluation: terms per primitive, combined per blend set, maximum over sets.
 #include "imps/field.h"
 

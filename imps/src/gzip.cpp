@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // gzip decompression with zlib (see gzip.h).
 #include "imps/gzip.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Marching Cubes over blocks of 8^3 cells, as a list of named passes (marching_cubes_passes.h): grid, bin primitives,
 // thin features, then per block cull, sample, classify, edge roots and shading; number vertices, triangulate from a
 // face-consistent case table, gather in block order.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The passes of MarchingCubes::polygonize, in the order they run, with the buffers they share. Internal (not
 // installed): marching_cubes.cpp and the passes' unit tests (tests/imps/marching_cubes_passes_test.cpp) include it.
 //

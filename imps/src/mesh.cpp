@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Topology checks, volume, bounds and merging of the shared triangle mesh.
 #include "imps/mesh.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Mesh export: OBJ, binary PLY and glTF 2.0 binary, built in memory and saved atomically.
 // Based on: Khronos Group, "glTF 2.0 Specification" (2021), sections 3.6-3.7 (accessors, buffers) and 4 (GLB);
 // Greg Turk, "The PLY Polygon File Format" (1994); Wavefront, "Object Files (.obj)" (Advanced Visualizer manual).

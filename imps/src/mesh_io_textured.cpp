@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Textured export: glTF 2.0 binary with embedded images and OBJ + MTL, from splitByTexture's parts.
 // Based on: Khronos Group, "glTF 2.0 Specification" (2021), sections 3.8-3.9 (materials, textures, images) and 4
 // (GLB); Wavefront, "Object Files (.obj)" and "Material Library Files (.mtl)".

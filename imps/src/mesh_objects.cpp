@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Several named meshes in one glTF, OBJ or PLY file (see imps/mesh_objects.h).
 #include "imps/mesh_objects.h"
 

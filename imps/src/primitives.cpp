@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Normalised squared distances of the three primitives, their gradients and conservative bounds.
 // Based on: K. Russell, "IMPS", MIT 1999, 2.3; the meta-line segment's three regions (2.3.3) fall out of the
 // swept-sphere form below: the minimising sphere sits at an endpoint (regions 1 and 3) or between (region 2), and the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Scene document: equality (ignoring source locations) and accessors.
 #include <utility>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // SceneBuilder: IMPS node types, their fields and the checks on them, filling an imps::Scene from parser events.
 #include "scene_builder.h"
 

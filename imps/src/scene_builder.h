@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // SceneBuilder: the ParserTarget that checks what the parser reports against the IMPS node types and fills an
 // imps::Scene. Private to imps/src; the rules it enforces are listed in docs/scene-format.md.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Parser for the IMPS VRML 2 dialect: syntax only, reported to a ParserTarget (see scene_parser.h).
 #include "scene_parser.h"
 

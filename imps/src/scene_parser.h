@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The IMPS VRML 2 parser: checks the syntax and reports what it reads to a ParserTarget, without knowing what the
 // nodes mean (pbrt-v4's ParserTarget). Private to imps/src; the grammar is in docs/scene-format.md.
 #pragma once

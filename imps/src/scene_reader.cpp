@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // readScene / readSceneFile: the parser driving the SceneBuilder, and file input.
 #include "imps/scene_reader.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // writeScene / saveSceneFile: the canonical text of a scene, and saving it atomically.
 #include "imps/scene_writer.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Skeleton cache: pose -> world transforms, differential transforms and world-space primitives.
 #include "imps/skeleton_cache.h"
 

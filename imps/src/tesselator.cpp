@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The particle tesselator's simulation: differential transforms, compute phase, integration, additions/deletions.
 //
 // Based on: A. Witkin and P. Heckbert, "Using Particles to Sample and Control Implicit Surfaces", 1994;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Accuracy measure for polygonizers: worst distance from surface samples to a triangle mesh (bucketed search).
 #include <algorithm>
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The particle tesselator's triangulation (thesis 3.7, made closed): tangent-plane Delaunay fans voted on by their
 // three corners, manifold assembly, then hole repair.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Seeding the particle tesselator from every primitive (issue 3: never depend on one random point finding the
 // surface): points spread over each primitive's own surface are projected onto the blended surface and thinned.
 #include <algorithm>

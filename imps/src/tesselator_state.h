@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Internal state shared by the tesselator's source files (simulation, seeding, triangulation). Not installed.
 #pragma once
 

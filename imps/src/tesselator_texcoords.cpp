@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The particle tesselator's carried texture coordinates (TextureMode::Carried): a texture that stretches with the
 // skin instead of sliding across it (issue 11; the thesis's open problem 6.1.2).
 //

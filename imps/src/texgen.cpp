@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Texture-coordinate generators: the sphere's and the plane's mappings.
 #include "imps/texgen.h"
 

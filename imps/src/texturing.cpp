@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // textureMesh: per-vertex texture layers and weights from the field's normalised contributions.
 #include "imps/texturing.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Heckbert's uniform spatial hash: bucket tables rebuilt by sorting points by bucket.
 #include "imps/uniform_hash.h"
 

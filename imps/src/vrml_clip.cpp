@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Clips from VRML 97 ROUTEs: TimeSensor -> interpolators -> Transforms (see vrml_clip.h).
 #include "imps/vrml_clip.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The VRML 97 reader: ISO/IEC 14772-1 syntax into a generic node tree (see vrml_file.h). Based on: ISO/IEC
 // 14772-1:1997 clause 5 (syntax) and Annex A (grammar); H-Anim 1.1 for the PROTO use it has to support.
 #include "imps/vrml_file.h"

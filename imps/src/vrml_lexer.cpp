@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Lexer for the IMPS VRML 2 dialect: UTF-8 text to tokens with line and column.
 #include "vrml_lexer.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tokens of the IMPS VRML 2 dialect (docs/scene-format.md): identifiers, numbers, strings and brackets, each with
 // its line and column. Private to imps/src.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // VRML 97 Shapes to flat-shaded triangle meshes (see vrml_props.h).
 #include "imps/vrml_props.h"
 

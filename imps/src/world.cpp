@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Worlds: Inlines of IMPS characters and VRML 97 files under Transforms, resolved into placed characters, their
 // clips and props (see imps/world.h).
 #include "imps/world.h"

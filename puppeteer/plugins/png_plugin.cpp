@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The PNG encoder plugin: OpenImageIO behind a small C interface, loaded by puppeteer/src/png.cpp only when a PNG
 // is written. OpenImageIO brings some 500 shared libraries whose start-up costs about 0.3 s; commands that write
 // no image (mesh, check, record …) should not pay it.

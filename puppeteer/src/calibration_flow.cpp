@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Joint-offset calibration over a live sample stream (see calibration_flow.h).
 #include "calibration_flow.h"
 

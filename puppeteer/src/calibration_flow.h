@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Joint-offset calibration as a flow over a live sample stream, shared by `puppeteer calibrate` and the live app's
 // `k` key: a countdown while the performer gets into the calibration pose, a window of samples, then the calibration
 // library's calibrateOffsets (average, reject a noisy window, set offsets) and Calibration::create.

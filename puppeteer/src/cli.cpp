@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The command line: `puppeteer <command> …`. Commands live in cli_<topic>.cpp and register themselves here.
 #include "cli.h"
 

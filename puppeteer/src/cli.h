@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The command line: every `puppeteer` command registers itself here. Exit codes are documented in docs/cli.md.
 #pragma once
 

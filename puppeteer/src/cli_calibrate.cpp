@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `puppeteer calibrate`: joint-offset calibration of an armature against a character's calibration pose, from a
 // live device (interactive) or the first milliseconds of a recorded session (non-interactive). docs/calibration.md.
 #include "calibration_flow.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `puppeteer devices`, `puppeteer sim` and `puppeteer record`: what is attached, a simulated armature on a
 // pseudo-terminal, and recording a live device to a session file. docs/devices.md.
 #include "cli.h"

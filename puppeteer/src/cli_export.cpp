@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `puppeteer export INPUT SCENE -o OUT`: a take (a .session through its calibration) or a clip (a .bvh, retargeted)
 // on the character, written as the character's skeleton (.bvh), a skinned animated glTF (.glb) or a baked surface
 // sequence (numbered .ply/.obj); or the old raw-channel BVH with --raw-channels.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `puppeteer view` (pose by hand), `puppeteer replay` (play a recorded session) and `puppeteer live` (drive the
 // character from an armature): the live app's commands.
 #include "cli.h"

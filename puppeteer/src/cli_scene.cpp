@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `puppeteer mesh` and `puppeteer check`: scene files to meshes, and scene validation.
 #include "cli.h"
 #include "cli_world.h"

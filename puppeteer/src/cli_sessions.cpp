@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `puppeteer info` and `puppeteer convert`: what a recorded session holds, and sessions <-> BVH clips.
 #include <CLI/CLI.hpp>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `puppeteer stretch`: paint a dot on a joint, bend it and bring it back, and report how far the dot moved over the
 // skin in the projective and the carried texture modes (issue 11; texture_stretch.h).
 #include <CLI/CLI.hpp>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `puppeteer bench`: the particle tesselator's Table 3.1-style report (ms per phase, particles, triangles, boundary
 // edges, accuracy) and its per-render quality (holes, non-manifold edges and vertices, folded triangles, distance of
 // the vertices from the surface, fissions and fusions), for a static pose, limbs swinging at a given angular speed, or

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `puppeteer check` for VRML 97 worlds and clips (see cli_world.h).
 #include "cli_world.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // VRML 97 worlds and clips on the command line: telling them from IMPS character scenes, and `puppeteer check` for
 // them (docs/cli.md, docs/world-format.md).
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // VRML clips on an implicit character: binding targets to joints and playing them (see clip_pose.h).
 #include "clip_pose.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Keyframed VRML clips (imps/vrml_clip.h) on an implicit character: which clip target drives which joint (a joint
 // map, calibration/joint_map.h, or equal names), the pose at a time, and a PoseSource that plays a clip in the app.
 #pragma once

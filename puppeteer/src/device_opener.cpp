@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Device spec -> transport opener.
 #include "device_opener.h"
 

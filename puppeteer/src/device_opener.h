@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The transport a device spec names, for every command that talks to an armature (record, calibrate, live).
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Serial ports ranked by how likely they are to be an armature (see device_ranking.h).
 #include "device_ranking.h"
 

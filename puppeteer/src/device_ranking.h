@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `puppeteer devices`: which attached serial ports are likely armatures, so they are listed first.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Skinned, animated glTF export of a take (see export_gltf.h).
 #include "export_gltf.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A take as a skinned, animated glTF 2.0 binary (.glb): the character's rest mesh (Marching Cubes), a skin whose
 // joints are the character's hierarchy, per-vertex weights from the primitives' normalised field contributions (at
 // most four joints per vertex), and the take as one animation (rotations of every joint, translations of the joints

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Baked surface sequences: a mesh per frame of a take, numbered files.
 #include "export_surfaces.h"
 

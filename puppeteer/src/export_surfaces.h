@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A take baked into the implicit skin itself, every frame: numbered PLY (or OBJ) files, one mesh per frame with
 // vertex colours. Numbered files because Houdini ($F), Blender (Stop-motion-OBJ, Mesh Sequence Cache via a script)
 // and every DCC read them with no plug-in, and because Marching Cubes and the tesselator change the vertex count

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Takes on the character: frame selection, clip and session sources, and the character's skeleton as BVH.
 #include "export_take.h"
 

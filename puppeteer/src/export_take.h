@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A take on the character, ready to leave the app: every output frame's local joint transforms (from a retargeted
 // clip or a calibrated session, resampled to a frame rate and cut to a frame range), and the character's skeleton as
 // a BVH clip. The glTF and surface-sequence writers are in export_gltf.h and export_surfaces.h.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The HUD, drawn with Debian's Dear ImGui 1.86 and its GLFW / OpenGL 3 backends (libimgui).
 #include "hud.h"
 

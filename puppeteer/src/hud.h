@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The live app's heads-up display (Dear ImGui): frame rate, polygonizer timings and counts, the pose source's
 // state, sample rate, faults, sample age and sample-to-screen latency, and the key help.
 #pragma once

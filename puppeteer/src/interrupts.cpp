@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Ctrl-C and SIGTERM as a request to finish (see interrupts.h).
 #include "interrupts.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Ctrl-C and SIGTERM as a request to finish: long-running commands (record, sim, the live app) poll the flag and
 // close what they have open (a take gets its END record) instead of being killed mid-write.
 #pragma once

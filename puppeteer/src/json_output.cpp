@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // --json reports.
 #include "json_output.h"
 

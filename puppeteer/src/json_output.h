@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `--json`: every reporting command can print its report as one JSON document on stdout for scripts, instead of
 // the text for people. Messages (warnings, errors, progress) still go to stderr; the exit code is the same.
 #pragma once

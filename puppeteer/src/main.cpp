@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The `puppeteer` program: every command of the product's command line.
 #include <unistd.h>
 

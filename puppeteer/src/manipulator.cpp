@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The hand-posing manipulators' maths (see manipulator.h).
 #include "manipulator.h"
 

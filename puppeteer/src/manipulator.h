@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The hand-posing manipulators' maths, free of any window or GL: projecting world points to window pixels, the pick
 // ray through a pixel, the joint whose bone a ray passes nearest, and a screen drag turned into a joint rotation
 // (an arcball centred on the joint — a two-axis trackball about the screen's up/right axes near its centre — or a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `--map` for clips on characters: choosing the joint mapping and telling the user what it did.
 #include "map_option.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `--map auto|names|FILE.json` for commands that put a BVH clip on a character (replay, export).
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The interactive modeller: handles, picking, drags into document edits, undo/redo (see modeller.h).
 #include "modeller.h"
 

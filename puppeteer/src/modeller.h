@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The interactive modeller (thesis chapter 5, appendix A.2.2), free of any window: the visible manipulators
 // (handles) of a scene, picking them with the mouse, dragging them into edits of the scene document, and
 // undo/redo. The viewer feeds it window-pixel mouse events and draws its handles; tests drive it directly.

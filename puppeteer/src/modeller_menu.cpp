@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The modeller's in-window menu (see modeller_menu.h), drawn with Dear ImGui 1.86.
 #include "modeller_menu.h"
 

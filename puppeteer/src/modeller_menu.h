@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The modeller's in-window menu (Dear ImGui): what the thesis viewer's right-click popup held — the polygonizer,
 // the particle display, the blend's parameters, the iso-value — plus the manipulator mode and undo/redo.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // OSC out (the app's poses to other programs) and OSC in (another host's poses as the pose source).
 #include "osc_stream.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Streaming the app's poses to other programs and hosts (`--osc-out`, docs/osc.md), and an OSC pose stream as the
 // app's pose source (`--device osc.udp://:PORT`).
 #pragma once

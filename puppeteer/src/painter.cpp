@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // 3D painting: ray cast, the owning layer's texel under the brush, antialiased dabs, saving under new names.
 #include "painter.h"
 

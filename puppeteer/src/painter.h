@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // 3D painting (thesis 3.9, A.2.1): a brush dab where the mouse ray meets the surface goes into the texture of the
 // primitive that owns that point, and painted textures are saved beside the scene under new names.
 // Pure functions over meshes and images, free of any window or GL (the app's `t` mode calls them; tested alone).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // PNG saving through the lazily loaded OpenImageIO plugin (puppeteer/plugins/png_plugin.cpp).
 #include "png.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // PNG files for snapshots and screenshots, written atomically. OpenImageIO does the encoding from a plugin loaded
 // on first use, so commands that write no image start without it.
 #pragma once

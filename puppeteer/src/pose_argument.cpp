@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `--pose` arguments: parsing (degrees by default) and applying them to the skeleton cache.
 #include "pose_argument.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `--pose` on the command line: turn a joint about an axis (degrees unless written otherwise) or move it.
 #pragma once
 

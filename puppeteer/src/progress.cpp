@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The progress line: drawn with a carriage return and erase-to-end-of-line, redrawn by one ticker thread.
 #include "progress.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Progress of long work, shown on a terminal only: one status line on stderr ("puppeteer mesh: polygonizing …
 // 1.4 s"), redrawn by a ticker thread and erased when the work is done, so that meshing ten million triangles does
 // not run for seconds in silence. When stderr is not a terminal (a pipe, a log file, a test) nothing is printed.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Props attached to joints (see prop_attachment.h).
 #include "prop_attachment.h"
 

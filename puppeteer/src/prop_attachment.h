@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Polygonal props (imps/vrml_props.h) in a character's world: loaded from `--prop FILE.wrl[@JOINT]`, a prop on a
 // joint following the joint's posed world transform (Beanito's hat), others staying where the file puts them.
 #pragma once

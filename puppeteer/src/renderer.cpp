@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // OpenGL 3.3 core rendering of the live app: shaders (as raw strings), buffer uploads, draw calls, read-back.
 #include "renderer.h"
 

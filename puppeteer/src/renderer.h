@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The live app's OpenGL 3.3 core renderer: a background gradient, the character's lit per-vertex-coloured
 // triangles (Lambert + rim, as snapshot.h) and optional particle points.
 #pragma once

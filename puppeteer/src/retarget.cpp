@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Retargeting clips onto a character (see retarget.h): name rules, hierarchy checks, rest-pose correction, scale.
 #include "retarget.h"
 

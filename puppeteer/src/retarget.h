@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Retargeting motion clips onto a character: which clip joint drives which character joint (name rules for the
 // common skeleton namings plus the hierarchy, the clip's own names, or an explicit joint map), and per frame the
 // character's joint rotations with the rest poses matched bone by bone, plus the root's translation scaled by leg

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The modeller's edits of the scene document (see scene_edit.h).
 #include "scene_edit.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The modeller's edits of the scene document (imps::Scene): finding the RigidTransform of a joint and the shape node
 // of a primitive, writing a pose into the document, translating / turning / scaling a joint, a primitive or a
 // meta-line segment's endpoint, and the undo/redo history of whole document states.

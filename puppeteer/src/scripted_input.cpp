@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Scripted input for the headless app (see scripted_input.h).
 #include "scripted_input.h"
 

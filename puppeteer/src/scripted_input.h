@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Scripted input for the headless app: key presses and mouse drags injected at given frames (`--keys "k@10,o@20"`,
 // `--drag "320,200,380,260@5"`), so tests and documentation runs exercise every key and the manipulators exactly as
 // a user would, through the same handlers as the window's callbacks.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Calibrations stored in recorded sessions (see session_calibration.h).
 #include "session_calibration.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Calibrations stored in recorded sessions: writing the one in force, and finding the one a replayed sample was
 // captured with. Lives in puppeteer/ because it is where calibration/ and sim/ meet.
 #pragma once

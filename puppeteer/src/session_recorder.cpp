@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Recording a live device in the app (see session_recorder.h).
 #include "session_recorder.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Recording a live device in the app: every raw sample, in order, with the device description and the calibration in
 // force, into an append-only, crash-safe session file (sim::SessionWriter, the same writer `puppeteer record` uses).
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Software rasteriser for mesh snapshots: z-buffer, perspective-correct attributes, Lambert + rim, supersampling.
 // Based on: Juan Pineda, "A Parallel Algorithm for Polygon Rasterization" (1988) (edge functions);
 // Paul Heckbert and Henry Moreton, "Interpolation for Polygon Texture Mapping and Shading" (1991)

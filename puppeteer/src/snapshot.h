@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Headless software rendering of a mesh to RGBA8 pixels or a PNG file, for docs, CLI snapshots and tests.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `puppeteer stretch`: a dot painted on a joint, bent and brought back, in the projective and the carried texture
 // modes.
 #include "texture_stretch.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `puppeteer stretch`: how far a painted dot slides over the skin when a joint bends and comes back, for the
 // projective and the carried texture modes (issue 11, docs/cli.md).
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Textured mesh export: the images as glTF/OBJ want them, and the files beside each other.
 #include "textured_export.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Writing a textured mesh with its images: glTF binary with the images embedded, OBJ with an .mtl and the images
 // beside it (docs/cli.md, `puppeteer mesh`).
 #pragma once

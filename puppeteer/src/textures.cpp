@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Texture images: loading beside the scene file, and bilinear sampling for the software renderer.
 #include "textures.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A character's texture images (docs/scene-format.md, *Texturing*): read once from beside the scene file, shared by
 // the software renderer, the GL renderer and the exporters.
 #pragma once

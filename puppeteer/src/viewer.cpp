@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The live app's frame loop, camera and hand-posing manipulators.
 #include "viewer.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The live app's window and frame loop: GLFW 3.3 + OpenGL 3.3 core. Each frame takes the newest pose (from a pose
 // source, or from the mouse), updates the skeleton cache, runs the polygonizer, uploads, draws, shows the HUD.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The live device pose source: device session → pose mailbox → joints; recording and re-calibration.
 #include "viewer_live.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A live armature as a pose source for the viewer: a device session (its own I/O thread) publishing into a pose
 // mailbox that the frame loop reads without waiting; recording every sample (key `o`) and re-calibrating (key `k`).
 #pragma once

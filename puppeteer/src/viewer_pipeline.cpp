@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The viewer's frame pipeline: pose → skeleton cache → polygonizer → mesh.
 #include "viewer_pipeline.h"
 

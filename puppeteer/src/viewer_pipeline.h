@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The live app's per-frame work without any window: scene → character → skeleton cache → particle tesselator or
 // Marching Cubes → Mesh. The viewer drives it once per rendered frame; tests drive it headless.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Session channels → joints by name, and the replay thread feeding the frame loop.
 #include "viewer_replay.h"
 

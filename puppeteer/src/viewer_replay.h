@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Replayed sessions as a pose source for the viewer: channels mapped to joints by name (the fallback used until a
 // calibration library exists) and a replay thread that feeds the frame loop through pose mailboxes.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Worlds on the command line (see world_scene.h).
 #include "world_scene.h"
 

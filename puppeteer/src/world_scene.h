@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A world (imps/world.h) on the command line: reading it with its diagnostics, `--drive NAME=SOURCE` checked
 // against its characters, and every character posed at a time and polygonized beside the props, for `render`,
 // `mesh` and `view` (docs/world-format.md#worlds, docs/cli.md).

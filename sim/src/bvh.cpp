@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // BVH reading (lenient about what real exporters write, precise about what is wrong) and canonical writing.
 #include "sim/bvh.h"
 

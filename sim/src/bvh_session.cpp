@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // BVH clip <-> recorded session conversion (mapping in docs/session-format.md, "BVH conversion").
 #include "sim/bvh_session.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A pseudo-terminal pair for serving a simulated armature by path (sim/pseudo_terminal.h).
 #include "sim/pseudo_terminal.h"
 

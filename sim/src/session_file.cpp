@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Recorded session files: writer, reader with recovery, replay. The byte layout is specified in
 // docs/session-format.md; the constants below are the only other place it lives.
 #include "sim/session_file.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Outages, missing sequence numbers and restarts in a recorded session (see session_link.h).
 #include "sim/session_link.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The simulated armature: boot, command answers, the sample schedule, fault injection, and its two servers.
 #include "sim/simulated_armature.h"
 

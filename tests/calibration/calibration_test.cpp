@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Counts → angles → joint rotations: offsets, signs, gains, limits, wrap-around, composition order, rest rotation,
 // and the Calibrator's deadband, smoothing and hold-last-good.
 #include "calibration/calibration.h"

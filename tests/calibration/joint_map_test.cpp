@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Joint map files (clip joint → character joint): parsing and every error with its file:line:column.
 #include "calibration/joint_map.h"
 

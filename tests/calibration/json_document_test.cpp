@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The calibration files' JSON reader (calibration/src/json_document.h): every value and key with its file:line:column
 // (columns count bytes), RFC 8259's grammar without extensions (no comments, trailing commas, NaN, single quotes,
 // leading zeros), escapes decoded to UTF-8, duplicate keys refused, input that is not UTF-8 refused at its first bad

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Offsets from a calibration-pose window (circular mean, noise rejection), the check pose (reversed / mis-scaled
 // channels), calibration files and session blobs, and the end-to-end path: known angles → counts → calibrate →
 // apply → the same angles.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Rig map files: parsing, validation errors with exact file:line:column messages, and round trips.
 #include "examples.h"
 #include "calibration/rig_map.h"

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The command line as a user meets it: exit codes, messages, files written (and not clobbered on failure).
 # Usage: cli_test.sh PUPPETEER SOURCE_DIR
 set -u

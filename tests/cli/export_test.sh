@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # `puppeteer export` as a user meets it: a BVH clip and a session on the biped as the character's skeleton (BVH),
 # a skinned glTF and a numbered surface sequence; the old raw-channel BVH on request; exit codes for bad input.
 # Usage: export_test.sh PUPPETEER SOURCE_DIR

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Bounded work on hostile inputs, run as a user would: sizes beyond the limits are refused with a message that says
 # the limit and how to raise it (exit 1 for a file's value, 2 for the command line's), endless inputs are refused
 # at their limit, and a file-size limit (ulimit -f) fails a save like a full disk: a message, exit 3, nothing left.

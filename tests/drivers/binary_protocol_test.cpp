@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for drivers/binary_protocol: known-answer bytes, round trips of every message type, every chunking,
 // resynchronisation after garbage, corruption and truncation, and the decoder's counters.
 #include "drivers/binary_protocol.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for drivers/device_session against a scripted in-memory device (a fake ByteTransport answering with the
 // drivers' own encoders): handshake, info, stream and poll modes, resync counters, timeouts, loss and reconnect,
 // the line protocol's banner. The same session over real libserialport + the simulator: tests/sim/.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for drivers/device_spec: the grammar in docs/devices.md, its error messages and round trips.
 #include "drivers/device_spec.h"
 #include "drivers/device_session.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for drivers/hid_report: the report descriptor parser, the armature layout, the input report decoder and
 // the device-side encoders, on hand-written real-world-like descriptors with known bytes.
 #include "drivers/hid_report.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for drivers/hid_transport through the real hidapi (hidraw backend) on umockdev-mocked USB HID devices
 // (tests/support/umockdev_hid.h), with the test playing the armature: enumeration, open by VID:PID and serial,
 // the descriptor and INFO feature report, and a DeviceSession streaming into a PoseMailbox through garbage,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for drivers/line_protocol: line endings, separators, banner, timestamps, channel-count locking, overlong
 // lines, junk, chunking, and the decoder's counters.
 #include "drivers/line_protocol.h"

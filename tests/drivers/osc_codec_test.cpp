@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for drivers/osc_codec: liblo's bundles decode to what was sent; DIY forms and number types are accepted;
 // every kind of malformed datagram is refused with its byte offset, never read past.
 #include "drivers/osc_codec.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for drivers/osc_receiver over loopback UDP, fed by the sender and by hand: every frame arrives in order; gaps,
 // reordering, duplicates, lateness and malformed datagrams are counted and survived; silence loses the source and
 // the next frame brings it back; a DIY sender's raw channels reach the pose mailbox.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The OSC pose sender (drivers/src/osc_sender.cpp) against plain UDP sockets on 127.0.0.1 (no OSC library on the
 // receiving side): each target gets every queued frame as the bundle encodeOscPose describes, byte for byte, with
 // frame counters 0, 1, 2 … stamped in send order and sentTimeNs stamped when sent; a full queue drops frames and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for drivers/pose_mailbox: newest-wins hand-off, in-order queue, counters, sample age, and no torn samples
 // between a producer and consumers running concurrently.
 #include "drivers/pose_mailbox.h"

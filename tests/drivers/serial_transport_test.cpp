@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for drivers/serial_transport through the real libserialport, on umockdev-mocked USB serial ports
 // (tests/support/umockdev_serial.h) whose pty master ends the tests drive.
 #include "drivers/serial_transport.h"

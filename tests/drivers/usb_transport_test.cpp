@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for drivers/usb_transport through the real libusb, against fake vendor-USB armatures in a umockdev testbed
 // (tests/support/umockdev_usb.h) whose URBs the simulator's device model answers: listing, open by VID:PID and serial,
 // the INFO control request, frames both ways, DeviceSession in stream and poll mode, garbage and corrupt frames,

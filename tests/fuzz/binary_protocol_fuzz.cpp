@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // libFuzzer target for the binary protocol decoder (drivers/binary_protocol): arbitrary bytes in arbitrary chunks
 // must never crash, and must keep the decoder's invariants (docs/protocol.md).
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // libFuzzer target for the BVH reader (sim/bvh): any text gives a clip or an error, never a crash; a clip that
 // was read writes back to text that reads as the same clip.
 #include <cstdint>

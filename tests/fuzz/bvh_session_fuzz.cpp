@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // libFuzzer target for BVH -> session -> BVH conversion (sim/bvh_session): whatever clip the reader accepts converts
 // to a self-consistent session (one sample per frame and device, timestamps that never go back) or to an error, and
 // the session converts back to a clip of the same shape. Never a crash, an overflow or an exception.

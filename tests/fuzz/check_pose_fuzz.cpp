@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // libFuzzer target for the check-pose JSON reader (calibration/offset_calibration): any bytes give targets or
 // diagnostics, never a crash; targets name joints of the character and carry finite angles.
 #include <cmath>

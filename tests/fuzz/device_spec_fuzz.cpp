@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // libFuzzer target for the device spec parser (drivers/device_spec): any text must parse or give an error, never
 // crash, and whatever parses must survive a format → parse round trip unchanged.
 #include <cstdio>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Invariant checks inside fuzz targets: a failure prints where and what, then aborts so the fuzzer keeps the input.
 #pragma once
 

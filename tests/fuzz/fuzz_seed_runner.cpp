@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Runs a libFuzzer entry point over every file in the given folders, so fuzz targets double as regression tests
 // in builds without libFuzzer.
 #include <cstdint>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // libFuzzer target for the HID codec (drivers/hid_report): any report descriptor must parse or give a located
 // error, any layout must be consistent, and any input report must decode or be counted, never crash; what
 // decodes must re-encode and decode to the same counts and flags (docs/protocol.md, "HID armatures").

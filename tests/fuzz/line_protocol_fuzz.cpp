@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // libFuzzer target for the line protocol decoder (drivers/line_protocol): arbitrary text in arbitrary chunks must
 // never crash, and must keep the decoder's invariants (docs/protocol.md).
 #include <cstdio>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // libFuzzer target for the OSC pose-stream decoder (drivers/osc_codec): any datagram must decode or give a located
 // error, never crash or read outside it, and whatever decodes must hold the documented invariants (docs/osc.md).
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // libFuzzer target for the rig-map / calibration JSON reader (calibration/rig_map): any bytes give a map or
 // diagnostics (never a crash, an exception or quadratic time), and a map that was read writes back (toJson) to valid
 // UTF-8 that reads as the same map, with toJson a fixed point. Checked with and without a device to resolve against.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // libFuzzer target for scene -> character -> polygonizer settings: whatever scene reads either fails to build a
 // character with diagnostics, or builds one whose polygonizer settings are honoured within bounded work: the Marching
 // Cubes grid is planned (and refused beyond its cell limit), a small one is meshed closed, and the particle

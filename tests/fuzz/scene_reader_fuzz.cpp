@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // libFuzzer target for readScene: any bytes must give a scene or diagnostics (never a crash or hang), and every
 // scene that reads must survive write -> read unchanged, with writeScene a fixed point.
 #include <cstdint>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // libFuzzer target for the session file reader (sim/session_file): any bytes must give a Session or an error,
 // never a crash, and a Session must be self-consistent.
 #include <cstdint>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The blend graph (blend_graph.h): two primitives blend only if they are blend neighbours, under every blend, in
 // flat and hierarchical scenes; BlendGroups add and remove pairs; the field agrees with a brute-force reference.
 #include "imps/blend_graph.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Character: joints, primitives and the hierarchy's blending rule (thesis 3.7), BlendGroups, blend sets.
 #include "imps/character.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The bundled examples: each compiles, meshes closed and manifold at several resolutions, and the biped keeps the
 // hierarchy's blending rule when posed.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Field: blend functions, the exponential approximations, batched vs point evaluation, gradients, colours.
 #include "imps/field.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // gzip decompression (imps/include/imps/gzip.h): round trips through zlib's own compressor, concatenated members,
 // the output limit, and truncated or corrupt input.
 #include "imps/gzip.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The passes of Marching Cubes one at a time (imps/src/marching_cubes_passes.h), each against a brute-force statement
 // of its contract; and the options' cancel flag and progress callback.
 #include "marching_cubes_passes.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Marching Cubes: closed manifold meshes, vertices on the analytic surfaces, determinism, thin features.
 #include "imps/marching_cubes.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for imps/mesh_io.h: round trips through independent readers, determinism, atomic saves, GLB validity.
 #include "imps/mesh_io.h"
 

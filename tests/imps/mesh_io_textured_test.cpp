@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Textured export (imps/src/mesh_io_textured.cpp) on a hand-made textured octahedron whose two layers are plane
 // projectors: the GLB's chunks and lengths, one primitive per image with TEXCOORD_0 = (u, 1 - v) of its generator,
 // the images embedded byte for byte with their names and MIME types, one texture per image with a repeating,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for several named meshes in one file: glTF nodes (one per object, named, each its own mesh), OBJ objects
 // with indices running on, PLY merged.
 #include "imps/mesh_objects.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for imps/mesh.h: topology checks, signed volume, bounds and appendMesh.
 #include "imps/mesh.h"
 

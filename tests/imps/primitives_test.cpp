@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Primitives: normalised squared distances, gradients, continuity of the meta-line segment, bounds.
 #include "imps/primitives.h"
 

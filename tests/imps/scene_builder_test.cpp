@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The SceneBuilder (imps/src/scene_builder.h): the ParserTarget that checks what the parser reports against the IMPS
 // node types (docs/scene-format.md) and fills a Scene. Driven by hand (it needs no parser) and by the parser, with the
 // exact text of every semantic error: unknown types and fields, value types, ranges, blend parameters against the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The VRML parser (imps/src/scene_parser.h) against a recording ParserTarget: the events a file's structure
 // produces and their order, node-valued fields, DEF/USE/NULL, value lists, the header, and what the target sees when
 // a syntax error stops the parse (a properly nested prefix). Nothing here knows the IMPS node types.

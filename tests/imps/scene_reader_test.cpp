@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for readScene / readSceneFile (imps/src/scene_reader.cpp): figure A-1, every node and field, syntax and file
 // errors end to end with their exact text. The semantic checks are the SceneBuilder's (scene_builder_test.cpp).
 #include "imps/scene_reader.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The scene document's own code (imps/src/scene.cpp): operator== compares every field a file can say (names and USE
 // references included) and nothing else (not source locations, not the fields of another shape or blend kind, not a
 // TexGenSphere's slide size, not the file name); sceneGraph() and blendingFunction() find what they name wherever

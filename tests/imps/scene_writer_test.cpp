@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for writeScene / saveSceneFile: the canonical layout, exact round trips, and atomic saving.
 #include "imps/scene_writer.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Skeleton cache: zeroth-order joint control, world-space primitives and differential transforms (thesis 3.7).
 #include "imps/skeleton_cache.h"
 

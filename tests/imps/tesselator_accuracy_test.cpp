@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // worstDistanceToMesh (imps/src/tesselator_accuracy.cpp): the worst point-to-triangle distance, checked against
 // distances worked out by hand: each region of a triangle (face, edges, corners), an octahedron inscribed in a
 // sphere (worst at the face centres' directions: R (1 - 1/sqrt 3)), and the searchRadius conventions.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The tesselator's triangulation passes (imps/src/tesselator_mesh.cpp, declared in tesselator_state.h) one at a
 // time: A vertices, B fans, C votes, D assembly, E hole repair and F pinches, each checked against its contract on
 // particles spread evenly over a sphere, and the half-edge bookkeeping on hand-built meshes (a closed octahedron, one

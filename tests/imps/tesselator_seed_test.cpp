@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // seedParticles (imps/src/tesselator_seed.cpp): particles seeded from every primitive's own surface, projected onto
 // the blended surface and thinned. Every component of a field with several separate blobs gets particles (issue 3:
 // seeding never depends on one random point finding the surface), each on the surface and owned by its blob, no two

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for the particle tesselator (imps/src/tesselator.cpp): convergence, closed meshes, determinism, blend rule,
 // recovery after fast motion, no NaN; the update's compute, integration and add/delete phases one at a time; and
 // settle()'s cancel flag and progress callback. The triangulation's passes are in tesselator_mesh_test.cpp, the

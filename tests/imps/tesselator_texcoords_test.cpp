@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for the particle tesselator's carried texture coordinates (imps/src/tesselator_texcoords.cpp,
 // TextureMode::Carried): determinism for any thread count, agreement with the generators where the skin moves
 // rigidly, nothing carried without textures, and the scene field that selects the mode.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Texture-coordinate generators (thesis 3.9): the sphere's and the plane's mappings, checked analytically.
 #include "imps/texgen.h"
 

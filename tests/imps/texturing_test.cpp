@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Texture layers (imps/texturing.h): ownership, normalised blend weights without a hard seam, untextured shares,
 // and both polygonizers.
 #include "imps/texturing.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for Heckbert's uniform hash (imps/src/uniform_hash.cpp): queries agree with brute force, also when buckets
 // alias far-apart cubes and when the query box is wider than the table.
 #include "imps/uniform_hash.h"

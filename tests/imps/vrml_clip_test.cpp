@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for readClips and the interpolators: the maths against hand-computed values, ROUTE resolution and its errors.
 #include "imps/vrml_clip.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for readVrml / readVrmlFile: VRML 97 syntax, DEF/USE, ROUTE, PROTO, gzip, the exporters' quirks and errors.
 #include "imps/vrml_file.h"
 

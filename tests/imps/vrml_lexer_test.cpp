@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The VRML lexer (imps/src/vrml_lexer.h) on its own: token kinds, number spellings, comments and separators,
 // strings with escapes, the two identifier dialects, line and code-point column positions, lookahead, bad input
 // reported once at the bad token, and the DiagnosticSink's cap.

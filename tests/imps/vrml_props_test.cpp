@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for readProps and the primitive meshes: volumes and orientation, fan triangulation, transforms, bad data.
 #include "imps/vrml_props.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for readWorldFile: characters placed by Inlines under Transforms, clips inlined beside them (url fragments),
 // props of the world and of inlined files, and the errors with the world's file:line:column.
 #include "imps/world.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Uses every installed library through the installed headers: meshes a scene with Marching Cubes (imps), maps a clip
 // joint onto its character (calibration), turns a BVH clip into a session and back (sim), and lists serial ports
 // through libserialport (drivers). Prints "closed TRIANGLES FRAMES" when the mesh is a closed 2-manifold, the

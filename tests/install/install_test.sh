@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # `cmake --install` gives a usable package: the CLI runs from the prefix (its PNG plugin found there), and another
 # CMake project finds the libraries with find_package(imps COMPONENTS drivers calibration sim), meshes a bundled
 # example through the core and calls into each of the other libraries (tests/install/consumer.cpp).

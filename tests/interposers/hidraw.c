@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 /* Test-only LD_PRELOAD interposer: turns umockdev-mocked /dev/hidrawN nodes into something that behaves like
  * hidraw for hidapi (tests/support/umockdev_hid.h). Never linked into the app; must come before
  * libumockdev-preload.so.0 in LD_PRELOAD.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 /* Test-only LD_PRELOAD interposer: fakes the modem-line ioctls on terminals that have none (umockdev's pty-backed
  * /dev/ttyACM0), so libserialport's sp_open() succeeds. Never linked into the app; must come before
  * libumockdev-preload.so.0 in LD_PRELOAD. Real serial ports are unaffected (their ioctls succeed first). */

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `puppeteer calibrate --session` end to end (a recorded session → a calibration file), and calibrations stored in
 // sessions (SessionWriter → readSession → the calibration in force for a sample).
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The command line as a user meets it, through the real `puppeteer` program: every command × every kind of failure
 // gives the exit code docs/cli.md promises, found before any work is done; misspellings get advice; the streams
 // stay in order when piped.

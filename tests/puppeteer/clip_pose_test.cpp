@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for ClipDriver / ClipPoseSource (a VRML clip on an implicit character) and the world commands: the bundled
 // clips bind to the bundled characters, poses equal hand-computed transforms, squash and stretch change the surface,
 // `check` lists clips and props, `render --clip` and `replay CLIP SCENE` fail cleanly on bad input.

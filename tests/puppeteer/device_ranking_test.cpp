@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `puppeteer devices` lists likely armatures first and the motherboard UART last.
 #include <gtest/gtest.h>
 

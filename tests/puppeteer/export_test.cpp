@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Exporting takes on the character: the skeleton BVH reproduces the skeleton cache's pose frame for frame (by BVH
 // forward kinematics after a write/read round trip), frames are resampled and cut as asked, the skinned glTF's
 // weights are normalised and its skin follows the implicit surface, the Khronos validator accepts it (when node and

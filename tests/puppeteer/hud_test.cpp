@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The HUD's key help offers only what works: o (record) and k (calibrate) need a live device.
 #include <gtest/gtest.h>
 

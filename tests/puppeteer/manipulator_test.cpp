@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The manipulators' maths without a window: projection and pick rays agree, picking finds the bone under the
 // cursor (and the joint that starts where two bones meet), the arcball is a two-axis trackball near its centre and
 // makes a grabbed limb follow the cursor, the twist turns about the view axis, and a world rotation becomes the

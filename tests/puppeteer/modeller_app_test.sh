@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The interactive modeller in the real app, headless under Xvfb, driven by scripted drags and keys as a user would:
 # a translate handle dragged moves its metaball to where it was dropped (checked against the scene files by
 # modeller_check, from the app's own first camera); a scale handle sets a metaball's radius; a joint handle of an

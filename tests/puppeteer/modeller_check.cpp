@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Checks for the modeller's headless app test (modeller_app_test.sh), from the scene files alone and the app's
 // first camera (modeller.h's initialOrbit, as the app frames a scene):
 //   modeller_check handle SCENE W H TARGET                 prints "CX,CY TX,TY": the target's handle centre and

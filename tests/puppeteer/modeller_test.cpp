@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The interactive modeller without a window, driven by window-pixel mouse events as the viewer drives it: a dragged
 // translate handle moves its primitive by the dragged amount, a scale handle sets a metaball's radius, a bone drag
 // turns a joint and writes it into the document, undo/redo restore the document and the pose, and what is on screen

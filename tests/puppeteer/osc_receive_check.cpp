@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A render host's side of the OSC streaming test (tests/puppeteer/osc_stream_test.sh): listens for pose frames with
 // drivers::OscReceiver in a process of its own, writes its port to READY_FILE once bound, and receives until the
 // stream has been idle for IDLE_MS after its first frame (or 60 s pass). Prints one line:

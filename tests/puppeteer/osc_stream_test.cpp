@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The app's OSC pose streaming without a window: a posed character sent with OscPoseWriter + OscPoseSender and
 // received by OscPoseSource poses a second character identically (bit for bit); unknown joints are reported;
 // raw channels from a DIY sender go through the calibration exactly as a device's samples do; --osc-out wraps a

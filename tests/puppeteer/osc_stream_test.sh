@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Streaming poses between processes over loopback OSC (docs/osc.md), as a stage would: one armature host (a stepped
 # replay with two --osc-out targets) feeds two receiver processes (osc_receive_check: every frame arrives, in order,
 # and the sender → receiver latency is printed) and a render host (`puppeteer live --device osc.udp://…`), which

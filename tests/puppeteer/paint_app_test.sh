@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # 3D painting in the live app, headless under Xvfb (docs/app.md, "3D painting"): `t` turns paint mode on, a scripted
 # drag paints a stroke on the left blob of textured_blobs.wrl, `s` saves the scene and the painted texture under a
 # new name beside it; paint_check then reloads the saved scene and checks the stroke (changed texels in one small

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Checks a painting session of the live app (tests/puppeteer/paint_app_test.sh): the saved scene reloads, the
 // texture it names for primitive PRIM is a new file (the original untouched) holding a stroke — some texels
 // changed, all of them in one compact region covering a small part of the image, every other texel as it was.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // 3D painting (puppeteer/src/painter.h): the ray cast, an antialiased dab into the owning primitive's texture and
 // nowhere else, and saving painted textures under new names so that the saved scene reloads with the stroke.
 #include "painter.h"

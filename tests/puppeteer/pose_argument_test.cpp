@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `--pose` arguments: degrees by default, radians on request, translations in metres, errors for everything else.
 #include "pose_argument.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Retargeting clips onto the biped, checked by forward kinematics: for clips in each common naming, with the arms
 // down in their rest pose (the biped's is a T-pose), the character's limb bones, hands and feet point where the clip's
 // do, frame after frame, and the root moves by the clip's root motion scaled by leg length.

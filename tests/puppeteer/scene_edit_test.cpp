@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The modeller's document edits without a window: a pose written into unnamed transforms too, translate / rotate /
 // scale of joints, primitives and endpoints (USE copies follow their DEF), limb length, round trips through the
 // writer, and the undo/redo history.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Scripted input: --keys and --drag parse into the events the headless app delivers, and bad text is refused with
 // the option's name.
 #include "scripted_input.h"

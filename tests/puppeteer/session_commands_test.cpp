@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `puppeteer info` and `convert` on sessions whose timestamps are whatever a file may hold (the extremes of int64).
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Checks a session recorded by the live app (`puppeteer live --record`) against the session the simulated armature
 // played: the take is whole, has samples, and every recorded sample is, bit for bit, the source sample its sequence
 // number names (the simulator sends source sample `sequence mod N`), with no sequence number missing.

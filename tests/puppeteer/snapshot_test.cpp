@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for puppeteer/src/snapshot.h: coverage, shading, depth order, framing and the PNG file.
 #include "snapshot.h"
 

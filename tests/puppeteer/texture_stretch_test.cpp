@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The stretch measurement (puppeteer/src/texture_stretch.h): a dot painted on the textured biped's left elbow,
 // the elbow bent 90 degrees and back. Carried texture coordinates bring the dot back to within one particle radius;
 // the projective figures are printed beside them. The dot's centre: where the interpolated coordinates equal its own.

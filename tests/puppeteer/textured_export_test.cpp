@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Textured export (puppeteer/src/textured_export.h, imps::encodeTexturedGlb / encodeTexturedObj): the textured
 // blobs as glTF binary with embedded images and TEXCOORD_0 from the generators, valid for the Khronos validator
 // (when node and gltf-validator are installed), and as OBJ with an .mtl and the images beside it.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Texture images (puppeteer/src/textures.h) and textured software rendering (snapshot.h): loading beside the scene,
 // the error for a missing image, bilinear repeating sampling, and layers modulating the rendered colour.
 #include "textures.h"

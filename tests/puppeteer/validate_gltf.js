@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Runs the Khronos glTF validator (npm gltf-validator) on one file and prints its issue counts; exits 1 when the
 // validator reports errors, 2 when it cannot run. Used by tests/puppeteer/export_test.cpp when node is present.
 const fs = require('fs');

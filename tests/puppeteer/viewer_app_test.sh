@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The live app run headless under Xvfb + Mesa llvmpipe, as a user would: screenshots of the biped at rest and with
 # its left arm lowered (not blank, same size, different only where the arm moved), then a stepped replay of a
 # BVH-derived session run twice must produce the same mesh sequence (hash per frame); finally the same session

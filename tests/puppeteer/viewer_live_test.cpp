@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The live pose source's recording (key o) and re-calibration (key k) against a simulated armature through the real
 // driver stack (in-process transport, device session, pose mailbox), without a window: a recording holds the
 // device, the calibration in force and every sample the simulator sent, bit for bit; a still armature calibrates

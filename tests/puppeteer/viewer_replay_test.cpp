@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests of the live app's pose sources and frame pipeline without a window: channels mapped to joints by name,
 // and a stepped replay giving the same mesh sequence every run.
 #include "viewer_replay.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Checks two screenshots of the live app (`puppeteer view`, HUD off): both show a character (not blank), they
 // have the same size, and they differ only where the posed limb moved — in the upper body, on the screen's
 // right half (the character's left arm seen from the front three-quarter camera), not in the legs.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The live app on a world (examples/two_bipeds.wrl), headless under Xvfb: both characters polygonized by Marching
 # Cubes, each driven by its own source (the clip inlined beside it; `--drive` with a clip, a session, or `rest`);
 # a different source for one character changes the picture, the same run twice gives the same picture (fixed 1/60 s

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for worlds on the command line: `render WORLD` draws every character where its Transform placed it,
 // `--drive NAME=CLIP` poses one character, bad worlds and bad --drive specs fail with file:line:column or a clear
 // message, `mesh WORLD` writes each character and prop as its own glTF node (checked by the Khronos validator when

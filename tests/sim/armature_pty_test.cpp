@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The simulated armature on a plain pseudo-terminal (the path `puppeteer sim --pty` serves) under the real drivers
 // (SerialTransport's termios path, DeviceSession, PoseMailbox): a 1 kHz × 64-channel stream arrives whole, in order
 // and byte-exact. Behaviour, not speed: the assertions count and compare samples and never time anything, so a

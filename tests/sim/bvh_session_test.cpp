@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for sim/bvh_session: the count mapping is exactly invertible, and BVH -> session -> BVH reproduces angles
 // within the quantisation step (session -> BVH -> session reproduces counts exactly).
 #include "sim/bvh_session.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for sim/bvh: the quirks of real BVH files, exact error messages, canonical writing and atomic saving.
 #include "sim/bvh.h"
 

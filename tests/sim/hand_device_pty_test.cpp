@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A device written by hand from docs/protocol.md alone (as a third party would), on the master side of a
 // pseudo-terminal, under the real drivers (SerialTransport's termios path, DeviceSession, PoseMailbox): the faults
 // of issue 14 that the simulator does not make — a numeric boot banner, silence longer than the session timeout, a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // PseudoTerminal (sim/src/pseudo_terminal.cpp): a pair whose slave end is held open in raw mode from the start, so
 // bytes pass both ways unchanged (no echo, no line buffering, no CR/LF translation, no signal or EOF characters),
 // bytes written before the drivers open the port wait for them, and the drivers closing the port is no hang-up for

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for sim/sample_table: exact round trips of every field, and a take in memory about its size on disk.
 #include "sim/sample_table.h"
 

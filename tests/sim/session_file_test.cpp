@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for sim/session_file: bit-exact write/read, crash recovery at every byte, corruption, replay timing.
 #include "sim/session_file.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for sim/session_link: outages, missing sequence numbers and restarts found in a recorded session, and a
 // rate that does not average over the outages (issue 14 items 2 and 4).
 #include "sim/session_link.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests for sim/simulated_armature: the device model on a manual clock (decoded with the drivers' own decoders),
 // the in-process `sim:` transport under a DeviceSession, and the drivers' real libserialport path against the
 // simulator on a umockdev-mocked /dev/ttyACM0 (tests/support/umockdev_serial.h).

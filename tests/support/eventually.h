@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Polling for a condition set by another thread (a device session, a simulated armature).
 #pragma once
 

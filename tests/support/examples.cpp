@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Example characters for tests, cached.
 #include "examples.h"
 

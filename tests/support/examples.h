@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The bundled example characters (examples/*.wrl), loaded once per test binary.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Test-only mesh readers: binary PLY, OBJ and (through tinygltf) GLB.
 #include "mesh_readers.h"
 

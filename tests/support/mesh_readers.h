@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Test-only mesh readers (binary PLY, OBJ, GLB) that read back what imps/mesh_io.h writes.
 #pragma once
 

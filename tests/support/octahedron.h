@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The regular octahedron: a small closed mesh whose distances, areas and topology are known by hand. Vertices
 // centre ± radius along the axes, in the order +x -x +y -y +z -z; eight faces, counter-clockwise seen from outside.
 #pragma once

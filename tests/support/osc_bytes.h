@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Hand-built OSC 1.0 bytes for tests that need packets no OSC library would produce (malformed ones, odd types).
 #pragma once
 

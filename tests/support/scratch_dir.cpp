@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Scratch directories and whole-file helpers for tests (see scratch_dir.h).
 #include "scratch_dir.h"
 

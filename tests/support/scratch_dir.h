@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A fresh directory for one test, and whole-file reads and writes for checking what the code under test wrote.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // runProgram: fork, redirect stdout/stderr to temporary files (or one), exec, wait.
 #include "subprocess.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Running a program as a user would, for command-line tests: its exit code and what it printed.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A sphere of particles for the tesselator's passes (imps/src/tesselator_state.h, so only for test binaries given
 // imps/src on their include path): a lone metaball whose surface is exactly the unit sphere, options for about n
 // particles on it, and n particles spread evenly over it (a Fibonacci spiral) with their neighbour lists.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Test helper: a umockdev testbed presenting USB HID devices (usb_device → usb_interface → hid → hidraw, with
 // uevent HID_ID/HID_NAME/HID_UNIQ and a report_descriptor) whose /dev/hidrawN nodes the test plays as a fake
 // armature: the test-only interposer tests/interposers/hidraw.c connects hidapi's open() of the node to a

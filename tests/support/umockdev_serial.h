@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Test helper: a umockdev testbed presenting USB serial ports (/dev/ttyACM0 as a CDC-ACM Arduino, /dev/ttyUSB0 as
 // an FTDI adapter with a latency_timer) backed by pseudo-terminals whose master ends the test drives.
 // Needs LD_PRELOAD=<libimps_modem_ioctl.so>:libumockdev-preload.so.0 (set by tests/CMakeLists.txt); tests skip

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Test helper: a umockdev testbed with fake vendor-USB armatures (1209:0001 by default) on /dev/bus/usb/001/NNN whose
 // usbdevfs ioctls are answered by the project's device model (sim::SimulatedArmature), so the real libusb talks to a
 // reactive device: descriptors, the INFO vendor request, bulk OUT commands, interrupt/bulk IN frames, unplug and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Calibrated conversion of raw Samples to a Pose: per channel, angle = sign * wrap(count - offset) / gain, clamped
 // to the limits; per joint, the pose rotation is rest * R(order), the axis rotations composed in the joint's order.
 // Translation channels (axes tx, ty, tz) read metres the same way and move the joint from its rest translation.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Joint maps: which joint of a motion clip (BVH) drives which joint of a character, when the automatic name rules
 // (puppeteer's `--map auto`) do not know the clip's naming. Format and checks in docs/calibration.md ("Joint maps").
 #pragma once

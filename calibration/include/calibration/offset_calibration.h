@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Joint-offset calibration (thesis figure 5-4): average a window of samples taken while the armature is held in the
 // character's calibration pose, reject a noisy window, set every channel's offset; optionally check signs and gains
 // against a second known pose. Workflow in docs/calibration.md.

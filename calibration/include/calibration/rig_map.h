@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The rig map: which armature channel drives which axis of which joint, and how counts become radians (sign, gain,
 // offset, limits, deadband, smoothing, wrap-around). A calibration file is a rig map whose offsets are all set.
 // The file format, the math and the technician's workflow are in docs/calibration.md.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The IMPS armature binary protocol (wire format in docs/protocol.md): messages, the frame encoder used by both
 // ends (host commands, device replies and samples) and the incremental, resynchronising frame decoder.
 #pragma once

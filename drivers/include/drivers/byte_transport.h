@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The byte pipe a DeviceSession talks through: a serial port, or the in-process simulator. Transports only move
 // bytes; codecs, handshakes and reconnects live in DeviceSession.
 #pragma once

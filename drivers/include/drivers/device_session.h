@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A live connection to one armature: the I/O thread, the connection state machine, the handshake, poll and stream
 // modes, timeouts and reconnects. Every decoded Sample goes to a PoseMailbox. State machine in docs/devices.md.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Device specs: the one-line text that names an armature and how to talk to it (docs/devices.md), e.g.
 // `serial:/dev/ttyACM0?baud=115200&protocol=lines`, `hid:2341:8036`, `usb:1209:0001`, `sim:?channels=32`,
 // `osc.udp://:9000` (an OSC pose stream, docs/osc.md).

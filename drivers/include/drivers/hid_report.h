@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The HID armature codec (docs/protocol.md, "HID armatures"): parses a HID report descriptor into the layout of
 // the armature's input report, decodes input reports into Samples, and (device side, for tests and the simulator)
 // builds descriptors and encodes reports. Pure: no hidapi, no I/O.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // HID armatures through hidapi (hidraw backend): listing HID devices with their report descriptors, and a
 // transport that hands the session one input report per read. docs/devices.md, docs/protocol.md ("HID").
 #pragma once

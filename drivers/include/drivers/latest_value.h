@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A wait-free single-producer single-consumer "newest value" hand-off (a triple buffer) for values too large or too
 // different for the PoseMailbox's Sample slots: the OSC receiver's pose frames.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The plain-text line protocol of DIY (Arduino) armatures: one line of unsigned integers per sample, with an
 // optional `t=` timestamp, after an optional boot banner. Format: docs/protocol.md, "Line protocol".
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The OSC pose stream's packets (docs/osc.md): one OSC bundle per pose frame — a frame header, one quaternion per
 // joint, the root translation — or raw encoder channels from a DIY sender. The pure decoder the OSC receiver and
 // its fuzz target use; knows nothing of characters (joints are names and numbers here).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // An OSC pose source (`--device osc.udp://:PORT`, docs/osc.md): a UDP socket read on its own I/O thread, datagrams
 // decoded by drivers/osc_codec.h. Pose frames go to a newest-value buffer, raw channels to the PoseMailbox like
 // any device's samples; ordering, lateness, loss and malformed packets are counted as for devices.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Streaming pose frames as OSC bundles over UDP to one or more `osc.udp://HOST:PORT` targets (docs/osc.md), through
 // liblo, on the sender's own thread so the frame loop never waits for the network.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The lock-free hand-off of Samples from a device I/O thread to the frame loop (newest wins, via a triple buffer)
 // and, optionally, to a recorder (every sample in order, via a bounded single-producer single-consumer ring).
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The bytes a decoder has received and not yet consumed, shared by the binary and line protocol decoders.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The device vocabulary: what an armature is (DeviceInfo) and what it reports (Sample). Knows nothing of joints.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Serial ports through libserialport: listing ports with their USB identity, and a ByteTransport over one port
 // (8N1, no flow control, non-blocking reads with timeouts), with the FTDI latency-timer check. docs/devices.md.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Vendor-specific USB armatures through libusb: listing them, a ByteTransport over one (binary-protocol frames on a
 // bulk OUT and an interrupt or bulk IN endpoint, INFO by a vendor control request) and a hotplug monitor that
 // notices them arriving and leaving. The USB framing is in docs/protocol.md, "USB transport"; docs/devices.md.

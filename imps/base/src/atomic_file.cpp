@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Atomic file replacement: temporary file, write, fsync, rename, fsync the directory.
 #include "imps/atomic_file.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "imps/clock.h"
 
 #include <algorithm>

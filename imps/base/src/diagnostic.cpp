@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Diagnostics: formatting and typo suggestions.
 #include "imps/diagnostic.h"
 

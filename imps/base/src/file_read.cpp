@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Whole-file reads with a size limit (see file_read.h).
 #include "imps/file_read.h"
 

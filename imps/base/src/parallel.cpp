@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // parallelFor on oneTBB, with an arena per thread count so callers can pin 1 vs N threads.
 #include "imps/parallel.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // UTF-8 well-formedness (see utf8.h).
 #include "imps/utf8.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Blend functions: how primitives' normalised squared distances d combine into one field (thesis 2.2, A.3).
 //
 // Based on: J. Blinn, "A Generalization of Algebraic Surface Drawing", 1982 (exponential blend, eq. 2.2 of the

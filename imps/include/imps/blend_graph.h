@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The blend graph: which primitives may blend, and the blend sets the field takes its maximum over (field.h).
 //
 // Two primitives blend only if they are blend neighbours. The field is the maximum over the *maximal cliques* of the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A character: the scene graph compiled into joints, joint-local primitives and the blend graph.
 //
 // Joints are the scene's RigidTransforms, addressed by DEF name (unnamed ones get "joint<N>"). Each primitive belongs

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The field of a posed character: world-space primitives, their blend and the blend sets that encode which
 // primitives may blend (the unwanted-blending rule of thesis 3.7). Evaluates value, gradient and colour.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // gzip decompression (RFC 1952) for inputs that were served compressed, such as VRML .wrl and .wrz files.
 #pragma once
 

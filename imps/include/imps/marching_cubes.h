@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Marching Cubes polygonizer: a closed, indexed triangle mesh of a Field's iso-surface on a regular grid.
 //
 // Based on: W. Lorensen and H. Cline, "Marching Cubes", 1987; G. Nielson and B. Hamann, "The Asymptotic Decider",

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The triangle mesh every polygonizer produces: flat arrays ready for GL upload and export, plus topology checks.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Mesh export: Wavefront OBJ, binary PLY and glTF 2.0 binary (.glb), each written atomically.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Several named meshes in one file (a world's characters and props): each object its own node in glTF, its own
 // `o` object in OBJ; PLY, which has no objects, gets them merged.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Implicit primitives in world space: metaball, meta-ellipsoid and meta-line segment (thesis 2.2-2.3).
 //
 // Based on: K. Russell, "IMPS: Implicit Surfaces for Interactive Animated Characters", MIT 1999, chapter 2;

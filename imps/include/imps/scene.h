@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The scene document: what an IMPS scene file says, node for node (thesis appendix A; docs/scene-format.md).
 //
 // This is a faithful, typed image of the file, not the evaluable character: `Character::fromScene` (character.h)

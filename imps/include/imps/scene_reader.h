@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Reading IMPS scene files (the VRML 2 dialect of thesis appendix A; docs/scene-format.md) into an imps::Scene.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Writing an imps::Scene as an IMPS scene file (docs/scene-format.md), in one canonical layout.
 #pragma once
 

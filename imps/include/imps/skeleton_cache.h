@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The skeleton cache (thesis 3.7): the current pose of a character, its world-space primitives and, for each joint,
 // the differential transform since the previous update.
 //

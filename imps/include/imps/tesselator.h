@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The particle polygonizer (Tesselator3MP, thesis 3.4-3.8 and appendix A): Witkin-Heckbert particles that follow a
 // character's surface from frame to frame, triangulated every render into a closed mesh.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Texture-coordinate generators (thesis 3.9): a sphere or a plane around a primitive whose well-known mapping gives
 // the (u, v) of every point the primitive owns — the coordinates of the closest point on the generator.
 //

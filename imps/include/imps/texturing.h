@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Texture layers of a polygonized mesh (thesis 3.9, without its seams): per vertex, the two textured primitives
 // that contribute most, weighted by their normalised field contributions, as colours are blended.
 //

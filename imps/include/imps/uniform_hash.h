@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Heckbert's uniform spatial hash for particle neighbour queries (thesis 3.7, figure A-1 `UniformHash`).
 //
 // Based on: P. Heckbert, "Fast Surface Particle Repulsion", SIGGRAPH '97 course notes (uniform hashing of space into

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Keyframed animation clips read from VRML 97 files (imps/vrml_file.h): a TimeSensor's fraction routed to
 // interpolators whose values are routed to Transforms' fields becomes a clip, a function of time giving every driven
 // Transform's translation, rotation, scale, scale orientation and centre. docs/world-format.md ("Clips").

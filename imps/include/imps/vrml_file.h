@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Reading VRML 97 files as DCC tools export them (3D Studio MAX, Blender, H-Anim humanoids) into a generic node tree:
 // the syntax of ISO/IEC 14772-1 with DEF/USE, ROUTE, PROTO/EXTERNPROTO and gzip compression. What the nodes mean
 // (transforms, shapes, animation clips) is read from this tree by imps/world.h. docs/world-format.md.

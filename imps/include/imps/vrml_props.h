@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Polygonal props from VRML 97 files (imps/vrml_file.h): every Shape's IndexedFaceSet, Box, Sphere, Cylinder or Cone
 // as a triangle mesh in the file's coordinates, with its Material's colour. docs/world-format.md ("Props").
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A world (docs/world-format.md, "Worlds"): a VRML 97 file placing several IMPS characters with standard `Inline`
 // nodes under `Transform`s, each character optionally with a keyframed clip inlined beside it, plus polygonal props
 // (its own Shapes and those of inlined VRML 97 files). Each character keeps its own scene file, so the app gives

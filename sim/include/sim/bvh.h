@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Biovision Hierarchy (BVH) motion files: a lenient reader for files found in the wild, a canonical writer and an
 // atomic save.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Conversion between BVH clips and recorded sessions: a clip becomes a pose stream of encoder counts (so public
 // motion capture can drive the rig without hardware) and a session becomes a clip (so a performance opens in
 // Blender). The count mapping is specified in docs/session-format.md ("BVH conversion").

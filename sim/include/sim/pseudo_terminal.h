@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A pseudo-terminal pair for serving a simulated armature where the drivers open it by path, like a real serial
 // port (`puppeteer sim --pty`, the pty-backed tests and the soak benchmark).
 #pragma once

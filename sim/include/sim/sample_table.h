@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A recorded take's samples, stored compactly. drivers::Sample is a fixed 350-byte record (room for kMaxChannels
 // counts and flags, so it can cross the lock-free mailbox); a take of 3-channel samples held that way takes ~10x
 // its file size in memory. SampleTable keeps a 32-byte header per sample and only the channelCount counts and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Recorded sessions: an append-only, crash-safe file of raw Samples (format in docs/session-format.md), its
 // reader with a recovery report, and a replayer that plays a recorded session against an injectable clock.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // What a recorded session's samples say about the device link: outages (pauses), sequence numbers missing, and
 // restarts of the device's numbering (reboots). `puppeteer info` prints it; the rate excludes the outages.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The simulated armature: one device model that plays a pose stream (generated motion or recorded samples) and
 // speaks the drivers' wire protocols from the device side, with optional faults (noise, dropouts, garbage,
 // corrupted frames, a boot banner, an unplug). Served in-process (SimulatedTransport, the `sim:` device spec) or

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Atomic saves (imps/base/include/imps/atomic_file.h): the target is replaced whole or left untouched, no temporary
 // file survives a failure, an existing target keeps its permissions, temporary names are exclusive.
 #include "imps/atomic_file.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The debug tier of imps/base/include/imps/check.h as Release builds have it: compiled out, operands never
 // evaluated, so the innermost loops pay nothing. (check_test.cpp checks it as Debug builds have it.)
 #define IMPS_DEBUG_CHECKS 0

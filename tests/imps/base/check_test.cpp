@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The check macros (imps/base/include/imps/check.h): the always-on tier, and the debug tier as a Debug build has it.
 // check_release_tier_test.cpp checks the debug tier as a Release build has it (compiled out).
 #define IMPS_DEBUG_CHECKS 1

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The clock (imps/base/include/imps/clock.h): steadyNowNs is std::chrono::steady_clock in nanoseconds, SteadyClock
 // reads it, ManualClock moves only when told and records every sleep.
 #include "imps/clock.h"

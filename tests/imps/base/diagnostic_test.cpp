@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Diagnostics (imps/base/include/imps/diagnostic.h): `file:line:column: severity: message`, error counting, the cap
 // on printed diagnostics, and "did you mean" suggestions.
 #include "imps/diagnostic.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Bounded whole-file reads (imps/base/include/imps/file_read.h): the size limit, IMPS_MAX_INPUT_MIB, endless inputs
 // and the system's errors.
 #include "imps/file_read.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The threading layer (imps/base/include/imps/parallel.h): every index once, worker numbers for per-worker scratch.
 #include "imps/parallel.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // UTF-8 well-formedness (imps/base/include/imps/utf8.h): where the first ill-formed byte is, and repair with U+FFFD.
 #include "imps/utf8.h"
 

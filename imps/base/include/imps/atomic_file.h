@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Saves that never lose data: every file the project writes goes through here.
 #pragma once
 

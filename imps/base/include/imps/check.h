@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Always-on invariant checks for programming errors (not for bad input: that gets a Diagnostic).
 #pragma once
 

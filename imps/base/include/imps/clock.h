@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Time, in one place: the monotonic host clock every module stamps samples and measures timeouts on
 // (std::chrono::steady_clock, in nanoseconds), and the Clock interface through which replays, simulated devices,
 // the session writer's periodic flush and the drivers' arrival stamps read time, so tests can drive them by hand.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Diagnostics for bad input: where it is (file:line:column) and what was expected.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Reading a whole input file with a size limit, so a huge or endless input (/dev/zero, a pipe that never closes)
 // is refused with a message instead of growing memory until the process dies.
 #pragma once

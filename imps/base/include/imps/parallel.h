@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The one threading layer: every parallel loop in the project goes through here (oneTBB underneath).
 //
 // Determinism contract: parallelFor calls body(i) exactly once for every i in [0, n), in an unspecified order and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // UTF-8 checks for text that came from a file or a device: find the first ill-formed byte, or make the text
 // well-formed before it reaches a format that requires UTF-8 (JSON, glTF).
 #pragma once
