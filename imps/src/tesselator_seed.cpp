@@ -5,6 +5,7 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "imps/uniform_hash.h"
 #include "tesselator_state.h"
 
 namespace imps {
@@ -109,7 +110,7 @@ void seedParticles(Tesselator::State& s, const Field& field, const TesselatorOpt
   std::unordered_map<uint64_t, std::vector<uint32_t>> grid;
   const float cellSize = 0.8f * h;
   auto key = [&](const glm::vec3& x, int dx, int dy, int dz) {
-    const auto c = [&](float v, int d) { return uint64_t(uint32_t(int32_t(std::floor(v / cellSize)) + d) & 0x1fffffu); };
+    const auto c = [&](float v, int d) { return uint64_t(uint32_t(clampedCube(v / cellSize) + d) & 0x1fffffu); };
     return (c(x.x, dx) << 42) | (c(x.y, dy) << 21) | c(x.z, dz);
   };
   const float minD2 = cellSize * cellSize;

@@ -17,13 +17,14 @@ UniformHashGrid::UniformHashGrid(float cubeSize, int bitsPerDim)
   end_.assign(buckets, kEmpty);
 }
 
-int UniformHashGrid::cell(float x) const {
-  // Clamp so that far-away or non-finite coordinates still give a valid (if useless) cell.
-  const float c = std::floor(x * invCube_);
-  if (!(c > -1e9f)) return -1000000000;
-  if (c > 1e9f) return 1000000000;
-  return static_cast<int>(c);
+int clampedCube(float c) {
+  const float f = std::floor(c);
+  if (!(f > -1e9f)) return -1000000000;
+  if (f > 1e9f) return 1000000000;
+  return static_cast<int>(f);
 }
+
+int UniformHashGrid::cell(float x) const { return clampedCube(x * invCube_); }
 
 uint32_t UniformHashGrid::bucketOf(const glm::vec3& p) const { return bucket(cell(p.x), cell(p.y), cell(p.z)); }
 

@@ -18,6 +18,11 @@
 
 namespace imps {
 
+// floor(c) as an int, clamped to +-1e9: the cube of a coordinate c in cube units, so that far-away or non-finite
+// coordinates give a valid (if useless) cube instead of an out-of-range conversion (undefined behaviour). Cubes hash
+// into a few bits per axis anyway, and every user compares real distances.
+int clampedCube(float c);
+
 class UniformHashGrid {
  public:
   // cubeSize > 0 metres; bitsPerDim is clamped to [1, 7] (at most 2^21 buckets, 16 MiB of tables).
