@@ -75,9 +75,17 @@ Box Field::surfaceBounds() const {
   const glm::vec3 cell = all.size() / float(kCells);
   std::vector<float> upper(kCells * kCells * kCells, 0.0f);
   std::vector<uint8_t> unbounded(upper.size(), 0);
+  // The grid cell of a point, clamped before the conversion to int: a scene with coordinates near FLT_MAX gives an
+  // infinite box, and inf or NaN must not reach int (undefined behaviour); NaN goes to cell 0.
+  const auto cellOf = [&](const glm::vec3& p) {
+    const glm::vec3 f = glm::floor((p - all.lo) / cell);
+    glm::ivec3 c;
+    for (int k = 0; k < 3; ++k) c[k] = !(f[k] > 0.0f) ? 0 : f[k] >= float(kCells - 1) ? kCells - 1 : int(f[k]);
+    return c;
+  };
   for (size_t i = 0; i < primitives_.size(); ++i) {
-    const glm::ivec3 lo = glm::clamp(glm::ivec3(glm::floor((supportBoxes_[i].lo - all.lo) / cell)), glm::ivec3(0), glm::ivec3(kCells - 1));
-    const glm::ivec3 hi = glm::clamp(glm::ivec3(glm::floor((supportBoxes_[i].hi - all.lo) / cell)), glm::ivec3(0), glm::ivec3(kCells - 1));
+    const glm::ivec3 lo = cellOf(supportBoxes_[i].lo);
+    const glm::ivec3 hi = cellOf(supportBoxes_[i].hi);
     for (int k = lo.z; k <= hi.z; ++k)
       for (int j = lo.y; j <= hi.y; ++j)
         for (int c = lo.x; c <= hi.x; ++c) {
