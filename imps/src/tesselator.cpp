@@ -184,23 +184,11 @@ void findNeighbours(Tesselator::State& s, const TesselatorOptions& o) {
 TesselatorOptions TesselatorOptions::forField(const Field& field, float cellSize) {
   TesselatorOptions o;
   if (field.primitives().empty()) return o;
-  constexpr double kPi = 3.14159265358979;
   float smallest = 1e30f;
   double area = 0.0;  // summed over the primitives, overlaps counted twice: an upper bound for blended scenes
   for (const Primitive& p : field.primitives()) {
     smallest = std::min(smallest, p.minRadius());
-    switch (p.kind) {
-      case PrimitiveKind::Metaball: area += 4.0 * kPi * double(p.radius) * double(p.radius); break;
-      case PrimitiveKind::Ellipsoid: {
-        const double r = (double(p.radii.x) + double(p.radii.y) + double(p.radii.z)) / 3.0;
-        area += 4.0 * kPi * r * r;
-        break;
-      }
-      case PrimitiveKind::LineSeg:
-        area += 4.0 * kPi * (double(p.r1) * p.r1 + double(p.r2) * p.r2) +
-                2.0 * kPi * std::max(double(p.r1), double(p.r2)) * double(p.length);
-        break;
-    }
+    area += primitiveSurfaceArea(p);
   }
   if (!(smallest > 0.0f) || !std::isfinite(smallest)) return o;
   // Hexagonal packing: one particle per 0.866 h^2 of surface.

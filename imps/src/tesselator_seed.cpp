@@ -66,21 +66,7 @@ void primitivePoints(const Primitive& p, float spacing, std::vector<glm::vec3>& 
 
 // About how many points primitivePoints gives at `spacing` (its surface area over spacing^2).
 double pointEstimate(const Primitive& p, float spacing) {
-  constexpr double kPi = 3.14159265358979;
-  double area = 0.0;
-  switch (p.kind) {
-    case PrimitiveKind::Metaball: area = 4.0 * kPi * double(p.radius) * double(p.radius); break;
-    case PrimitiveKind::Ellipsoid: {
-      const double r = (double(p.radii.x) + double(p.radii.y) + double(p.radii.z)) / 3.0;
-      area = 4.0 * kPi * r * r;
-      break;
-    }
-    case PrimitiveKind::LineSeg:
-      area = 4.0 * kPi * (double(p.r1) * p.r1 + double(p.r2) * p.r2) +
-             2.0 * kPi * std::max(double(p.r1), double(p.r2)) * double(p.length);
-      break;
-  }
-  return area / (double(spacing) * spacing) + 8.0;
+  return primitiveSurfaceArea(p) / (double(spacing) * spacing) + 8.0;
 }
 
 // The candidates' spacing: 0.8 desiredRadius, widened when that would give more than a few times maxParticles
@@ -94,6 +80,21 @@ float seedSpacing(const Field& field, const TesselatorOptions& o) {
 }
 
 }  // namespace
+
+double primitiveSurfaceArea(const Primitive& p) {
+  constexpr double kPi = 3.14159265358979;
+  switch (p.kind) {
+    case PrimitiveKind::Metaball: return 4.0 * kPi * double(p.radius) * double(p.radius);
+    case PrimitiveKind::Ellipsoid: {
+      const double r = (double(p.radii.x) + double(p.radii.y) + double(p.radii.z)) / 3.0;
+      return 4.0 * kPi * r * r;
+    }
+    case PrimitiveKind::LineSeg:
+      return 4.0 * kPi * (double(p.r1) * p.r1 + double(p.r2) * p.r2) +
+             2.0 * kPi * std::max(double(p.r1), double(p.r2)) * double(p.length);
+  }
+  return 0.0;
+}
 
 void seedParticles(Tesselator::State& s, const Field& field, const TesselatorOptions& o) {
   const float h = o.desiredRadius;

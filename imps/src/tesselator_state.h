@@ -155,6 +155,11 @@ void findNeighbours(Tesselator::State& s, const TesselatorOptions& o);
 // Places particles on the field's surface from every primitive (tesselator_seed.cpp).
 void seedParticles(Tesselator::State& s, const Field& field, const TesselatorOptions& o);
 
+// The surface area of primitive p's own d = 1 surface (m^2): a sphere's, an ellipsoid's as a sphere of its mean radius,
+// a segment's as its two end spheres plus a cylinder of the larger radius. Seeding's point budget and the
+// scene-derived particle spacing (TesselatorOptions::forField) both estimate from it.
+double primitiveSurfaceArea(const Primitive& p);
+
 // ---- The triangulation's passes (tesselator_mesh.cpp), in the order Tesselator::triangulate runs them. Each needs
 // the neighbour list (findNeighbours) and s.field; each reads the previous passes' outputs and writes only its own.
 // Parallel ones write per-particle outputs only (deterministic for any thread count).
