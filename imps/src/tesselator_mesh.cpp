@@ -18,6 +18,10 @@
 //     is already used, so no edge ever has more than two triangles and orientations agree;
 //  E. hole repair (sequential): boundary loops (directed edges whose twin is missing) are walked and closed by ear
 //     clipping, choosing each time the ear with the shortest new edge whose normal agrees with the vertex normals.
+//  F. pinches: vertices whose triangles form more than one fan lose the smaller fans; the holes are repaired again;
+//  G. the fallback: a triangulation still open or pinched is replaced by Marching Cubes (never a hole);
+//  H. folds (sequential, closed triangulations only): a triangle winding against the field normal at its centroid
+//     gets an edge flip, else one of its corners is removed and its ring re-triangulated, when that unfolds it.
 #include <algorithm>
 #include <bit>
 #include <chrono>
@@ -825,6 +829,191 @@ size_t unpinchVertices(Tesselator::State& s, const TesselatorOptions& o, size_t&
   return pinched;
 }
 
+namespace {
+
+// Whether triangle (a, b, c) winds with the surface: its normal agrees with the field's outward normal at its
+// centroid. Where it agrees within 60 degrees with each corner's normal (almost everywhere), the field is not asked.
+bool windsOutward(const Tesselator::State& s, uint32_t a, uint32_t b, uint32_t c) {
+  const glm::vec3 pa = s.vpos[a], face = glm::cross(s.vpos[b] - pa, s.vpos[c] - pa);
+  const float near = 0.5f * glm::length(face);
+  if (glm::dot(face, s.nrm[a]) > near && glm::dot(face, s.nrm[b]) > near && glm::dot(face, s.nrm[c]) > near) return true;
+  return glm::dot(face, s.field->sample((pa + s.vpos[b] + s.vpos[c]) / 3.0f).gradient) < 0.0f;
+}
+
+// The slot of directed edge a -> b in a's half-edge table (a -> b must exist).
+size_t halfEdgeSlot(const Tesselator::State& s, uint32_t a, uint32_t b) {
+  const size_t base = size_t(a) * kMaxHalfEdges;
+  size_t k = 0;
+  while (k + 1 < s.heCount[a] && s.heTo[base + k] != b) ++k;
+  IMPS_DCHECK_EQ(s.heTo[base + k], b);
+  return base + k;
+}
+
+// Points the half-edge slot of a -> b at triangle t with third corner c, adding the slot if a -> b is new.
+void setHalfEdge(Tesselator::State& s, uint32_t a, uint32_t b, uint32_t c, uint32_t t, bool isNew) {
+  const size_t k = isNew ? size_t(a) * kMaxHalfEdges + s.heCount[a]++ : halfEdgeSlot(s, a, b);
+  s.heTo[k] = b, s.heThird[k] = c, s.heTri[k] = t;
+}
+
+// Removes directed edge a -> b, keeping heTri in step with heTo and heThird.
+void dropHalfEdge(Tesselator::State& s, uint32_t a, uint32_t b) {
+  const size_t k = halfEdgeSlot(s, a, b), end = size_t(a) * kMaxHalfEdges + s.heCount[a];
+  std::copy(s.heTri.begin() + std::ptrdiff_t(k + 1), s.heTri.begin() + std::ptrdiff_t(end), s.heTri.begin() + std::ptrdiff_t(k));
+  removeHalfEdge(s, a, b);
+}
+
+// Flips the edge u -> v of triangle t = (u, v, w) if that unfolds it: its neighbour (v, u, x) and t become (u, x, w)
+// and (x, v, w), both winding with the normals, x -> w no edge yet. Returns whether it flipped.
+bool flipToUnfold(Tesselator::State& s, uint32_t t, int k) {
+  uint32_t* tri = &s.tris[3 * size_t(t)];
+  const uint32_t u = tri[k], v = tri[(k + 1) % 3], w = tri[(k + 2) % 3];
+  const size_t back = halfEdgeSlot(s, v, u);
+  const uint32_t x = s.heThird[back], t2 = s.heTri[back];
+  if (x == w || hasHalfEdge(s, w, x) || hasHalfEdge(s, x, w)) return false;
+  if (s.heCount[x] >= kMaxHalfEdges || s.heCount[w] >= kMaxHalfEdges) return false;
+  const int before = 1 + int(!windsOutward(s, v, u, x));
+  if (int(!windsOutward(s, u, x, w)) + int(!windsOutward(s, x, v, w)) >= before) return false;
+  dropHalfEdge(s, u, v);
+  dropHalfEdge(s, v, u);
+  tri[0] = u, tri[1] = x, tri[2] = w;
+  uint32_t* tri2 = &s.tris[3 * size_t(t2)];
+  tri2[0] = x, tri2[1] = v, tri2[2] = w;
+  setHalfEdge(s, u, x, w, t, false);
+  setHalfEdge(s, x, w, u, t, true);
+  setHalfEdge(s, w, u, x, t, false);
+  setHalfEdge(s, x, v, w, t2, false);
+  setHalfEdge(s, v, w, x, t2, false);
+  setHalfEdge(s, w, x, v, t2, true);
+  return true;
+}
+
+// A triangulation of ring[0..m) (a counter-clockwise loop) into `ears` whose triangles all wind with the surface and
+// whose new edges are no edges yet: the fan from the ring vertex with the shortest diagonals. Returns the triangle
+// count, m - 2, or 0 if no fan will do.
+size_t fanRing(const Tesselator::State& s, const uint32_t* ring, size_t m, uint32_t* ears) {
+  size_t best = m;
+  float bestLength = 1e30f;
+  for (size_t j = 0; j < m; ++j) {
+    const uint32_t a = ring[j];
+    float length = 0.0f;
+    bool ok = true;
+    for (size_t i = 1; i + 1 < m && ok; ++i) {
+      const uint32_t b = ring[(j + i) % m], c = ring[(j + i + 1) % m];
+      ok = windsOutward(s, a, b, c) && (i == 1 || !(hasHalfEdge(s, a, b) || hasHalfEdge(s, b, a)));
+      if (i >= 2) length += glm::length(s.vpos[b] - s.vpos[a]);
+    }
+    if (ok && length < bestLength) bestLength = length, best = j;
+  }
+  if (best == m) return 0;
+  for (size_t i = 1; i + 1 < m; ++i) {
+    uint32_t* ear = ears + 3 * (i - 1);
+    ear[0] = ring[best], ear[1] = ring[(best + i) % m], ear[2] = ring[(best + i + 1) % m];
+  }
+  return m - 2;
+}
+
+// The same by ear clipping: each time the ear with the shortest new edge among those that wind with the surface and
+// whose new edge is no edge yet. Returns m - 2, or 0 if it gets stuck.
+size_t clipRing(const Tesselator::State& s, const uint32_t* ring, size_t m, uint32_t* ears) {
+  uint32_t left[kMaxHalfEdges];
+  std::copy_n(ring, m, left);
+  size_t n = m, count = 0;
+  while (n > 3) {
+    size_t best = n;
+    float bestLength = 1e30f;
+    for (size_t k = 0; k < n; ++k) {
+      const uint32_t a = left[k], b = left[(k + 1) % n], c = left[(k + 2) % n];
+      if (hasHalfEdge(s, a, c) || hasHalfEdge(s, c, a) || !windsOutward(s, a, b, c)) continue;
+      const float length = glm::length(s.vpos[c] - s.vpos[a]);
+      if (length < bestLength) bestLength = length, best = k;
+    }
+    if (best == n) return 0;
+    uint32_t* ear = ears + 3 * count++;
+    ear[0] = left[best], ear[1] = left[(best + 1) % n], ear[2] = left[(best + 2) % n];
+    const size_t drop = (best + 1) % n;
+    std::copy(left + drop + 1, left + n, left + drop);
+    --n;
+  }
+  if (!windsOutward(s, left[0], left[1], left[2])) return 0;
+  std::copy_n(left, 3, ears + 3 * count++);
+  return count;
+}
+
+// Removes vertex p if that unfolds its umbrella: its ring (a closed disk's boundary, distinct vertices) is
+// triangulated again by fanRing, else clipRing. The ring's m triangles become m - 2 (the last two slots are marked
+// dead, kDead). Returns whether it removed p (all or nothing).
+constexpr uint32_t kDead = ~0u;
+bool removeToUnfold(Tesselator::State& s, uint32_t p) {
+  const size_t m = s.heCount[p];
+  if (m < 3) return false;
+  uint32_t ring[kMaxHalfEdges], ringTri[kMaxHalfEdges], ears[3 * kMaxHalfEdges];
+  ring[0] = s.heTo[size_t(p) * kMaxHalfEdges];
+  for (size_t i = 0; i < m; ++i) {  // counter-clockwise: triangle (p, ring[i], ring[i + 1]) is ringTri[i]
+    const size_t k = halfEdgeSlot(s, p, ring[i]);
+    ringTri[i] = s.heTri[k];
+    if (i + 1 < m) ring[i + 1] = s.heThird[k];
+    else if (s.heThird[k] != ring[0]) return false;  // not a closed disk
+  }
+  for (size_t i = 0; i < m; ++i)  // room for the new edges (each ring vertex loses two half-edges, gets at most m - 1)
+    if (s.heCount[ring[i]] + m > kMaxHalfEdges + 1) return false;
+  size_t count = fanRing(s, ring, m, ears);
+  if (count == 0) count = clipRing(s, ring, m, ears);
+  if (count == 0) return false;
+  for (size_t i = 0; i < m; ++i) {
+    const uint32_t b = ring[i], c = ring[(i + 1) % m];
+    dropHalfEdge(s, p, b);
+    dropHalfEdge(s, b, c);
+    dropHalfEdge(s, c, p);
+  }
+  for (size_t q = 0; q < count; ++q) {
+    const uint32_t a = ears[3 * q], b = ears[3 * q + 1], c = ears[3 * q + 2], t = ringTri[q];
+    uint32_t* tri = &s.tris[3 * size_t(t)];
+    tri[0] = a, tri[1] = b, tri[2] = c;
+    setHalfEdge(s, a, b, c, t, true);
+    setHalfEdge(s, b, c, a, t, true);
+    setHalfEdge(s, c, a, b, t, true);
+  }
+  for (size_t i = m - 2; i < m; ++i) std::fill_n(&s.tris[3 * size_t(ringTri[i])], 3, kDead);
+  return true;
+}
+
+}  // namespace
+
+size_t unfoldTriangles(Tesselator::State& s) {
+  const size_t triangles = s.tris.size() / 3;
+  s.folded.clear();
+  for (uint32_t t = 0; t < triangles; ++t)
+    if (!windsOutward(s, s.tris[3 * size_t(t)], s.tris[3 * size_t(t) + 1], s.tris[3 * size_t(t) + 2])) s.folded.push_back(t);
+  if (s.folded.empty()) return 0;
+  s.heTri.resize(s.heTo.size());
+  for (uint32_t t = 0; t < triangles; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = s.tris[3 * size_t(t) + size_t(k)], b = s.tris[3 * size_t(t) + size_t(k + 1) % 3];
+      s.heTri[halfEdgeSlot(s, a, b)] = t;
+    }
+  for (int round = 0; round < 3 && !s.folded.empty(); ++round) {
+    size_t left = 0;
+    for (uint32_t t : s.folded) {
+      const uint32_t* tri = &s.tris[3 * size_t(t)];
+      if (tri[0] == kDead || windsOutward(s, tri[0], tri[1], tri[2])) continue;  // a neighbour's repair unfolded it
+      bool fixed = false;
+      for (int k = 0; k < 3 && !fixed; ++k) fixed = flipToUnfold(s, t, k);
+      for (int k = 0; k < 3 && !fixed; ++k) fixed = removeToUnfold(s, tri[k]);
+      if (!fixed) s.folded[left++] = t;
+    }
+    s.folded.resize(left);
+  }
+  // Compact away the dead slots.
+  size_t w = 0;
+  for (size_t t = 0; t < triangles; ++t)
+    if (s.tris[3 * t] != kDead) {
+      for (size_t k = 0; k < 3; ++k) s.tris[w + k] = s.tris[3 * t + k];
+      w += 3;
+    }
+  s.tris.resize(w);
+  return s.folded.size();
+}
+
 void writeMesh(const Tesselator::State& s, const TesselatorOptions& o, Mesh& mesh) {
   const size_t n = s.size();
   mesh.positions.resize(3 * n);
@@ -872,6 +1061,7 @@ void Tesselator::triangulate(Mesh& mesh) {
   stats_.pinchedVertices = pinched;
   stats_.openEdges = boundary;
   s.lastMeshOpen = boundary > 0 || pinched > 0;
+  stats_.foldedTriangles = s.lastMeshOpen || !o.unfold ? 0 : unfoldTriangles(s);  // H
   stats_.fallback = o.closedFallback && (boundary > 0 || pinched > 0);
   if (stats_.fallback) {  // G: never show a hole (docs/tesselator.md, "The fallback")
     ++stats_.fallbacks;

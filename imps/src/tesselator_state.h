@@ -132,6 +132,8 @@ struct Tesselator::State {
   std::vector<uint32_t> holeTo;
   std::vector<uint8_t> holeCount, holeUsed, openUp, openOut;
   std::vector<uint32_t> loop, tris;
+  std::vector<uint32_t> heTri;   // unfoldTriangles: per half-edge slot the index of its triangle in s.tris / 3
+  std::vector<uint32_t> folded;  // unfoldTriangles: the triangles winding against their corners' normals
   std::vector<size_t> chunkUnanimous;  // voteTriangles: per chunk its emitted unanimous triangles, then offsets
   std::vector<size_t> chunkOpen;       // assembleTriangles: per chunk its open directed edges
   // Per-update scratch (step's phases).
@@ -192,6 +194,12 @@ size_t unpinchVertices(Tesselator::State& s, const TesselatorOptions& o, size_t&
 // Counts the vertices whose triangles do not form a single fan (a disk, or a half-disk on the boundary), marking them
 // in s.openUp and the half-edge slots of all but their largest fan in s.dropSlot. Parallel; reads the half-edge table.
 size_t markPinchedVertices(Tesselator::State& s, const TesselatorOptions& o);
+// H. folds (sequential; only on a closed, manifold triangulation): a triangle winding against its corners' field
+// normals (a fold, in the concave creases where the corners' tangent planes disagree) has its edges flipped, each
+// flip replacing it and its neighbour by the quad's other diagonal when both new triangles wind with the normals and
+// that diagonal is no edge yet (a flip keeps the mesh closed and manifold). In triangle order, up to three rounds.
+// Returns the folds left.
+size_t unfoldTriangles(Tesselator::State& s);
 // The output: one vertex per particle (s.vpos, s.nrm, s.vcol clamped to [0, 1]) and s.tris.
 void writeMesh(const Tesselator::State& s, const TesselatorOptions& o, Mesh& mesh);
 // G. the fallback output: Marching Cubes of s.field at cell desiredRadius (closed and manifold by construction).

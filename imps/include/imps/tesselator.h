@@ -68,6 +68,10 @@ struct TesselatorOptions {
   // A triangulation left with a hole or a pinched vertex after repair is replaced by Marching Cubes of the same field
   // at cell desiredRadius (stats().fallback), so that no hole is ever shown. False: the particle mesh as it is.
   bool closedFallback = true;
+  // A closed triangulation's folds (triangles winding against the field's outward normal at their centroid, in the
+  // concave creases) are repaired by edge flips and vertex removals that keep it closed and manifold (pass H,
+  // docs/tesselator.md); stats().foldedTriangles counts those left. False: folds stay (and are not counted).
+  bool unfold = true;
   // Projective: a textured mesh's coordinates come from the generators (textureMesh alone). Carried: every particle
   // carries its coordinates (see carryTexcoords), so the texture stretches with the skin instead of sliding.
   TextureMode textureMode = TextureMode::Projective;
@@ -107,6 +111,7 @@ struct TesselatorStats {
   size_t unfilledLoops = 0;    // last triangulate(): boundary loops the repair could not close
   size_t openEdges = 0;        // last triangulate(): the particle triangulation's edges with one triangle after repair
   size_t pinchedVertices = 0;  // last triangulate(): its vertices whose triangles form more than one fan
+  size_t foldedTriangles = 0;  // last triangulate(): triangles still winding against their corners' normals
   bool fallback = false;       // last triangulate(): the mesh is the Marching Cubes fallback (see closedFallback)
   uint64_t fallbacks = 0;      // triangulations that fell back, since reset
   uint64_t updates = 0;        // total update() calls since reset
