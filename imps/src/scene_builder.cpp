@@ -603,7 +603,38 @@ void SceneBuilder::field(const std::string& name, const SourceLoc& nameLoc, cons
 // field; `value` with no items and not bracketed stands for "a node was given".
 void SceneBuilder::storeField(Frame& frame, const FieldSpec& spec, const SourceLoc& nameLoc,
                               const FieldValue& value) {
-  const std::string& typeName = frame.typeName;
+  if (!admitField(frame, spec, nameLoc)) return;
+  const SourceLoc loc = value.items.empty() && !value.bracketed ? nameLoc : value.loc;
+  for (const Token& t : value.items)
+    if (t.kind == TokenKind::BadNumber) return;  // reported by the lexer
+
+  // The shape of the value: a node, a list, or a run of numbers / strings / booleans.
+  const bool isNodeValue = value.items.empty() && !value.bracketed;
+  if (spec.type == FieldType::Node || spec.type == FieldType::Nodes) {
+    if (value.bracketed && value.items.empty() && spec.type == FieldType::Nodes) return;  // `children []`
+    if (value.bracketed && value.items.empty()) {
+      sink_.error(nameLoc, "field '" + std::string(spec.name) + "' of " + frame.typeName + " holds one node, not a list");
+      return;
+    }
+    return mismatch(frame, spec, loc, describe(value.items.front()));
+  }
+  if (isNodeValue) return mismatch(frame, spec, loc, "a node");
+  if (spec.type == FieldType::Strings) return storeStrings(frame, spec, loc, value);
+  if (value.bracketed) return mismatch(frame, spec, loc, "a list");
+  if (spec.type == FieldType::Bool) {
+    const Token& t = value.items.front();
+    if (t.kind != TokenKind::Identifier) return mismatch(frame, spec, loc, describe(t));
+    if (value.items.size() > 1) return mismatch(frame, spec, loc, std::to_string(value.items.size()) + " values");
+    Value v;
+    v.b = t.text == "TRUE";
+    spec.set(frame.data, v);
+    return;
+  }
+  storeNumbers(frame, spec, loc, value);
+}
+
+// Whether a field may be stored in `frame`: its type has it and it was not given before (else reported).
+bool SceneBuilder::admitField(Frame& frame, const FieldSpec& spec, const SourceLoc& nameLoc) {
   const std::string fieldName = spec.name;
   if (spec.set == nullptr && spec.accepts == 0) {
     std::vector<std::string> candidates;
@@ -613,80 +644,65 @@ void SceneBuilder::storeField(Frame& frame, const FieldSpec& spec, const SourceL
       list += (list.empty() ? "" : ", ") + std::string(f.name);
     }
     const std::string hint = didYouMean(fieldName, candidates);
-    sink_.error(nameLoc, "unknown field '" + fieldName + "' in " + typeName +
+    sink_.error(nameLoc, "unknown field '" + fieldName + "' in " + frame.typeName +
                              (hint.empty() ? " (its fields are: " + list + ")" : hint));
-    return;
+    return false;
   }
   if (const auto seen = frame.seen.find(fieldName); seen != frame.seen.end()) {
-    sink_.error(nameLoc, "field '" + fieldName + "' is given twice in " + typeName + " (first at " +
+    sink_.error(nameLoc, "field '" + fieldName + "' is given twice in " + frame.typeName + " (first at " +
                              position(seen->second) + ")");
-    return;
+    return false;
   }
   frame.seen.emplace(fieldName, nameLoc);
-  const SourceLoc loc = value.items.empty() && !value.bracketed ? nameLoc : value.loc;
+  return true;
+}
+
+// "expected <what spec.type holds> for field 'F' of T, found <found>".
+void SceneBuilder::mismatch(const Frame& frame, const FieldSpec& spec, const SourceLoc& loc, const std::string& found) {
+  sink_.error(loc, "expected " + std::string(expectation(spec.type)) + " for field '" + std::string(spec.name) +
+                       "' of " + frame.typeName + ", found " + found);
+}
+
+// An MFString / SFString field: strings only, one unless bracketed, and the spec's constraint on them.
+void SceneBuilder::storeStrings(Frame& frame, const FieldSpec& spec, const SourceLoc& loc, const FieldValue& value) {
+  const std::string field = "field '" + std::string(spec.name) + "' of " + frame.typeName;
+  for (const Token& t : value.items)
+    if (t.kind != TokenKind::String) return mismatch(frame, spec, loc, describe(t));
+  if (!value.bracketed && value.items.size() > 1)
+    return mismatch(frame, spec, loc, std::to_string(value.items.size()) + " strings");
+  const std::string count = std::to_string(value.items.size()) + " strings";
+  if (spec.constraint == Constraint::OneString && (value.items.size() != 1 || value.items.front().text.empty())) {
+    sink_.error(loc, field + " must be one non-empty string, found " +
+                         (value.items.size() == 1 ? std::string("an empty string") : count));
+    return;
+  }
+  if (spec.constraint == Constraint::TextureModeName &&
+      (value.items.size() != 1 ||
+       (value.items.front().text != "projective" && value.items.front().text != "carried"))) {
+    sink_.error(loc, field + " must be \"projective\" or \"carried\", found " +
+                         (value.items.size() == 1 ? "\"" + value.items.front().text + "\"" : count));
+    return;
+  }
+  Value v;
+  for (const Token& t : value.items) {
+    v.strings.push_back(t.text);
+    frame.memberLocs.push_back(SourceLoc{fileName_, t.line, t.column});
+  }
+  spec.set(frame.data, v);
+  if (auto* texture = std::get_if<ImageTextureNode>(&frame.data)) texture->loc = frame.memberLocs.front();
+}
+
+// A numeric field (SFInt32, SFFloat, SFVec3f, SFColor, SFRotation): exactly its count of numbers, each in range for
+// its type, then the spec's constraint.
+void SceneBuilder::storeNumbers(Frame& frame, const FieldSpec& spec, const SourceLoc& loc, const FieldValue& value) {
+  const std::string fieldName = spec.name, &typeName = frame.typeName;
   const std::string what = " for field '" + fieldName + "' of " + typeName;
   for (const Token& t : value.items)
-    if (t.kind == TokenKind::BadNumber) return;  // reported by the lexer
-
-  // The shape of the value: a node, a list, or a run of numbers / strings / booleans.
-  const bool isNodeValue = value.items.empty() && !value.bracketed;
-  auto mismatch = [&](const std::string& found) {
-    sink_.error(loc, "expected " + std::string(expectation(spec.type)) + what + ", found " + found);
-  };
-  if (spec.type == FieldType::Node || spec.type == FieldType::Nodes) {
-    if (value.bracketed && value.items.empty() && spec.type == FieldType::Nodes) return;  // `children []`
-    if (value.bracketed && value.items.empty()) {
-      sink_.error(nameLoc, "field '" + fieldName + "' of " + typeName + " holds one node, not a list");
-      return;
-    }
-    mismatch(describe(value.items.front()));
-    return;
-  }
-  if (isNodeValue) return mismatch("a node");
-  if (spec.type == FieldType::Strings) {
-    for (const Token& t : value.items)
-      if (t.kind != TokenKind::String) return mismatch(describe(t));
-    if (!value.bracketed && value.items.size() > 1) return mismatch(std::to_string(value.items.size()) + " strings");
-    if (spec.constraint == Constraint::OneString && (value.items.size() != 1 || value.items.front().text.empty())) {
-      sink_.error(loc, "field '" + fieldName + "' of " + typeName + " must be one non-empty string, found " +
-                           (value.items.size() == 1 ? std::string("an empty string")
-                                                    : std::to_string(value.items.size()) + " strings"));
-      return;
-    }
-    if (spec.constraint == Constraint::TextureModeName &&
-        (value.items.size() != 1 ||
-         (value.items.front().text != "projective" && value.items.front().text != "carried"))) {
-      sink_.error(loc, "field '" + fieldName + "' of " + typeName + " must be \"projective\" or \"carried\", found " +
-                           (value.items.size() == 1 ? "\"" + value.items.front().text + "\""
-                                                    : std::to_string(value.items.size()) + " strings"));
-      return;
-    }
-    Value v;
-    for (const Token& t : value.items) {
-      v.strings.push_back(t.text);
-      frame.memberLocs.push_back(SourceLoc{fileName_, t.line, t.column});
-    }
-    spec.set(frame.data, v);
-    if (auto* texture = std::get_if<ImageTextureNode>(&frame.data)) texture->loc = frame.memberLocs.front();
-    return;
-  }
-  if (value.bracketed) return mismatch("a list");
-  if (spec.type == FieldType::Bool) {
-    const Token& t = value.items.front();
-    if (t.kind != TokenKind::Identifier) return mismatch(describe(t));
-    if (value.items.size() > 1) return mismatch(std::to_string(value.items.size()) + " values");
-    Value v;
-    v.b = t.text == "TRUE";
-    spec.set(frame.data, v);
-    return;
-  }
-  // Numbers from here on.
-  for (const Token& t : value.items)
-    if (t.kind != TokenKind::Number) return mismatch(describe(t));
+    if (t.kind != TokenKind::Number) return mismatch(frame, spec, loc, describe(t));
   const size_t n = expectedCount(spec.type);
   if (value.items.size() != n)
-    return mismatch(std::to_string(value.items.size()) + (value.items.size() == 1 ? " number" : " numbers"));
-
+    return mismatch(frame, spec, loc,
+                    std::to_string(value.items.size()) + (value.items.size() == 1 ? " number" : " numbers"));
   Value v;
   std::array<float, 4> numbers{};
   for (size_t k = 0; k < n; ++k) {
@@ -695,7 +711,7 @@ void SceneBuilder::storeField(Frame& frame, const FieldSpec& spec, const SourceL
     std::string_view digits = t.text;
     if (digits.front() == '+') digits.remove_prefix(1);
     if (spec.type == FieldType::Int) {
-      if (digits.find_first_of(".eE") != std::string_view::npos) return mismatch("'" + t.text + "'");
+      if (digits.find_first_of(".eE") != std::string_view::npos) return mismatch(frame, spec, loc, "'" + t.text + "'");
       const auto r = std::from_chars(digits.data(), digits.data() + digits.size(), v.i);
       if (r.ec != std::errc() || r.ptr != digits.data() + digits.size()) {
         sink_.error(tokenLoc, "integer '" + t.text + "'" + what + " is out of range");
@@ -712,7 +728,6 @@ void SceneBuilder::storeField(Frame& frame, const FieldSpec& spec, const SourceL
   v.f = numbers[0];
   v.v = glm::vec3(numbers[0], numbers[1], numbers[2]);
   v.r = Rotation{glm::vec3(numbers[0], numbers[1], numbers[2]), numbers[3]};
-
   if (const std::string rule = constraintBroken(spec, v.i, numbers); !rule.empty()) {
     sink_.error(loc, "field '" + fieldName + "' of " + typeName + " must " + rule + ", found " + sourceText(value));
     return;

@@ -66,6 +66,10 @@ class SceneBuilder final : public ParserTarget {
   void deliver(Finished child);
   void deliverTop(Finished child);
   void storeField(Frame& frame, const FieldSpec& spec, const SourceLoc& nameLoc, const FieldValue& value);
+  bool admitField(Frame& frame, const FieldSpec& spec, const SourceLoc& nameLoc);
+  void storeStrings(Frame& frame, const FieldSpec& spec, const SourceLoc& loc, const FieldValue& value);
+  void storeNumbers(Frame& frame, const FieldSpec& spec, const SourceLoc& loc, const FieldValue& value);
+  void mismatch(const Frame& frame, const FieldSpec& spec, const SourceLoc& loc, const std::string& found);
   void checkBlendParams(const SceneNode& node, BlendKind inForce);
 
   std::string fileName_;
