@@ -23,6 +23,7 @@
 #include <glm/gtc/quaternion.hpp>
 #include <glm/mat4x4.hpp>
 
+#include "camera.h"
 #include "cli.h"
 #include "interrupts.h"
 #include "imps/scene_writer.h"
@@ -134,8 +135,7 @@ void moveCursor(ViewerState& s, double x, double y) {
   if (s.stroking) {
     paintAlong(s, x, y);
   } else if (s.orbiting) {
-    s.orbit.yaw -= float(x - s.lastX) * 0.008f;
-    s.orbit.pitch = std::clamp(s.orbit.pitch + float(y - s.lastY) * 0.008f, -1.5f, 1.5f);
+    s.orbit.turn(float(x - s.lastX), float(y - s.lastY));
   } else if (s.modeller->dragging()) {
     s.modeller->drag(currentView(s), glm::vec2(float(x), float(y)));
     s.poseDirty = true;
@@ -169,7 +169,7 @@ void onCursor(GLFWwindow* w, double x, double y) { moveCursor(state(w), x, y); }
 void onScroll(GLFWwindow* w, double /*dx*/, double dy) {
   ViewerState& s = state(w);
   if (s.hud && s.hud->wantsMouse()) return;
-  s.orbit.distance = std::clamp(s.orbit.distance * std::pow(0.9f, float(dy)), 0.05f, 100.0f);
+  s.orbit.zoom(float(dy));
 }
 
 void handleKey(GLFWwindow* w, ViewerState& s, int key, int mods) {
