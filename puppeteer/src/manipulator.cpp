@@ -10,42 +10,7 @@
 #include <glm/geometric.hpp>
 #include <glm/mat4x4.hpp>
 
-#include "renderer.h"
-
 namespace imps::app {
-
-ScreenView screenView(const Camera& camera, int width, int height, float sceneRadius) {
-  ScreenView v;
-  v.width = std::max(1, width), v.height = std::max(1, height);
-  v.viewProjection = Renderer::projectionMatrix(camera, float(v.width) / float(v.height), sceneRadius) *
-                     Renderer::viewMatrix(camera);
-  const glm::vec3 forward = glm::normalize(camera.target - camera.eye);
-  v.right = glm::normalize(glm::cross(forward, camera.up));
-  v.up = glm::cross(v.right, forward);
-  v.towardsViewer = -forward;
-  v.eye = camera.eye;
-  return v;
-}
-
-bool projectToWindow(const ScreenView& view, const glm::vec3& world, glm::vec2* pixel) {
-  const glm::vec4 clip = view.viewProjection * glm::vec4(world, 1.0f);
-  if (clip.w <= 0.0f) return false;
-  *pixel = glm::vec2((clip.x / clip.w * 0.5f + 0.5f) * float(view.width),
-                     (0.5f - clip.y / clip.w * 0.5f) * float(view.height));
-  return true;
-}
-
-PickRay pickRay(const ScreenView& view, const glm::vec2& pixel) {
-  // The pixel at the near and far planes, unprojected; the ray starts at the eye.
-  const glm::mat4 inverse = glm::inverse(view.viewProjection);
-  const float ndcX = pixel.x / float(view.width) * 2.0f - 1.0f;
-  const float ndcY = 1.0f - pixel.y / float(view.height) * 2.0f;
-  glm::vec4 nearPoint = inverse * glm::vec4(ndcX, ndcY, -1.0f, 1.0f);
-  glm::vec4 farPoint = inverse * glm::vec4(ndcX, ndcY, 1.0f, 1.0f);
-  nearPoint /= nearPoint.w;
-  farPoint /= farPoint.w;
-  return PickRay{view.eye, glm::normalize(glm::vec3(farPoint - nearPoint))};
-}
 
 std::vector<Bone> skeletonBones(std::span<const int> parents, std::span<const glm::vec3> world) {
   std::vector<Bone> bones;
@@ -86,10 +51,6 @@ int pickJoint(const PickRay& ray, std::span<const Bone> bones, float maxAngle) {
     if (score < bestScore) bestScore = score, best = bone.joint;
   }
   return best;
-}
-
-float pixelsToAngle(float pixels, int windowHeight, float verticalFov) {
-  return std::atan(pixels / (0.5f * float(std::max(1, windowHeight))) * std::tan(0.5f * verticalFov));
 }
 
 namespace {

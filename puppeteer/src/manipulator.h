@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
-// The hand-posing manipulators' maths, free of any window or GL: projecting world points to window pixels, the pick
-// ray through a pixel, the joint whose bone a ray passes nearest, and a screen drag turned into a joint rotation
-// (an arcball centred on the joint — a two-axis trackball about the screen's up/right axes near its centre — or a
-// twist about the view axis).
+// The hand-posing manipulators' maths, free of any window or GL: the joint whose bone a ray passes nearest, and a
+// screen drag turned into a joint rotation (an arcball centred on the joint — a two-axis trackball about the
+// screen's up/right axes near its centre — or a twist about the view axis). The mapping between world points and
+// window pixels (ScreenView, projectToWindow, pickRay, pixelsToAngle) is the camera's (camera.h).
 // Based on: K. Shoemake, "ARCBALL: A User Interface for Specifying Three-Dimensional Orientation Using a Mouse",
 // 1992; M. Chen, S. J. Mountford, A. Sellen, "A Study in Interactive 3-D Rotation Using 2-D Control Devices", 1988
 // (the "virtual trackball": horizontal drag turns about the vertical screen axis, vertical about the horizontal).
@@ -16,32 +16,9 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
-#include "snapshot.h"
+#include "camera.h"
 
 namespace imps::app {
-
-// A camera's view of a window: world → clip (projection * view) and the window size in pixels. Window pixels have
-// their origin at the top-left corner, x to the right, y down (GLFW's cursor convention).
-struct ScreenView {
-  glm::mat4 viewProjection{1.0f};
-  int width = 1, height = 1;
-  // The camera's world-space basis: right, up (both unit, orthogonal) and the unit direction towards the viewer.
-  glm::vec3 right{1, 0, 0}, up{0, 1, 0}, towardsViewer{0, 0, 1};
-  glm::vec3 eye{0, 0, 3};
-};
-
-// The view of `camera` (Renderer::viewMatrix / projectionMatrix with `sceneRadius`) in a width x height window.
-ScreenView screenView(const Camera& camera, int width, int height, float sceneRadius);
-
-// Window pixel position of a world point; false (and *pixel untouched) when the point is behind the camera.
-bool projectToWindow(const ScreenView& view, const glm::vec3& world, glm::vec2* pixel);
-
-// A ray from the eye through a window pixel (world space, unit direction).
-struct PickRay {
-  glm::vec3 origin{0.0f};
-  glm::vec3 direction{0, 0, -1};
-};
-PickRay pickRay(const ScreenView& view, const glm::vec2& pixel);
 
 // A pickable piece of the skeleton: the segment from joint `joint`'s origin to one of its children's origins (world
 // space, metres), or a single point (a == b) for a joint without children. Picking a bone picks the joint that
@@ -59,10 +36,6 @@ std::vector<Bone> skeletonBones(std::span<const int> parents, std::span<const gl
 // nearest point seen from the ray's origin; -1 when none is within `maxAngle` or lies in front of the origin. Where
 // two bones meet (an elbow), the bone that starts there wins, so a click on a joint picks that joint.
 int pickJoint(const PickRay& ray, std::span<const Bone> bones, float maxAngle);
-
-// The angle (radians) that `pixels` pixels subtend at the centre of `view` (for pickJoint's maxAngle); needs the
-// camera's vertical field of view.
-float pixelsToAngle(float pixels, int windowHeight, float verticalFov);
 
 // The arcball (Shoemake), centred on the picked joint's window position `center` with radius `radius` pixels: the
 // window points `from` and `to` are lifted onto the ball's front hemisphere (or its rim, outside the ball) and the

@@ -28,27 +28,9 @@ bool samePose(const std::vector<Rigid>& a, const std::vector<Rigid>& b) {
 
 }  // namespace
 
-Camera OrbitCamera::camera() const {
-  const glm::vec3 dir(std::cos(pitch) * std::sin(yaw), std::sin(pitch), std::cos(pitch) * std::cos(yaw));
-  return Camera{target + distance * dir, target, glm::vec3(0, 1, 0), verticalFov};
-}
-
 OrbitCamera initialOrbit(const ViewerPipeline& pipeline, int width, int height, float* sceneRadius) {
   return initialOrbit(pipeline.restBounds().empty() ? bounds(pipeline.mesh()) : pipeline.restBounds(), width, height,
                       sceneRadius);
-}
-
-OrbitCamera initialOrbit(const MeshBounds& box, int width, int height, float* sceneRadius) {
-  const Camera cam = frameBox(box, kFrontThreeQuarter, float(width) / float(std::max(1, height)));
-  const glm::vec3 d = glm::normalize(cam.eye - cam.target);
-  OrbitCamera orbit;
-  orbit.target = cam.target;
-  orbit.distance = glm::length(cam.eye - cam.target);
-  orbit.yaw = std::atan2(d.x, d.z);
-  orbit.pitch = std::asin(std::clamp(d.y, -1.0f, 1.0f));
-  orbit.verticalFov = cam.verticalFov;
-  if (sceneRadius) *sceneRadius = box.empty() ? 1.0f : 0.5f * glm::length(box.max - box.min);
-  return orbit;
 }
 
 namespace {

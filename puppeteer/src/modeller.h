@@ -20,6 +20,7 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include "camera.h"
 #include "manipulator.h"
 #include "renderer.h"
 #include "scene_edit.h"
@@ -27,19 +28,10 @@
 
 namespace imps::app {
 
-// An orbit camera around a target: yaw about +y, pitch above the horizon, distance in metres.
-struct OrbitCamera {
-  glm::vec3 target{0.0f};
-  float yaw = 0.0f, pitch = 0.0f, distance = 3.0f;
-  float verticalFov = 0.6f;
-  Camera camera() const;
-};
-
-// The app's first camera: the pipeline's rest bounds (else the mesh's) framed from the front three-quarter view in
-// a width x height window; *sceneRadius (optional) receives the radius the clip planes use.
+// The app's first camera (camera.h's initialOrbit): the pipeline's rest bounds (else the mesh's) framed from the
+// front three-quarter view in a width x height window; *sceneRadius (optional) receives the radius the clip planes
+// use.
 OrbitCamera initialOrbit(const ViewerPipeline& pipeline, int width, int height, float* sceneRadius);
-// The same for a box (a world of several characters).
-OrbitCamera initialOrbit(const MeshBounds& box, int width, int height, float* sceneRadius);
 
 enum class ManipulatorMode { Translate, Rotate, Scale };
 const char* modeName(ManipulatorMode mode);

@@ -448,15 +448,6 @@ void Renderer::uploadParticles(std::span<const glm::vec3> positions) {
   pointCount_ = static_cast<int32_t>(positions.size());
 }
 
-glm::mat4 Renderer::viewMatrix(const Camera& camera) { return glm::lookAt(camera.eye, camera.target, camera.up); }
-
-glm::mat4 Renderer::projectionMatrix(const Camera& camera, float aspect, float sceneRadius) {
-  const float distance = glm::length(camera.eye - camera.target);
-  const float nearPlane = std::max(0.01f, distance - 2.0f * sceneRadius);
-  const float farPlane = distance + 4.0f * sceneRadius + 1.0f;
-  return glm::perspective(camera.verticalFov, aspect, nearPlane, farPlane);
-}
-
 void Renderer::draw(const Camera& camera, int width, int height, bool particles) {
   glViewport(0, 0, width, height);
   glDisable(GL_BLEND);
@@ -473,9 +464,9 @@ void Renderer::draw(const Camera& camera, int width, int height, bool particles)
   glBindVertexArray(backgroundVao_);
   glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
 
-  const glm::mat4 view = viewMatrix(camera);
+  const glm::mat4 view = camera.viewMatrix();
   const glm::mat4 projection =
-      projectionMatrix(camera, static_cast<float>(width) / static_cast<float>(std::max(1, height)), sceneRadius_);
+      camera.projectionMatrix(static_cast<float>(width) / static_cast<float>(std::max(1, height)), sceneRadius_);
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   if (texturedCount_ > 0) {

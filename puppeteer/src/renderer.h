@@ -13,6 +13,7 @@
 #include <glm/vec3.hpp>
 
 #include "imps/mesh.h"
+#include "camera.h"
 #include "png.h"
 #include "snapshot.h"
 
@@ -50,7 +51,7 @@ class Renderer {
   void uploadParticles(std::span<const glm::vec3> positions);
 
   // Clears to the background gradient and draws the mesh (and the particles when `particles`) seen by `camera`
-  // into a viewport of width x height pixels.
+  // (its viewMatrix and projectionMatrix with the scene radius) into a viewport of width x height pixels.
   void draw(const Camera& camera, int width, int height, bool particles);
 
   // The default framebuffer's back buffer as RGBA8, rows from the top (call after draw(), before swapping).
@@ -62,10 +63,8 @@ class Renderer {
 
   static std::vector<uint8_t> readPixels(int width, int height);
 
-  static glm::mat4 viewMatrix(const Camera& camera);
-  static glm::mat4 projectionMatrix(const Camera& camera, float aspect, float sceneRadius);
-
-  // Radius of the uploaded mesh's bounding sphere around the camera target, used for the clip planes.
+  // Radius of the uploaded mesh's bounding sphere around the camera target, used for the clip planes
+  // (Camera::projectionMatrix).
   void setSceneRadius(float radius) { sceneRadius_ = radius; }
 
  private:

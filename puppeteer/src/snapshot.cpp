@@ -37,9 +37,10 @@ struct ViewFrame {
 ViewFrame viewFrame(const Camera& camera, float aspect) {
   ViewFrame frame;
   frame.eye = camera.eye;
-  frame.forward = glm::normalize(camera.target - camera.eye);
-  frame.right = glm::normalize(glm::cross(frame.forward, camera.up));
-  frame.up = glm::cross(frame.right, frame.forward);
+  const CameraBasis basis = camera.basis();
+  frame.forward = basis.forward;
+  frame.right = basis.right;
+  frame.up = basis.up;
   frame.tanHalfFovY = std::tan(0.5f * camera.verticalFov);
   frame.tanHalfFovX = frame.tanHalfFovY * aspect;
   return frame;
@@ -71,28 +72,6 @@ struct Edge {
 };
 
 }  // namespace
-
-Camera frameBox(const MeshBounds& box, glm::vec3 fromDirection, float aspect, float verticalFov, float margin) {
-  const glm::vec3 lo = box.empty() ? glm::vec3(-0.5f) : box.min;
-  const glm::vec3 hi = box.empty() ? glm::vec3(0.5f) : box.max;
-  const glm::vec3 centre = 0.5f * (lo + hi);
-  const float radius = std::max(0.5f * glm::length(hi - lo), 1e-4f);
-  const float halfY = 0.5f * verticalFov;
-  const float halfX = std::atan(std::tan(halfY) * aspect);
-  const float distance = radius * std::max(margin, 1.0f) / std::sin(std::min(halfX, halfY));
-  const glm::vec3 direction = glm::normalize(fromDirection);
-  Camera camera;
-  camera.target = centre;
-  camera.eye = centre + direction * distance;
-  camera.verticalFov = verticalFov;
-  // Looking straight down or up the y axis, y cannot be "up"; use -z (the front of the subject at the bottom).
-  camera.up = std::abs(direction.y) > 0.999f ? glm::vec3(0.0f, 0.0f, -1.0f) : glm::vec3(0.0f, 1.0f, 0.0f);
-  return camera;
-}
-
-Camera frameMesh(const Mesh& mesh, glm::vec3 fromDirection, float aspect) {
-  return frameBox(bounds(mesh), fromDirection, aspect);
-}
 
 std::vector<uint8_t> renderMesh(const Mesh& mesh, const SnapshotOptions& options) {
   if (options.width <= 0 || options.height <= 0 || options.supersampling <= 0) return {};

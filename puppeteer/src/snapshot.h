@@ -9,34 +9,11 @@
 
 #include <glm/vec3.hpp>
 
+#include "camera.h"
 #include "imps/mesh.h"
 #include "png.h"
 
 namespace imps::app {
-
-// A pinhole (perspective) camera in world space (metres). It looks from `eye` towards `target`; `up` only needs to
-// be non-parallel to the view direction. verticalFov is the full vertical opening angle in radians; the horizontal
-// one follows from the image's aspect ratio.
-struct Camera {
-  glm::vec3 eye{0.0f, 0.0f, 3.0f};
-  glm::vec3 target{0.0f, 0.0f, 0.0f};
-  glm::vec3 up{0.0f, 1.0f, 0.0f};
-  float verticalFov = 0.6f;
-};
-
-// Direction from the subject towards the camera for the front-three-quarter view: in front (+z), to the right
-// (+x) and a little above (+y), with y up. Need not be normalised.
-inline constexpr glm::vec3 kFrontThreeQuarter{0.65f, 0.4f, 1.0f};
-
-// A camera looking at the centre of `box` from `fromDirection` (world space, need not be normalised, not zero),
-// with y up (z up when looking straight along y), far enough that the box's bounding sphere fits in the view
-// with `margin` (>= 1) to spare, for an image of the given aspect ratio (width / height). An empty box frames
-// the unit cube around the origin.
-Camera frameBox(const MeshBounds& box, glm::vec3 fromDirection = kFrontThreeQuarter, float aspect = 1.0f,
-                float verticalFov = 0.6f, float margin = 1.08f);
-
-// frameBox(bounds(mesh), ...).
-Camera frameMesh(const Mesh& mesh, glm::vec3 fromDirection = kFrontThreeQuarter, float aspect = 1.0f);
 
 // How to render a snapshot. Colours are linear RGB in [0, 1] (like Mesh::colors); the image is sRGB-encoded.
 struct SnapshotOptions {

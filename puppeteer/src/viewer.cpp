@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The live app's frame loop, camera and hand-posing manipulators.
+// The live app's window, input callbacks and frame loop.
 #include "viewer.h"
 
 #define GL_GLEXT_PROTOTYPES 1
@@ -23,7 +23,9 @@
 #include <glm/gtc/quaternion.hpp>
 #include <glm/mat4x4.hpp>
 
+#include "camera.h"
 #include "cli.h"
+#include "frame_stats.h"
 #include "interrupts.h"
 #include "imps/scene_writer.h"
 #include "manipulator.h"
@@ -134,8 +136,7 @@ void moveCursor(ViewerState& s, double x, double y) {
   if (s.stroking) {
     paintAlong(s, x, y);
   } else if (s.orbiting) {
-    s.orbit.yaw -= float(x - s.lastX) * 0.008f;
-    s.orbit.pitch = std::clamp(s.orbit.pitch + float(y - s.lastY) * 0.008f, -1.5f, 1.5f);
+    s.orbit.turn(float(x - s.lastX), float(y - s.lastY));
   } else if (s.modeller->dragging()) {
     s.modeller->drag(currentView(s), glm::vec2(float(x), float(y)));
     s.poseDirty = true;
@@ -169,7 +170,7 @@ void onCursor(GLFWwindow* w, double x, double y) { moveCursor(state(w), x, y); }
 void onScroll(GLFWwindow* w, double /*dx*/, double dy) {
   ViewerState& s = state(w);
   if (s.hud && s.hud->wantsMouse()) return;
-  s.orbit.distance = std::clamp(s.orbit.distance * std::pow(0.9f, float(dy)), 0.05f, 100.0f);
+  s.orbit.zoom(float(dy));
 }
 
 void handleKey(GLFWwindow* w, ViewerState& s, int key, int mods) {
@@ -257,18 +258,6 @@ void deliver(GLFWwindow* w, ViewerState& s, const ScriptedEvent& e) {
 void onFramebufferSize(GLFWwindow* w, int width, int height) {
   ViewerState& s = state(w);
   s.width = width, s.height = height;
-}
-
-// Median and 99th percentile of `values` (copied; empty gives -1).
-std::pair<double, double> medianP99(std::vector<double> values) {
-  if (values.empty()) return {-1.0, -1.0};
-  auto at = [&](double q) {
-    const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * double(values.size() - 1) + 0.5));
-    std::nth_element(values.begin(), values.begin() + std::ptrdiff_t(k), values.end());
-    return values[k];
-  };
-  const double median = at(0.5);
-  return {median, at(0.99)};
 }
 
 // Runs ViewerPipeline::frame() on its own thread, one job at a time (--overlap): start() hands it the current
@@ -370,23 +359,19 @@ struct GlfwSession {
   }
 };
 
-void onGlfwError(int code, const char* description) { std::fprintf(stderr, "puppeteer: GLFW error %d: %s\n", code, description); }
+void onGlfwError(int code, const char* description) {
+  std::fprintf(stderr, "puppeteer: GLFW error %d: %s\n", code, description);
+}
 
-}  // namespace
-
-int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions& options) {
-  glfwSetErrorCallback(onGlfwError);
-  GlfwSession glfw;
-  if (!glfw.ok) {
-    std::fprintf(stderr, "puppeteer: error: cannot initialise GLFW (no display? try xvfb-run -a)\n");
-    return kExitIoError;
-  }
-  const bool headless = options.frames > 0;
+// Opens the window with a current GL 3.3 core context, or returns null. msaaSamples < 0 asks for 4 samples and, when
+// the GL turns out to be a software renderer (llvmpipe, softpipe), where multisampling costs more than the rest of
+// the frame, closes that window and opens one without. Headless runs (frames > 0) get a fixed-size window.
+GLFWwindow* openWindow(const ViewerOptions& options) {
   glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
   glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
   glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
   glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
-  glfwWindowHint(GLFW_RESIZABLE, headless ? GLFW_FALSE : GLFW_TRUE);
+  glfwWindowHint(GLFW_RESIZABLE, options.frames > 0 ? GLFW_FALSE : GLFW_TRUE);
   auto open = [&](int samples) {
     glfwWindowHint(GLFW_SAMPLES, samples);
     GLFWwindow* w = glfwCreateWindow(options.width, options.height, options.title.c_str(), nullptr, nullptr);
@@ -402,13 +387,14 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
       window = open(0);
     }
   }
-  if (!window) {
-    std::fprintf(stderr, "puppeteer: error: cannot open a window with an OpenGL 3.3 core context\n");
-    return kExitIoError;
-  }
-  glfwSwapInterval(headless || !options.vsync ? 0 : 1);
+  return window;
+}
 
-  ViewerState s;
+// Fills the state the callbacks share (`s` must outlive the window's callbacks) and installs them: mouse buttons,
+// cursor, scroll, keys and framebuffer size. Sets the swap interval (no vsync when headless or asked).
+void installCallbacks(GLFWwindow* window, ViewerState& s, ViewerPipeline& pipeline, PoseSource* source,
+                      const ViewerOptions& options) {
+  glfwSwapInterval(options.frames > 0 || !options.vsync ? 0 : 1);
   s.pipeline = &pipeline;
   s.source = source;
   s.showParticles = options.showParticles;
@@ -420,275 +406,365 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
   glfwSetScrollCallback(window, onScroll);
   glfwSetKeyCallback(window, onKey);
   glfwSetFramebufferSizeCallback(window, onFramebufferSize);
+}
 
-  int exitCode = kExitOk;
-  catchInterrupts();
-  {
-    auto renderer = std::make_unique<Renderer>();
-    if (!renderer->ok()) {
-      std::fprintf(stderr, "puppeteer: error: %s\n", renderer->error().c_str());
-      glfwDestroyWindow(window);
-      return kExitIoError;
-    }
-    renderer->uploadTextures(allTextures(pipeline, options));
-    std::unique_ptr<Hud> hud = options.hud ? std::make_unique<Hud>(window) : nullptr;
-    s.hud = hud.get();
-
-    // First pose and settled surface; the camera frames the character's rest pose from the front three-quarter
-    // view, so a posed character (or a replay) does not move the camera.
-    int64_t arrivalNs = 0;
-    if (source && source->poll(pipeline.skeleton(), &arrivalNs)) pipeline.skeleton().update();
-    pipeline.frame();
-    for (const ViewerActor& a : options.others) {
-      if (a.source && a.source->poll(a.pipeline->skeleton(), &arrivalNs)) a.pipeline->skeleton().update();
-      a.pipeline->frame();
-    }
-    s.orbit = options.others.empty() ? initialOrbit(pipeline, s.width, s.height, &s.sceneRadius)
-                                     : initialOrbit(worldBounds(pipeline, options), s.width, s.height, &s.sceneRadius);
-    renderer->setSceneRadius(s.sceneRadius);
-    renderer->setPointSize(options.pointSize);
-    Modeller modeller(pipeline);
-    modeller.setEnabled(options.manipulators);
-    s.modeller = &modeller;
-    MenuSettings menu{options.showParticles, options.pointSize};
-    // Menu changes, run where the pipeline is idle (after the worker's wait, with the input events).
-    std::vector<std::function<void(ViewerPipeline&, Modeller&)>> menuActions;
-
-    HudInfo info;
-    std::vector<double> latencies, frameTimes;  // ms
-    std::vector<double> allLatencies;
-    latencies.reserve(2048);
-    frameTimes.reserve(options.frames > 0 ? size_t(options.frames) : 1 << 16);
-    allLatencies.reserve(options.frames > 0 ? size_t(options.frames) : 1 << 16);
-    // Per-phase times (ms): summed over the HUD's half-second window, and every frame's for the exit summary.
-    enum Phase { kPose, kPolygonize, kUpload, kDraw, kHud, kSwap, kPhases };
-    double phaseSum[kPhases] = {};
-    std::vector<double> phaseTimes[kPhases];
-    for (auto& v : phaseTimes) v.reserve(options.frames > 0 ? size_t(options.frames) : 1 << 16);
-    int64_t phaseStart = 0;
-    auto lap = [&](Phase p) {
-      if (options.syncPhases) glFinish();  // charge the GL's deferred work to the phase that queued it
-      const int64_t t = steadyNowNs();
-      const double ms = double(t - phaseStart) * 1e-6;
-      phaseSum[p] += ms;
-      phaseTimes[p].push_back(ms);
-      phaseStart = t;
-    };
-    const int64_t loopStart = steadyNowNs();
-    int64_t windowStart = loopStart, lastFrameEnd = loopStart;
-    int framesInWindow = 0, frame = 0, screenshotCount = 0;
-    // --overlap: the worker polygonizes frame N+1 while this thread draws frame N. The pipeline and the skeleton
-    // are touched here only while the worker is idle (after wait(), before start()).
-    std::unique_ptr<PolygonizeWorker> worker = options.overlap ? std::make_unique<PolygonizeWorker>(pipeline) : nullptr;
-    int64_t inFlightArrival = 0;  // arrival of the sample whose pose is being polygonized (0: none new)
-    int64_t meshArrival = 0;      // arrival of the sample whose mesh is about to be drawn
-    uint64_t uploadedVersion = ~uint64_t{0};
-    std::vector<AttachedProp> props = options.props;  // moved by options.moveProps
-    uint64_t propsVersion = 0;
-    // 1. Newest pose: never waits for the source.
-    auto pollPose = [&] {
-      int64_t newArrival = 0;
-      if (source && source->poll(pipeline.skeleton(), &newArrival)) {
-        s.poseDirty = true;
-        inFlightArrival = newArrival;
-      }
-      if (source) {
-        // Already printed by the source, in order with its details.
-        if (std::string m = source->takeMessage(); !m.empty()) s.message = std::move(m);
-      }
-      if (s.poseDirty) {
-        pipeline.skeleton().update();
-        s.poseDirty = false;
-      }
-      if (s.resetRequested) {
-        pipeline.resetPolygonizer();
-        s.resetRequested = false;
-        s.message = "polygonizer reset";
-      }
-    };
-    while (!glfwWindowShouldClose(window) && !interruptRequested()) {
-      phaseStart = steadyNowNs();
-      if (worker) {
-        worker->wait();  // frame N's mesh (its time is the polygonize phase's: what the draw did not hide)
-        lap(kPolygonize);
-        meshArrival = std::exchange(inFlightArrival, 0);
-      }
-      glfwPollEvents();
-      for (const ScriptedEvent& e : eventsAt(options.script, frame)) deliver(window, s, e);
-      for (auto& action : std::exchange(menuActions, {})) {
-        action(pipeline, modeller);
-        s.poseDirty = true;
-      }
-      phaseStart = steadyNowNs();
-      if (!worker) {
-        // 2. Polygonize.
-        pollPose();
-        lap(kPose);
-        pipeline.frame();
-        for (const ViewerActor& a : options.others) {
-          int64_t arrival = 0;
-          if (a.source && a.source->poll(a.pipeline->skeleton(), &arrival)) {
-            a.pipeline->skeleton().update();
-            if (inFlightArrival == 0) inFlightArrival = arrival;
-          }
-          a.pipeline->frame();
-        }
-        lap(kPolygonize);
-        meshArrival = std::exchange(inFlightArrival, 0);
-      }
-      // 3. Upload, only a new mesh.
-      const bool drawParticles = s.showParticles && pipeline.polygonizer() == Polygonizer::Particles;
-      if (options.moveProps && options.moveProps(frame, props)) ++propsVersion;
-      uint64_t version = pipeline.meshVersion() * 1000003u + propsVersion;
-      for (const ViewerActor& a : options.others) version = version * 1000003u + a.pipeline->meshVersion();
-      if (version != uploadedVersion) {
-        if ((props.empty() && options.others.empty()) || worker) {
-          renderer->uploadMesh(pipeline.mesh());
-        } else {
-          Mesh withProps = pipeline.mesh();  // the props posed like the character this frame
-          appendPosedProps(withProps, props, pipeline.skeleton());
-          appendOthers(withProps, pipeline, options);
-          renderer->uploadMesh(withProps);
-        }
-        uploadedVersion = version;
-      }
-      if (drawParticles) renderer->uploadParticles(pipeline.tesselator().particles().positions);
-      if (s.texturesDirty) {
-        renderer->uploadTextures(allTextures(pipeline, options));
-        s.texturesDirty = false;
-      }
-      lap(kUpload);
-      // What the HUD and the hashes say about this mesh, read before the worker rewrites it.
-      const TesselatorStats& ts = pipeline.tesselator().stats();
-      info.polygonizer = pipeline.polygonizer() == Polygonizer::Particles ? "particles" : "Marching Cubes";
-      info.simulateMs = ts.simulateMs, info.addDeleteMs = ts.addDeleteMs, info.meshMs = ts.meshMs;
-      info.marchingCubesMs = pipeline.marchingCubesStats().milliseconds;
-      info.updatesPerRender = pipeline.updatesPerRender();
-      info.particles = pipeline.polygonizer() == Polygonizer::Particles ? ts.particles : 0;
-      info.triangles = pipeline.mesh().triangleCount();
-      for (const ViewerActor& a : options.others) info.triangles += a.pipeline->mesh().triangleCount();
-      if (options.printMeshHashes)
-        std::printf("frame %d hash %016llx triangles %zu\n", frame, static_cast<unsigned long long>(meshHash(pipeline.mesh())),
-                    pipeline.mesh().triangleCount());
-      if (worker) {
-        phaseStart = steadyNowNs();
-        pollPose();
-        lap(kPose);
-        worker->start();  // frame N+1's mesh, from the pose just taken
-      }
-      // 4. Draw.
-      renderer->draw(s.orbit.camera(), s.width, s.height, drawParticles);
-      renderer->drawOverlay(handleOverlay(currentView(s), modeller.handles(), modeller.selected(), modeller.mode()),
-                            s.width, s.height);
-      lap(kDraw);
-
-      // HUD.
-      if (hud) {
-        if (source) {
-          source->describe(info);
-        } else {
-          info.source = "hand";
-          info.mapping.clear();
-          info.state = "posing";
-        }
-        info.selectedJoint = modeller.selected()
-                                 ? targetName(pipeline.character(), *modeller.selected()) + " (" +
-                                       modeName(modeller.mode()) + ")"
-                                 : std::string();
-        info.message = s.message;
-        menu.showParticles = s.showParticles;
-        info.deviceKeys = source && source->handlesDeviceKeys();
-        hud->draw(info, [&] {
-          drawModellerMenu(pipeline, modeller, menu, menuActions);
-          if (s.painting) drawBrushWindow(s.brush);
-        });
-        s.showParticles = menu.showParticles;
-        renderer->setPointSize(menu.pointSize);
-      }
-      lap(kHud);
-
-      if (s.saveRequested) {
-        s.saveRequested = false;
-        std::string error;
-        const bool anyPainted = std::find(s.painted.begin(), s.painted.end(), true) != s.painted.end();
-        const bool saved = savePaintedScene(pipeline.posedScene(), pipeline.character(), pipeline.textures(),
-                                            s.painted, options.savePath, &error);
-        report(s, saved ? "saved " + options.savePath + (anyPainted ? " with its painted textures" : "")
-                        : "save failed: " + error);
-      }
-      const bool lastFrame = headless && frame + 1 >= options.frames;
-      if (s.screenshotRequested || (lastFrame && !options.screenshot.empty())) {
-        const std::string path =
-            s.screenshotRequested ? "puppeteer-screenshot-" + std::to_string(++screenshotCount) + ".png" : options.screenshot;
-        s.screenshotRequested = false;
-        std::string error;
-        if (savePng(Renderer::readPixels(s.width, s.height), s.width, s.height, path, &error)) {
-          s.message = "screenshot " + path;
-        } else {
-          s.message = "screenshot failed: " + error;
-          std::fprintf(stderr, "puppeteer: error: %s\n", error.c_str());
-          if (lastFrame) exitCode = kExitIoError;
-        }
-        phaseStart = steadyNowNs();  // not part of the swap
-      }
-      // 5. Swap; the frame is on screen once the GL has finished it.
-      glfwSwapBuffers(window);
-      if (source) glFinish();
-      lap(kSwap);
-      const int64_t now = phaseStart;
-      if (meshArrival > 0) {
-        const double latency = double(now - meshArrival) * 1e-6;
-        latencies.push_back(latency);
-        allLatencies.push_back(latency);
-        meshArrival = 0;
-      }
-      if (source) source->frameDone();
-      for (const ViewerActor& a : options.others)
-        if (a.source) a.source->frameDone();
-      frameTimes.push_back(double(now - lastFrameEnd) * 1e-6);
-      if (info.fps == 0.0 && frameTimes.back() > 0.0) info.frameMs = frameTimes.back(), info.fps = 1e3 / info.frameMs;
-      lastFrameEnd = now;
-      ++framesInWindow;
-      ++frame;
-      if (now - windowStart >= 500'000'000) {
-        info.fps = framesInWindow / (double(now - windowStart) * 1e-9);
-        info.frameMs = double(now - windowStart) * 1e-6 / framesInWindow;
-        double* fields[kPhases] = {&info.poseMs, &info.polygonizeMs, &info.uploadMs, &info.drawMs, &info.hudMs, &info.swapMs};
-        for (int p = 0; p < kPhases; ++p) *fields[p] = phaseSum[p] / framesInWindow, phaseSum[p] = 0.0;
-        const auto [median, p99] = medianP99(latencies);
-        info.latencyMedianMs = median, info.latencyP99Ms = p99;
-        if (latencies.size() > 2000) latencies.erase(latencies.begin(), latencies.end() - 1000);
-        windowStart = now, framesInWindow = 0;
-      }
-      if (lastFrame) break;
-    }
-    if (worker) worker->wait();
-    if (source) report(s, source->finish());
-    if (source && exitCode == kExitOk) exitCode = source->exitCode();
-    for (const ViewerActor& a : options.others) {
-      if (!a.source) continue;
-      report(s, a.source->finish());
-      if (exitCode == kExitOk) exitCode = a.source->exitCode();
-    }
-
-    // Summary: frame rate over the whole loop (the settle before it excluded).
-    const double seconds = double(lastFrameEnd - loopStart) * 1e-9;
-    const auto [frameMedian, frameP99] = medianP99(frameTimes);
-    std::printf("puppeteer: %d frames in %.2f s: %.1f FPS (frame time median %.1f ms, p99 %.1f ms), %zu triangles, %dx%d\n",
-                frame, seconds, seconds > 0 ? frame / seconds : 0.0, frameMedian, frameP99, info.triangles, s.width,
-                s.height);
-    static const char* const kPhaseNames[kPhases] = {"pose", "polygonize", "upload", "draw", "hud", "swap"};
-    std::printf("puppeteer: median ms per phase%s:", options.syncPhases ? " (GL finished after each)" : "");
-    for (int p = 0; p < kPhases; ++p) std::printf(" %s %.2f", kPhaseNames[p], medianP99(phaseTimes[p]).first);
-    std::printf("\n");
-    if (!allLatencies.empty()) {
-      const auto [median, p99] = medianP99(allLatencies);
-      std::printf("puppeteer: sample-to-screen latency over %zu frames: median %.1f ms, p99 %.1f ms\n",
-                  allLatencies.size(), median, p99);
-    }
-    s.hud = nullptr;
-    s.modeller = nullptr;
+// The first pose and a settled surface for every character, before the first frame is timed.
+void settle(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions& options) {
+  int64_t arrivalNs = 0;
+  if (source && source->poll(pipeline.skeleton(), &arrivalNs)) pipeline.skeleton().update();
+  pipeline.frame();
+  for (const ViewerActor& a : options.others) {
+    if (a.source && a.source->poll(a.pipeline->skeleton(), &arrivalNs)) a.pipeline->skeleton().update();
+    a.pipeline->frame();
   }
+}
+
+// The first camera: the character's rest pose (a world: every character's) framed from the front three-quarter view,
+// so a posed character (or a replay) does not move the camera. Sets s.orbit and s.sceneRadius.
+void frameCamera(ViewerState& s, const ViewerPipeline& pipeline, const ViewerOptions& options) {
+  s.orbit = options.others.empty() ? initialOrbit(pipeline, s.width, s.height, &s.sceneRadius)
+                                   : initialOrbit(worldBounds(pipeline, options), s.width, s.height, &s.sceneRadius);
+}
+
+// The frame loop over a window whose renderer, HUD and modeller are ready. Each frame: input (events, script, menu
+// actions), pose, polygonize, upload, draw, HUD, save / screenshot, swap, statistics; until the window closes, an
+// interrupt arrives or the headless frame count is done. run() returns the exit code.
+class FrameLoop {
+ public:
+  FrameLoop(GLFWwindow* window, ViewerState& s, ViewerPipeline& pipeline, PoseSource* source,
+            const ViewerOptions& options, Renderer& renderer, Hud* hud, Modeller& modeller)
+      : window_(window),
+        s_(s),
+        pipeline_(pipeline),
+        source_(source),
+        options_(options),
+        renderer_(renderer),
+        hud_(hud),
+        modeller_(modeller),
+        menu_{options.showParticles, options.pointSize},
+        stats_(options.frames),
+        worker_(options.overlap ? std::make_unique<PolygonizeWorker>(pipeline) : nullptr),
+        props_(options.props) {}
+
+  int run();
+
+ private:
+  void lap(FramePhase phase);
+  void takeInput();
+  void pollPose();
+  void polygonize();
+  void upload(bool drawParticles);
+  void describeMesh();
+  void drawHud();
+  void saveIfRequested();
+  void screenshotIfDue(bool lastFrame);
+  void swapAndCount();
+  void finishSources();
+
+  GLFWwindow* window_;
+  ViewerState& s_;
+  ViewerPipeline& pipeline_;
+  PoseSource* source_;
+  const ViewerOptions& options_;
+  Renderer& renderer_;
+  Hud* hud_;
+  Modeller& modeller_;
+  MenuSettings menu_;
+  // Menu changes, run where the pipeline is idle (after the worker's wait, with the input events).
+  std::vector<std::function<void(ViewerPipeline&, Modeller&)>> menuActions_;
+  HudInfo info_;
+  FrameStats stats_;
+  int64_t phaseStart_ = 0;
+  int frame_ = 0, screenshotCount_ = 0;
+  int exitCode_ = kExitOk;
+  // --overlap: the worker polygonizes frame N+1 while this thread draws frame N. The pipeline and the skeleton
+  // are touched here only while the worker is idle (after wait(), before start()).
+  std::unique_ptr<PolygonizeWorker> worker_;
+  int64_t inFlightArrival_ = 0;  // arrival of the sample whose pose is being polygonized (0: none new)
+  int64_t meshArrival_ = 0;      // arrival of the sample whose mesh is about to be drawn
+  uint64_t uploadedVersion_ = ~uint64_t{0};
+  std::vector<AttachedProp> props_;  // moved by options.moveProps
+  uint64_t propsVersion_ = 0;
+};
+
+// Ends the current phase: its time since the last lap joins the statistics.
+void FrameLoop::lap(FramePhase phase) {
+  if (options_.syncPhases) glFinish();  // charge the GL's deferred work to the phase that queued it
+  const int64_t t = steadyNowNs();
+  stats_.addPhase(phase, double(t - phaseStart_) * 1e-6);
+  phaseStart_ = t;
+}
+
+// Window events, this frame's scripted events and the menu's queued changes (the worker is idle here).
+void FrameLoop::takeInput() {
+  glfwPollEvents();
+  for (const ScriptedEvent& e : eventsAt(options_.script, frame_)) deliver(window_, s_, e);
+  for (auto& action : std::exchange(menuActions_, {})) {
+    action(pipeline_, modeller_);
+    s_.poseDirty = true;
+  }
+}
+
+// The newest pose (never waits for the source), the source's messages, and a requested polygonizer reset.
+void FrameLoop::pollPose() {
+  int64_t newArrival = 0;
+  if (source_ && source_->poll(pipeline_.skeleton(), &newArrival)) {
+    s_.poseDirty = true;
+    inFlightArrival_ = newArrival;
+  }
+  if (source_) {
+    // Already printed by the source, in order with its details.
+    if (std::string m = source_->takeMessage(); !m.empty()) s_.message = std::move(m);
+  }
+  if (s_.poseDirty) {
+    pipeline_.skeleton().update();
+    s_.poseDirty = false;
+  }
+  if (s_.resetRequested) {
+    pipeline_.resetPolygonizer();
+    s_.resetRequested = false;
+    s_.message = "polygonizer reset";
+  }
+}
+
+// Without --overlap: the pose, then every character's surface on this thread.
+void FrameLoop::polygonize() {
+  pollPose();
+  lap(FramePhase::Pose);
+  pipeline_.frame();
+  for (const ViewerActor& a : options_.others) {
+    int64_t arrival = 0;
+    if (a.source && a.source->poll(a.pipeline->skeleton(), &arrival)) {
+      a.pipeline->skeleton().update();
+      if (inFlightArrival_ == 0) inFlightArrival_ = arrival;
+    }
+    a.pipeline->frame();
+  }
+  lap(FramePhase::Polygonize);
+  meshArrival_ = std::exchange(inFlightArrival_, 0);
+}
+
+// Uploads the mesh (with the props and the other characters) only when one of them changed, the particles when
+// drawn, and the textures when painted.
+void FrameLoop::upload(bool drawParticles) {
+  if (options_.moveProps && options_.moveProps(frame_, props_)) ++propsVersion_;
+  uint64_t version = pipeline_.meshVersion() * 1000003u + propsVersion_;
+  for (const ViewerActor& a : options_.others) version = version * 1000003u + a.pipeline->meshVersion();
+  if (version != uploadedVersion_) {
+    if ((props_.empty() && options_.others.empty()) || worker_) {
+      renderer_.uploadMesh(pipeline_.mesh());
+    } else {
+      Mesh withProps = pipeline_.mesh();  // the props posed like the character this frame
+      appendPosedProps(withProps, props_, pipeline_.skeleton());
+      appendOthers(withProps, pipeline_, options_);
+      renderer_.uploadMesh(withProps);
+    }
+    uploadedVersion_ = version;
+  }
+  if (drawParticles) renderer_.uploadParticles(pipeline_.tesselator().particles().positions);
+  if (s_.texturesDirty) {
+    renderer_.uploadTextures(allTextures(pipeline_, options_));
+    s_.texturesDirty = false;
+  }
+}
+
+// What the HUD and the hashes say about this mesh, read before the worker rewrites it.
+void FrameLoop::describeMesh() {
+  const TesselatorStats& ts = pipeline_.tesselator().stats();
+  info_.polygonizer = pipeline_.polygonizer() == Polygonizer::Particles ? "particles" : "Marching Cubes";
+  info_.simulateMs = ts.simulateMs, info_.addDeleteMs = ts.addDeleteMs, info_.meshMs = ts.meshMs;
+  info_.marchingCubesMs = pipeline_.marchingCubesStats().milliseconds;
+  info_.updatesPerRender = pipeline_.updatesPerRender();
+  info_.particles = pipeline_.polygonizer() == Polygonizer::Particles ? ts.particles : 0;
+  info_.triangles = pipeline_.mesh().triangleCount();
+  for (const ViewerActor& a : options_.others) info_.triangles += a.pipeline->mesh().triangleCount();
+  if (options_.printMeshHashes)
+    std::printf("frame %d hash %016llx triangles %zu\n", frame_,
+                static_cast<unsigned long long>(meshHash(pipeline_.mesh())), pipeline_.mesh().triangleCount());
+}
+
+// The HUD (when on) with the source's state, the selection, the last message, the modeller's menu and, while
+// painting, the brush window; takes back what the menu changed.
+void FrameLoop::drawHud() {
+  if (!hud_) return;
+  if (source_) {
+    source_->describe(info_);
+  } else {
+    info_.source = "hand";
+    info_.mapping.clear();
+    info_.state = "posing";
+  }
+  info_.selectedJoint = modeller_.selected() ? targetName(pipeline_.character(), *modeller_.selected()) + " (" +
+                                                   modeName(modeller_.mode()) + ")"
+                                             : std::string();
+  info_.message = s_.message;
+  menu_.showParticles = s_.showParticles;
+  info_.deviceKeys = source_ && source_->handlesDeviceKeys();
+  hud_->draw(info_, [&] {
+    drawModellerMenu(pipeline_, modeller_, menu_, menuActions_);
+    if (s_.painting) drawBrushWindow(s_.brush);
+  });
+  s_.showParticles = menu_.showParticles;
+  renderer_.setPointSize(menu_.pointSize);
+}
+
+// Key `s`: saves the posed scene (and the painted textures) to options.savePath.
+void FrameLoop::saveIfRequested() {
+  if (!s_.saveRequested) return;
+  s_.saveRequested = false;
+  std::string error;
+  const bool anyPainted = std::find(s_.painted.begin(), s_.painted.end(), true) != s_.painted.end();
+  const bool saved = savePaintedScene(pipeline_.posedScene(), pipeline_.character(), pipeline_.textures(), s_.painted,
+                                      options_.savePath, &error);
+  report(s_, saved ? "saved " + options_.savePath + (anyPainted ? " with its painted textures" : "")
+                   : "save failed: " + error);
+}
+
+// Key `c` / F12: a numbered screenshot; the last headless frame: options.screenshot (a failure there fails the run).
+// The time it takes is not charged to the swap.
+void FrameLoop::screenshotIfDue(bool lastFrame) {
+  if (!s_.screenshotRequested && !(lastFrame && !options_.screenshot.empty())) return;
+  const std::string path = s_.screenshotRequested
+                               ? "puppeteer-screenshot-" + std::to_string(++screenshotCount_) + ".png"
+                               : options_.screenshot;
+  s_.screenshotRequested = false;
+  std::string error;
+  if (savePng(Renderer::readPixels(s_.width, s_.height), s_.width, s_.height, path, &error)) {
+    s_.message = "screenshot " + path;
+  } else {
+    s_.message = "screenshot failed: " + error;
+    std::fprintf(stderr, "puppeteer: error: %s\n", error.c_str());
+    if (lastFrame) exitCode_ = kExitIoError;
+  }
+  phaseStart_ = steadyNowNs();
+}
+
+// Swaps (with a source, waits until the GL has finished, so the frame is on screen), then counts the frame: its
+// sample-to-screen latency, the sources' per-frame bookkeeping and, every half second, the HUD's figures.
+void FrameLoop::swapAndCount() {
+  glfwSwapBuffers(window_);
+  if (source_) glFinish();
+  lap(FramePhase::Swap);
+  const int64_t now = phaseStart_;
+  if (meshArrival_ > 0) {
+    stats_.addLatency(double(now - meshArrival_) * 1e-6);
+    meshArrival_ = 0;
+  }
+  if (source_) source_->frameDone();
+  for (const ViewerActor& a : options_.others)
+    if (a.source) a.source->frameDone();
+  const bool windowClosed = stats_.endFrame(now);
+  if (info_.fps == 0.0 && stats_.lastFrameMs() > 0.0)
+    info_.frameMs = stats_.lastFrameMs(), info_.fps = 1e3 / info_.frameMs;
+  ++frame_;
+  if (!windowClosed) return;
+  const FrameWindow& w = stats_.window();
+  info_.fps = w.fps;
+  info_.frameMs = w.frameMs;
+  double* fields[kFramePhases] = {&info_.poseMs, &info_.polygonizeMs, &info_.uploadMs,
+                                  &info_.drawMs, &info_.hudMs,        &info_.swapMs};
+  for (int p = 0; p < kFramePhases; ++p) *fields[p] = w.phaseMs[size_t(p)];
+  info_.latencyMedianMs = w.latencyMedianMs, info_.latencyP99Ms = w.latencyP99Ms;
+}
+
+// After the last frame: the sources close what they have open (a take); the first failing exit code wins.
+void FrameLoop::finishSources() {
+  if (worker_) worker_->wait();
+  if (source_) report(s_, source_->finish());
+  if (source_ && exitCode_ == kExitOk) exitCode_ = source_->exitCode();
+  for (const ViewerActor& a : options_.others) {
+    if (!a.source) continue;
+    report(s_, a.source->finish());
+    if (exitCode_ == kExitOk) exitCode_ = a.source->exitCode();
+  }
+}
+
+int FrameLoop::run() {
+  const bool headless = options_.frames > 0;
+  stats_.start(steadyNowNs());
+  while (!glfwWindowShouldClose(window_) && !interruptRequested()) {
+    phaseStart_ = steadyNowNs();
+    if (worker_) {
+      worker_->wait();  // frame N's mesh (its time is the polygonize phase's: what the draw did not hide)
+      lap(FramePhase::Polygonize);
+      meshArrival_ = std::exchange(inFlightArrival_, 0);
+    }
+    takeInput();
+    phaseStart_ = steadyNowNs();
+    if (!worker_) polygonize();
+    const bool drawParticles = s_.showParticles && pipeline_.polygonizer() == Polygonizer::Particles;
+    upload(drawParticles);
+    lap(FramePhase::Upload);
+    describeMesh();
+    if (worker_) {
+      phaseStart_ = steadyNowNs();
+      pollPose();
+      lap(FramePhase::Pose);
+      worker_->start();  // frame N+1's mesh, from the pose just taken
+    }
+    renderer_.draw(s_.orbit.camera(), s_.width, s_.height, drawParticles);
+    renderer_.drawOverlay(handleOverlay(currentView(s_), modeller_.handles(), modeller_.selected(), modeller_.mode()),
+                          s_.width, s_.height);
+    lap(FramePhase::Draw);
+    drawHud();
+    lap(FramePhase::Hud);
+    saveIfRequested();
+    const bool lastFrame = headless && frame_ + 1 >= options_.frames;
+    screenshotIfDue(lastFrame);
+    swapAndCount();
+    if (lastFrame) break;
+  }
+  finishSources();
+  // Frame rate over the whole loop (the settle before it excluded).
+  std::fputs(summaryText(stats_.summary(), info_.triangles, s_.width, s_.height, options_.syncPhases).c_str(), stdout);
+  return exitCode_;
+}
+
+// The window's renderer, HUD and modeller, the settled first frame and camera, then the frame loop. Returns the
+// exit code; everything it made is gone (the HUD before the window) when it returns.
+int runFrames(GLFWwindow* window, ViewerState& s, ViewerPipeline& pipeline, PoseSource* source,
+              const ViewerOptions& options) {
+  auto renderer = std::make_unique<Renderer>();
+  if (!renderer->ok()) {
+    std::fprintf(stderr, "puppeteer: error: %s\n", renderer->error().c_str());
+    return kExitIoError;
+  }
+  renderer->uploadTextures(allTextures(pipeline, options));
+  std::unique_ptr<Hud> hud = options.hud ? std::make_unique<Hud>(window) : nullptr;
+  s.hud = hud.get();
+  settle(pipeline, source, options);
+  frameCamera(s, pipeline, options);
+  renderer->setSceneRadius(s.sceneRadius);
+  renderer->setPointSize(options.pointSize);
+  Modeller modeller(pipeline);
+  modeller.setEnabled(options.manipulators);
+  s.modeller = &modeller;
+  const int exitCode = FrameLoop(window, s, pipeline, source, options, *renderer, hud.get(), modeller).run();
+  s.hud = nullptr;
+  s.modeller = nullptr;
+  return exitCode;
+}
+
+}  // namespace
+
+// The steps, top to bottom: GLFW, the window (with the MSAA fallback), the callbacks, then the renderer, the first
+// frame and camera and the frame loop (runFrames), the exit summary at its end.
+int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions& options) {
+  glfwSetErrorCallback(onGlfwError);
+  GlfwSession glfw;
+  if (!glfw.ok) {
+    std::fprintf(stderr, "puppeteer: error: cannot initialise GLFW (no display? try xvfb-run -a)\n");
+    return kExitIoError;
+  }
+  GLFWwindow* window = openWindow(options);
+  if (!window) {
+    std::fprintf(stderr, "puppeteer: error: cannot open a window with an OpenGL 3.3 core context\n");
+    return kExitIoError;
+  }
+  ViewerState s;
+  installCallbacks(window, s, pipeline, source, options);
+  catchInterrupts();
+  const int exitCode = runFrames(window, s, pipeline, source, options);
   glfwDestroyWindow(window);
   return exitCode;
 }

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
-// The manipulators' maths without a window: projection and pick rays agree, picking finds the bone under the
-// cursor (and the joint that starts where two bones meet), the arcball is a two-axis trackball near its centre and
-// makes a grabbed limb follow the cursor, the twist turns about the view axis, and a world rotation becomes the
-// right local rotation under a turned parent.
+// The manipulators' maths without a window (the projection and pick rays they use are tested in camera_test.cpp):
+// picking finds the bone under the cursor (and the joint that starts where two bones meet), the arcball is a
+// two-axis trackball near its centre and makes a grabbed limb follow the cursor, the twist turns about the view axis,
+// and a world rotation becomes the right local rotation under a turned parent.
 #include "manipulator.h"
 
 #include <gtest/gtest.h>
@@ -31,34 +31,6 @@ void expectNear(const glm::vec3& a, const glm::vec3& b, float tolerance = 1e-4f)
   EXPECT_NEAR(a.x, b.x, tolerance);
   EXPECT_NEAR(a.y, b.y, tolerance);
   EXPECT_NEAR(a.z, b.z, tolerance);
-}
-
-TEST(Manipulator, ScreenViewBasisAndProjection) {
-  const ScreenView v = frontView();
-  expectNear(v.right, {1, 0, 0});
-  expectNear(v.up, {0, 1, 0});
-  expectNear(v.towardsViewer, {0, 0, 1});
-  const glm::vec2 centre = project(v, {0, 0, 0});
-  EXPECT_NEAR(centre.x, 320.0f, 1e-3f);
-  EXPECT_NEAR(centre.y, 240.0f, 1e-3f);
-  // +x is to the right, +y is up (window y grows downwards).
-  EXPECT_GT(project(v, {0.5f, 0, 0}).x, 320.0f);
-  EXPECT_LT(project(v, {0, 0.5f, 0}).y, 240.0f);
-  glm::vec2 behind;
-  EXPECT_FALSE(projectToWindow(v, {0, 0, 10}, &behind));
-}
-
-TEST(Manipulator, PickRayPassesThroughTheProjectedPoint) {
-  const ScreenView v = screenView(Camera{{2, 1.5f, 4}, {0, 0.8f, 0}, {0, 1, 0}, 0.6f}, 1280, 720, 1.2f);
-  for (const glm::vec3 p : {glm::vec3(0.3f, 1.2f, -0.2f), glm::vec3(-0.7f, 0.1f, 0.4f), glm::vec3(0, 0.8f, 0)}) {
-    const PickRay ray = pickRay(v, project(v, p));
-    expectNear(ray.origin, {2, 1.5f, 4});
-    EXPECT_NEAR(glm::length(ray.direction), 1.0f, 1e-5f);
-    const glm::vec3 toP = p - ray.origin;
-    const float t = glm::dot(toP, ray.direction);
-    EXPECT_GT(t, 0.0f);
-    EXPECT_LT(glm::length(toP - t * ray.direction), 1e-3f) << "ray misses the point it was cast through";
-  }
 }
 
 TEST(Manipulator, BonesOfASkeleton) {
@@ -95,12 +67,6 @@ TEST(Manipulator, PickJointByBone) {
   const std::vector<Bone> two = {Bone{7, {-1, 0.1f, 0}, {1, 0.1f, 0}}, Bone{8, {-1, -0.1f, 0}, {1, -0.1f, 0}}};
   EXPECT_EQ(pickJoint(pickRay(v, project(v, {0, 0.05f, 0})), two, 0.1f), 7);
   EXPECT_EQ(pickJoint(pickRay(v, project(v, {0, -0.06f, 0})), two, 0.1f), 8);
-}
-
-TEST(Manipulator, PixelsToAngle) {
-  // Half the window's height subtends half the vertical field of view.
-  EXPECT_NEAR(pixelsToAngle(240.0f, 480, 0.6f), 0.3f, 1e-5f);
-  EXPECT_NEAR(pixelsToAngle(0.0f, 480, 0.6f), 0.0f, 1e-7f);
 }
 
 TEST(Manipulator, ArcballNearItsCentreIsATwoAxisTrackball) {
