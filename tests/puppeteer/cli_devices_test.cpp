@@ -61,17 +61,18 @@ TEST(DevicesCommand, ListsSerialHidAndUsbDevices) {
 
 // ---- sim
 
-// The simulator serves a pseudo-terminal under --link; `record` reads it through the real serial driver.
+// The simulator serves a pseudo-terminal under --link; `record` reads it through the real serial driver; Ctrl-C stops
+// the simulator, which removes its link.
 TEST(SimCommand, ServesAnArmatureThatRecordReadsThroughTheSerialDriver) {
   const ScratchDir dir("imps_cli_devices");
   const std::string link = (dir / "arm").string(), take = (dir / "pty.session").string();
   const test::ProgramRun run = test::runProgram(
       "/bin/bash",
       {"-c",
-       "\"$0\" sim --device 'sim:?rate=200&channels=8' --pty --link \"$1\" --seconds 4 > \"$1.out\" & sim=$!\n"
+       "\"$0\" sim --device 'sim:?rate=200&channels=8' --pty --link \"$1\" --seconds 60 > \"$1.out\" & sim=$!\n"
        "for i in $(seq 200); do [ -e \"$1\" ] && break; sleep 0.02; done\n"
        "\"$0\" record --device \"serial:$1?protocol=binary\" -o \"$2\" --seconds 0.3 --json; code=$?\n"
-       "wait $sim; exit $code",
+       "kill -INT $sim; wait $sim; exit $code",  // Ctrl-C stops the simulator
        test::puppeteerProgram().string(), link, take});
   ASSERT_EQ(run.exitCode, kCliOk) << describe(run);
   const std::string served = fileBytes(link + ".out");
@@ -196,7 +197,7 @@ TEST(RecordCommand, AnUnplugIsAnOutageAndTheRestartAReboot) {
   const ScratchDir dir("imps_cli_devices");
   const std::string take = (dir / "unplug.session").string();
   const test::ProgramRun run =
-      runPuppeteer({"record", "--device", "sim:?rate=200&unplug_ms=200&replug_ms=400", "-o", take, "--seconds", "0.9"});
+      runPuppeteer({"record", "--device", "sim:?rate=200&unplug_ms=300&replug_ms=600", "-o", take, "--seconds", "1.5"});
   ASSERT_EQ(run.exitCode, kCliOk) << describe(run);
   const test::ProgramRun info = runPuppeteer({"info", take});
   ASSERT_EQ(info.exitCode, kCliOk) << describe(info);
