@@ -16,6 +16,7 @@
 
 #include "calibration/calibration.h"
 #include "cli_run.h"
+#include "error_text.h"
 #include "examples.h"
 #include "scratch_dir.h"
 #include "sim/session_file.h"
@@ -61,7 +62,7 @@ TEST(SessionRecorder, WhatIsRecordedReadsBackSampleExact) {
   ASSERT_TRUE(calibration) << calibration.error().str();
   const drivers::DeviceInfo dev = device(32);
   auto recorder = SessionRecorder::create(path, dev, &*calibration);
-  ASSERT_TRUE(recorder) << recorder.error();
+  ASSERT_TRUE(recorder) << test::errorOf(recorder);
   const std::vector<drivers::Sample> first = samples(300, 32, 0, 1), second = samples(200, 32, 300, 2);
   ASSERT_TRUE(recorder->append(first));
   drivers::DeviceSessionStats stats;
@@ -96,7 +97,7 @@ TEST(SessionRecorder, ALayoutChangeIsRecordedNotDropped) {
   const ScratchDir dir("imps_session_recorder");
   const fs::path path = dir / "layout.session";
   auto recorder = SessionRecorder::create(path, device(8), nullptr);
-  ASSERT_TRUE(recorder) << recorder.error();
+  ASSERT_TRUE(recorder) << test::errorOf(recorder);
   const std::vector<drivers::Sample> eight = samples(50, 8, 0, 3), six = samples(40, 6, 50, 4);
   ASSERT_TRUE(recorder->append(eight));
   ASSERT_TRUE(recorder->append(six));
@@ -129,7 +130,7 @@ TEST(SessionRecorder, AFullDiskIsReportedAndTheTakeStaysReadable) {
   sim::SessionWriterOptions options;
   options.flushEverySamples = 16;
   auto recorder = SessionRecorder::create(path, device(32), nullptr, options);
-  ASSERT_TRUE(recorder) << recorder.error();
+  ASSERT_TRUE(recorder) << test::errorOf(recorder);
   const std::vector<drivers::Sample> all = samples(2000, 32, 0, 5);
   const auto oldHandler = std::signal(SIGXFSZ, SIG_IGN);
   rlimit old{};
@@ -141,7 +142,7 @@ TEST(SessionRecorder, AFullDiskIsReportedAndTheTakeStaysReadable) {
   std::string error;
   for (size_t i = 0; i < all.size() && !failed; i += 16) {
     auto appended = recorder->append(std::span(all).subspan(i, 16));
-    if (!appended) failed = true, error = appended.error();
+    if (!appended) failed = true, error = test::errorOf(appended);
   }
   ::setrlimit(RLIMIT_FSIZE, &old);
   std::signal(SIGXFSZ, oldHandler);
