@@ -34,7 +34,10 @@ extern "C" __attribute__((visibility("default"))) int imps_png_encode(int width,
     copyError("OpenImageIO cannot write PNG: " + OIIO::geterror(), error, errorSize);
     return -1;
   }
-  const OIIO::ImageSpec spec(width, height, 4, OIIO::TypeDesc::UINT8);
+  OIIO::ImageSpec spec(width, height, 4, OIIO::TypeDesc::UINT8);
+  // The pixels are straight (unassociated) alpha, as PNG stores them: without this OpenImageIO takes them for
+  // premultiplied and divides the colour by alpha, so a half-transparent texel came back with another colour.
+  spec.attribute("oiio:UnassociatedAlpha", 1);
   if (!out->open("memory.png", spec) || !out->write_image(OIIO::TypeDesc::UINT8, rgba) || !out->close()) {
     copyError("PNG encoding failed: " + out->geterror(), error, errorSize);
     return -1;
@@ -76,7 +79,10 @@ uint8_t encodeSrgb(float linear) {
 // writes a message into error.
 extern "C" __attribute__((visibility("default"))) int imps_image_read(const char* path, int* width, int* height,
                                                                      uint8_t** rgba, char* error, size_t errorSize) {
-  std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(path);
+  // Straight alpha, as PNG stores it (by default OpenImageIO premultiplies the colour by alpha on reading).
+  OIIO::ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(path, &config);
   if (!in) {
     std::string message = OIIO::geterror();
     copyError(message.empty() ? "not an image OpenImageIO can read" : message, error, errorSize);

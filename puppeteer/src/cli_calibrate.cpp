@@ -285,7 +285,8 @@ void addCalibrationCommands(CLI::App& app, Commands& commands) {
   cmd->add_option("--check-pose", args->checkPose, "a second known pose to check signs and gains (JSON)")
       ->check(inputFile());
   cmd->add_option("--max-noise-deg", args->maxNoiseDeg, "reject the window above this per-channel std deviation")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(positiveNumber());
   cmd->add_flag("--json", args->json, "Print the result as JSON on stdout (the walkthrough's text goes to stderr)");
   cmd->add_flag("--no-wait", args->noWait, "with --device: do not wait for Enter before each pose (scripts, tests)");
   commands.push_back({cmd, [args] { return runCalibrate(*args); }});

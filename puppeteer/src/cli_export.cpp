@@ -92,6 +92,7 @@ int writeRawChannels(const ExportArgs& a) {
     std::fprintf(stderr, "puppeteer export: error: --raw-channels writes a .session's raw channels to a .bvh\n");
     return kExitUsage;
   }
+  if (int rc = checkOutputPath("export", "-o", a.output); rc != kExitOk) return rc;
   auto session = sim::readSession(a.input);
   if (!session) {
     std::fprintf(stderr, "%s\n", session.error().c_str());
@@ -205,6 +206,9 @@ int runExport(const ExportArgs& a) {
                  a.output.c_str());
     return kExitUsage;
   }
+  // A sequence's folder is created when missing; a single file's must exist, found before any work.
+  if (!sequence)
+    if (int rc = checkOutputPath("export", "-o", a.output); rc != kExitOk) return rc;
   auto loaded = loadScene(a.scene);
   if (!loaded) return kExitInvalidInput;
   const Character& character = loaded->character;
@@ -249,16 +253,17 @@ void addExportCommands(CLI::App& app, Commands& commands) {
                 "glTF (.glb) or a baked surface sequence (take_####.ply)");
   cmd->add_option("input", a->input, "A .session (through its calibration) or a .bvh clip (retargeted)")
       ->required()
-      ->check(CLI::ExistingFile);
-  cmd->add_option("scene", a->scene, "Scene file (.wrl): the character")->required()->check(CLI::ExistingFile);
+      ->check(inputFile());
+  cmd->add_option("scene", a->scene, "Scene file (.wrl): the character")->required()->check(inputFile());
   cmd->add_option("-o,--output", a->output,
                   "OUT.bvh, OUT.glb, or a numbered OUT_####.ply / OUT_####.obj sequence (# = frame digits)")
       ->required();
-  cmd->add_option("--calibration", a->calibration, "Calibration for a .session (default: the one it recorded)");
+  cmd->add_option("--calibration", a->calibration, "Calibration for a .session (default: the one it recorded)")
+      ->check(inputFile());
   cmd->add_option("--map", a->map, "BVH clips: auto, names or a joint map FILE.json (docs/calibration.md)")
       ->capture_default_str();
   cmd->add_option("--fps", a->fps, "Resample to this frame rate (default: the input's own frames)")
-      ->check(CLI::PositiveNumber);
+      ->check(positiveNumber());
   cmd->add_option("--frames", a->frames, "A:B: only output frames A to B (0-based, inclusive; after --fps)");
   cmd->add_option("--cell", a->cell, "Marching Cubes cell in metres for .glb and surface sequences")
       ->check(CLI::Range(0.002f, 0.5f))

@@ -824,7 +824,8 @@ void addLiveCommands(CLI::App& app, Commands& commands) {
                         "BVH clips: auto (name rules for CMU, Mixamo, Rokoko, Biovision, Bandai-Namco, 3ds-Max Biped "
                         "+ the hierarchy), names (same joint names) or a joint map FILE.json")
       ->capture_default_str();
-  replayCmd->add_option("--speed", replay->speed, "Playback speed (1 = real time; 0 = as fast as possible)");
+  replayCmd->add_option("--speed", replay->speed, "Playback speed (1 = real time; 0 = as fast as possible)")
+      ->check(nonNegativeNumber());
   replayCmd->add_flag("--stepped", replay->stepped,
                       "One recorded sample per rendered frame, no clock: deterministic (tests)");
   replayCmd->add_option("--export-session", replay->exportSession,

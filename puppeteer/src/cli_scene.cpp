@@ -625,9 +625,9 @@ void addSceneCommands(CLI::App& app, Commands& commands) {
   meshCmd->add_option("--updates", mesh->updates, "particles: updates to run (default: until settled)")
       ->check(CLI::Range(1, 1000000));
   meshCmd->add_option("--max-cells", mesh->maxCells, "Marching Cubes: the most grid cells (default 2^28; more is refused)")
-      ->check(CLI::PositiveNumber);
+      ->check(positiveNumber());
   meshCmd->add_option("--max-particles", mesh->maxParticles, "particles: the most particles (default 2^18)")
-      ->check(CLI::PositiveNumber);
+      ->check(positiveNumber());
   meshCmd->add_flag("--json", mesh->json, "Print the report as JSON (for scripts)");
   meshCmd->add_option("--prop", mesh->props,
                       "Also write a VRML 97 file's props, FILE.wrl@JOINT attached to a joint, each its own object "
@@ -654,7 +654,7 @@ void addSceneCommands(CLI::App& app, Commands& commands) {
   renderCmd->add_option("--width", render->width, "Image width in pixels")->check(CLI::Range(16, 8192));
   renderCmd->add_option("--height", render->height, "Image height in pixels")->check(CLI::Range(16, 8192));
   renderCmd->add_option("--max-cells", render->maxCells, "The most grid cells (default 2^28; more is refused)")
-      ->check(CLI::PositiveNumber);
+      ->check(positiveNumber());
   renderCmd->add_option("--view", render->view, "Camera direction")->check(CLI::IsMember({"three-quarter", "front", "side", "top"}));
   renderCmd->add_flag("--json", render->json, "Print the report as JSON (for scripts)");
   auto* renderClip = renderCmd->add_option("--clip", render->clip, "Pose the character from a VRML 97 clip file "

@@ -29,6 +29,9 @@ const char* modeName(TextureMode m) { return m == TextureMode::Carried ? "carrie
 Json vec(const glm::vec3& v) { return Json::array({v.x, v.y, v.z}); }
 
 int runStretch(StretchArgs& a) {
+  // The pictures' directory is checked before any work, as every command checks its outputs (docs/cli.md).
+  if (!a.options.pictures.empty())
+    if (int rc = checkOutputPath("stretch", "--pictures", a.options.pictures); rc != kExitOk) return rc;
   const auto loaded = loadScene(a.scene);
   if (!loaded) return kExitInvalidInput;
   if (a.axis.size() == 3) a.options.axis = {a.axis[0], a.axis[1], a.axis[2]};

@@ -320,35 +320,6 @@ TEST(LiveCalibration, KeyNeedsARigMapAndSomewhereToSave) {
   EXPECT_NE(rig.source->recalibrate().find("needs a rig map"), std::string::npos);
 }
 
-TEST(CalibrationFlow, CollectsTheWindowAfterTheCountdown) {
-  CalibrationFlow flow({.delayMs = 1000, .windowMs = 500, .maxNoiseDeg = 0.5});
-  EXPECT_EQ(flow.phase(), CalibrationFlow::Phase::Idle);
-  flow.start(0);
-  EXPECT_EQ(flow.phase(), CalibrationFlow::Phase::Countdown);
-  EXPECT_NE(flow.progress(400'000'000).find("averaging in 0.6s"), std::string::npos) << flow.progress(400'000'000);
-  auto at = [](int64_t ms) {
-    drivers::Sample s;
-    s.channelCount = 1;
-    s.arrivalTimeNs = ms * 1'000'000;
-    return s;
-  };
-  const std::vector<drivers::Sample> early = {at(100), at(999)};
-  EXPECT_FALSE(flow.update(early, 999'000'000));
-  EXPECT_TRUE(flow.window().empty());
-  const std::vector<drivers::Sample> inside = {at(1000), at(1200), at(1499)};
-  EXPECT_FALSE(flow.update(inside, 1'300'000'000));
-  EXPECT_EQ(flow.phase(), CalibrationFlow::Phase::Averaging);
-  EXPECT_NE(flow.progress(1'300'000'000).find("3 samples"), std::string::npos);
-  const std::vector<drivers::Sample> late = {at(1500), at(1600)};
-  EXPECT_TRUE(flow.update(late, 1'600'000'000));
-  EXPECT_EQ(flow.phase(), CalibrationFlow::Phase::Complete);
-  EXPECT_EQ(flow.window().size(), 3u);
-  EXPECT_FALSE(flow.update(late, 1'700'000'000));  // only once
-  flow.reset();
-  EXPECT_EQ(flow.phase(), CalibrationFlow::Phase::Idle);
-  EXPECT_TRUE(flow.window().empty());
-}
-
 // The simulator's default motion under the bundled calibration (docs/cli.md's `live --device 'sim:?rate=1000'
 // --calibration examples/simple_biped.calibration.json`) is a performance, not a tumble: over whole cycles every
 // channel's angle stays inside its joint's limits (no clamping needed), and the waving forearm really moves.

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
-// `puppeteer calibrate --session` end to end (a recorded session → a calibration file), and calibrations stored in
-// sessions (SessionWriter → readSession → the calibration in force for a sample).
+// `puppeteer calibrate` (puppeteer/src/cli_calibrate.cpp): in process from recorded sessions (a session → a
+// calibration file that reads back with the offsets recorded), and through the real program against the simulated
+// armature, with docs/cli.md's exit code and message for every failure.
 #include <gtest/gtest.h>
 
 #include <CLI/CLI.hpp>
@@ -11,13 +12,16 @@
 #include <fstream>
 #include <numbers>
 
+#include <nlohmann/json.hpp>
+
 #include "calibration/calibration.h"
 #include "cli.h"
+#include "cli_run.h"
+#include "examples.h"
+#include "scratch_dir.h"
 #include "imps/scene_reader.h"
 #include "imps/utf8.h"
-#include "session_calibration.h"
 #include "sim/session_file.h"
-
 
 namespace imps::app {
 namespace {
@@ -205,61 +209,6 @@ TEST(CalibrateCommand, NeedsExactlyOneSource) {
   testing::internal::GetCapturedStderr();
 }
 
-TEST(SessionCalibration, ReplayFindsTheCalibrationItWasCapturedWith) {
-  TempDir dir;
-  const auto path = dir.path / "take.session";
-  const drivers::DeviceInfo dev = device32();
-  auto first = calibration::Calibration::readFile(kSource + "/examples/simple_biped.calibration.json", &biped(), &dev);
-  ASSERT_TRUE(first.has_value()) << first.error().str();
-  calibration::RigMap shifted = first->rigMap();
-  for (auto& c : shifted.channels) c.offset = *c.offset + 100;
-  auto second = calibration::Calibration::create(shifted, &biped(), &dev);
-  ASSERT_TRUE(second.has_value());
-  {
-    auto w = sim::SessionWriter::create(path, dev);
-    ASSERT_TRUE(w.has_value());
-    drivers::Sample s;
-    s.channelCount = 32;
-    ASSERT_TRUE(appendCalibration(*w, *first).has_value());
-    for (int k = 0; k < 10; ++k) ASSERT_TRUE(w->append(s).has_value());
-    ASSERT_TRUE(appendCalibration(*w, *second).has_value());  // re-calibrated mid-take
-    for (int k = 0; k < 10; ++k) ASSERT_TRUE(w->append(s).has_value());
-    ASSERT_TRUE(w->close().has_value());
-  }
-  auto session = sim::readSession(path);
-  ASSERT_TRUE(session.has_value()) << session.error();
-  ASSERT_EQ(session->calibrations.size(), 2u);
-  auto at5 = calibrationForSample(*session, 5, &biped(), path.string());
-  auto at15 = calibrationForSample(*session, 15, &biped(), path.string());
-  ASSERT_TRUE(at5.has_value() && at5->has_value()) << (at5 ? "none" : at5.error().str());
-  ASSERT_TRUE(at15.has_value() && at15->has_value());
-  EXPECT_EQ((*at5)->toJson(), first->toJson());
-  EXPECT_EQ((*at15)->toJson(), second->toJson());
-  // A session without calibrations has none to offer.
-  sim::Session empty;
-  auto none = calibrationForSample(empty, 0);
-  ASSERT_TRUE(none.has_value());
-  EXPECT_FALSE(none->has_value());
-  // A damaged blob is reported against the session.
-  session->calibrations[1].json = "{\"version\": 1, \"bits\": 12, \"joints\": [}";
-  auto bad = calibrationForSample(*session, 15, &biped(), "take.session");
-  ASSERT_FALSE(bad.has_value());
-  EXPECT_EQ(bad.error().str(), "take.session calibration #1:1:39: error: expected a value, found '}'\n");
-}
-
-// Sessions converted from BVH by earlier versions carry the clip's channel mapping as a CALIBRATION blob: it is
-// not a calibration (channels map by name), so none is in force — no error to report.
-TEST(SessionCalibration, OldBvhChannelMappingIsNoCalibration) {
-  auto old = sim::readSession(kSource + "/tests/data/sessions/legacy_bvh_mapping.session");
-  ASSERT_TRUE(old.has_value()) << old.error();
-  ASSERT_EQ(old->calibrations.size(), 1u);
-  EXPECT_TRUE(isBvhChannelMapping(old->calibrations[0].json));
-  auto found = calibrationForSample(*old, 0, &biped(), "legacy_bvh_mapping.session");
-  ASSERT_TRUE(found.has_value()) << found.error().str();
-  EXPECT_FALSE(found->has_value());
-  EXPECT_FALSE(isBvhChannelMapping("{\"version\": 1, \"bits\": 12, \"info\": {\"source\":\"bvh\"}, \"joints\": []}"));
-}
-
 }  // namespace
 }  // namespace imps::app
 
@@ -280,6 +229,128 @@ TEST(CalibrateCommand, LiveDeviceThatKeepsMovingIsRejectedAsNoisy) {
   EXPECT_NE(err.find("the calibration-pose window was rejected"), std::string::npos) << err;
   EXPECT_NE(err.find("is too noisy"), std::string::npos) << err;
   EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+// ---- Through the program
+
+using test::contains;
+using test::describe;
+using test::kCliInvalidInput;
+using test::kCliIo;
+using test::kCliOk;
+using test::kCliUsage;
+using test::runPuppeteer;
+using test::sourceFile;
+
+const std::string kRig = sourceFile("examples/simple_biped.rig.json");
+const std::string kBiped = sourceFile("examples/simple_biped.wrl");
+
+// The documented walkthrough works with what ships: the simulator holding the calibration pose. The file it writes
+// reads back as a calibration of the character, with the summary's channels; its offsets are the still pose's counts.
+TEST(CalibrateCommand, SucceedsWithTheBundledPieces) {
+  const ScratchDir dir("imps_cli_calibrate");
+  const std::string out = (dir / "still.calibration.json").string();
+  const test::ProgramRun run = runPuppeteer(
+      {"calibrate", "--json", "--rig", kRig, "--scene", kBiped, "--device", "sim:?motion=still&noise=1", "--no-wait",
+       "-o", out});
+  ASSERT_EQ(run.exitCode, kCliOk) << describe(run);
+  const nlohmann::json summary = nlohmann::json::parse(run.out);
+  EXPECT_TRUE(contains(run.err, "Hold the armature in the calibration pose")) << "the walkthrough goes to stderr";
+  auto cal = calibration::Calibration::readFile(out, &test::exampleCharacter("simple_biped"), nullptr);
+  ASSERT_TRUE(cal.has_value()) << cal.error().str();
+  EXPECT_EQ(cal->rigMap().channels.size(), summary["channels"].get<size_t>());
+  EXPECT_EQ(cal->rigMap().device, "IMPS Simulated Monkey");
+  for (const auto& c : cal->rigMap().channels) EXPECT_TRUE(c.offset.has_value()) << c.channel;
+  EXPECT_LT(summary["noiseMaxDeg"].get<double>(), 0.5);
+  // The bundled calibration was made the same way: both read the still pose alike.
+  auto bundled = calibration::Calibration::readFile(sourceFile("examples/simple_biped.calibration.json"),
+                                                    &test::exampleCharacter("simple_biped"), nullptr);
+  ASSERT_TRUE(bundled.has_value()) << bundled.error().str();
+  ASSERT_EQ(bundled->rigMap().channels.size(), cal->rigMap().channels.size());
+  for (size_t i = 0; i < cal->rigMap().channels.size(); ++i)
+    EXPECT_NEAR(bundled->angle(i, *cal->rigMap().channels[i].offset), 0.0, 0.01) << "channel " << i;
+}
+
+// A 12-bit rig map on a line-protocol device: calibrate and live agree. Without bits=12 both refuse it (naming
+// the key to add); with it calibrate succeeds.
+TEST(CalibrateCommand, CalibrateAndLiveAgreeOnALineDevicesBits) {
+  const ScratchDir dir("imps_cli_calibrate");
+  test::ProgramRun run = runPuppeteer({"calibrate", "--rig", kRig, "--scene", kBiped, "--device",
+                                       "sim:?protocol=lines&motion=still&bits=12", "--no-wait", "-o",
+                                       (dir / "lines.calibration.json").string()});
+  EXPECT_EQ(run.exitCode, kCliOk) << describe(run);
+  EXPECT_TRUE(std::filesystem::exists(dir / "lines.calibration.json"));
+  run = runPuppeteer({"live", kBiped, "--device", "sim:?protocol=lines&motion=still", "--calibration",
+                      sourceFile("examples/simple_biped.calibration.json"), "--frames", "1"});
+  EXPECT_EQ(run.exitCode, kCliInvalidInput) << describe(run);
+  EXPECT_TRUE(contains(run.err, "add bits=12 to the device spec"));
+  run = runPuppeteer({"calibrate", "--rig", kRig, "--scene", kBiped, "--device",
+                      "sim:?protocol=lines&motion=still&bits=16", "--no-wait", "-o", (dir / "l16.json").string()});
+  EXPECT_EQ(run.exitCode, kCliInvalidInput) << describe(run);
+  EXPECT_TRUE(contains(run.err, "12-bit encoders"));
+}
+
+// A recorded take of the simulator's moving armature: the window is too noisy, the channels are named, nothing is
+// written.
+TEST(CalibrateCommand, AMovingTakeIsRejectedAsNoisy) {
+  const ScratchDir dir("imps_cli_calibrate");
+  const std::string take = (dir / "take.session").string(), out = (dir / "cal.json").string();
+  ASSERT_EQ(runPuppeteer({"record", "--device", "sim:?rate=200&channels=32", "-o", take, "--seconds", "0.5"}).exitCode,
+            kCliOk);
+  const test::ProgramRun run = runPuppeteer({"calibrate", "--rig", kRig, "--scene", kBiped, "--session", take, "-o",
+                                             out});
+  EXPECT_EQ(run.exitCode, kCliInvalidInput) << describe(run);
+  EXPECT_TRUE(contains(run.err, "is too noisy"));
+  EXPECT_TRUE(contains(run.err, "Nothing was written"));
+  EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+TEST(CalibrateCommand, Failures) {
+  const ScratchDir dir("imps_cli_calibrate");
+  const std::string wave = sourceFile("examples/simple_biped_wave.session");
+  const std::string out = (dir / "c.json").string();
+  std::ofstream(dir / "bad.rig.json") << "{\n  \"version\": 1,\n  \"joints\": [ { \"joint\": \"L_Elbo\" } ]\n}\n";
+  std::ofstream(dir / "garbage.session") << "not a session\n";
+  std::ofstream(dir / "keep.json") << "precious";
+  auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = {"calibrate", "--rig", kRig, "--scene", kBiped};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return args;
+  };
+  const std::vector<std::string> still = {"--device", "sim:?motion=still", "--no-wait"};
+  test::expectFailures({
+      {"missing rig", {"calibrate", "--rig", (dir / "none.json").string(), "--scene", kBiped, "--session", wave, "-o",
+                       out}, kCliInvalidInput, "no such file"},
+      {"missing scene", {"calibrate", "--rig", kRig, "--scene", (dir / "none.wrl").string(), "--session", wave, "-o",
+                         out}, kCliInvalidInput, "no such file"},
+      {"missing session", with({"--session", (dir / "none.session").string(), "-o", out}), kCliInvalidInput,
+       "no such file"},
+      {"missing check pose", with({"--session", wave, "-o", out, "--check-pose", (dir / "none.json").string()}),
+       kCliInvalidInput, "no such file"},
+      {"bad rig map", {"calibrate", "--rig", (dir / "bad.rig.json").string(), "--scene", kBiped, "--session", wave,
+                       "-o", out}, kCliInvalidInput, "bad.rig.json:"},
+      {"endless rig map", {"calibrate", "--rig", "/dev/zero", "--scene", kBiped, "--session", wave, "-o", out},
+       kCliInvalidInput, "/dev/zero: error: cannot read rig map: larger than the 16 MiB limit"},
+      {"garbage session", with({"--session", (dir / "garbage.session").string(), "-o", out}), kCliInvalidInput,
+       "garbage.session"},
+      {"no source", with({"-o", out}), kCliUsage, "give exactly one of --session SESSION or --device SPEC"},
+      {"two sources", with({"--session", wave, "--device", "sim:", "-o", out}), kCliUsage, "exactly one of"},
+      {"window 0", with({"--session", wave, "-o", out, "--window-ms", "0"}), kCliUsage, "--window-ms"},
+      {"noise -1", with({"--session", wave, "-o", out, "--max-noise-deg", "-1"}), kCliUsage, "--max-noise-deg"},
+      {"bad spec", with({"--device", "nope", "-o", out}), kCliUsage, "spec:1:1: error"},
+      {"an OSC stream", with({"--device", "osc.udp://:9000", "-o", out}), kCliUsage, "OSC pose stream"},
+      {"missing directory", with({"--session", wave, "-o", (dir / "nodir/c.json").string()}), kCliIo,
+       "does not exist"},
+      {"no output", with(still), kCliUsage, "--output"},
+      {"misspelt option", with({"--session", wave, "-o", out, "--window-m", "300"}), kCliUsage,
+       "did you mean '--window-ms'?"},
+      {"rejected over an existing file",
+       {"calibrate", "--rig", (dir / "bad.rig.json").string(), "--scene", kBiped, "--session", wave, "-o",
+        (dir / "keep.json").string()},
+       kCliInvalidInput, "bad.rig.json"},
+  });
+  EXPECT_FALSE(std::filesystem::exists(out));
+  EXPECT_EQ(fileBytes(dir / "keep.json"), "precious");
 }
 
 }  // namespace
