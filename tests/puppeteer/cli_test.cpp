@@ -373,7 +373,7 @@ TEST_F(CliTest, LongWorkShowsProgressOnATerminalOnly) {
   ASSERT_EQ(piped.exitCode, kOk) << piped.err;
   EXPECT_EQ(piped.err, "");
   auto pty = sim::PseudoTerminal::open();
-  ASSERT_TRUE(pty) << pty.error();
+  ASSERT_TRUE(pty) << pty.error().str();
   test::ProgramOptions onTerminal;
   onTerminal.stderrPath = pty->slavePath();
   const test::ProgramRun shown = runProgram(puppeteer(), args, onTerminal);
