@@ -119,6 +119,8 @@ TEST(SerialTransport, AbsentPortIsAnErrorNotACrash) {
   auto t = SerialTransport::open("/dev/ttyACM0");
   ASSERT_FALSE(t);
   EXPECT_NE(errorText(t.error()).find("/dev/ttyACM0: error:"), std::string::npos) << t.error().str();
+  EXPECT_EQ(t.error().path, "/dev/ttyACM0");  // the device, so the message can name it
+  EXPECT_EQ(t.error().message.find("error:"), std::string::npos) << "the severity is added by errorText";
 }
 
 TEST(SerialTransport, UnplugMakesReadsFail) {
