@@ -197,7 +197,7 @@ void runStream(StreamRun& r, double seconds, double warmupSeconds, double frameH
   // ---- The armature on a pseudo-terminal, as `puppeteer sim --pty` serves it.
   auto pty = sim::PseudoTerminal::open();
   if (!pty) {
-    r.error = pty.error();
+    r.error = pty.error().str();
     return;
   }
   sim::ArmatureOptions ao;

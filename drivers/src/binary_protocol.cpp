@@ -2,6 +2,9 @@
 // The IMPS armature binary protocol: CRC, frame encoder and resynchronising decoder (format: docs/protocol.md).
 #include "drivers/binary_protocol.h"
 
+#include "imps/check.h"
+#include "text.h"
+
 #include <array>
 #include <cstdio>
 #include <cstdlib>
@@ -64,79 +67,80 @@ bool hasDefaultNames(const DeviceInfo& info) {
 
 // ---- Payload sizes and validation (encoder side) ----
 
-std::expected<size_t, std::string> deviceInfoSize(const DeviceInfo& info) {
+// A message that cannot be encoded: one diagnostic without a position (the values are not from a file).
+std::unexpected<Diagnostics> invalid(std::string message) { return diagnosticError({}, std::move(message)); }
+
+std::expected<size_t, Diagnostics> deviceInfoSize(const DeviceInfo& info) {
   if (info.channelCount < 1 || info.channelCount > kMaxChannels)
-    return std::unexpected("DeviceInfo.channelCount " + std::to_string(info.channelCount) + " is outside 1.." +
-                           std::to_string(kMaxChannels));
+    return invalid("DeviceInfo.channelCount " + std::to_string(info.channelCount) + " is outside 1.." +
+                   std::to_string(kMaxChannels));
   if (info.bitsPerChannel < 1 || info.bitsPerChannel > 32)
-    return std::unexpected("DeviceInfo.bitsPerChannel " + std::to_string(info.bitsPerChannel) +
-                           " is outside 1..32");
-  if (info.name.size() > kMaxDeviceNameSize) return std::unexpected("DeviceInfo.name is longer than 63 bytes");
+    return invalid("DeviceInfo.bitsPerChannel " + std::to_string(info.bitsPerChannel) + " is outside 1..32");
+  if (info.name.size() > kMaxDeviceNameSize) return invalid("DeviceInfo.name is longer than 63 bytes");
   if (info.serialNumber.size() > kMaxSerialNumberSize)
-    return std::unexpected("DeviceInfo.serialNumber is longer than 63 bytes");
+    return invalid("DeviceInfo.serialNumber is longer than 63 bytes");
   if (info.firmwareVersion.size() > kMaxFirmwareVersionSize)
-    return std::unexpected("DeviceInfo.firmwareVersion is longer than 31 bytes");
+    return invalid("DeviceInfo.firmwareVersion is longer than 31 bytes");
   if (!info.channelNames.empty() && static_cast<int>(info.channelNames.size()) != info.channelCount)
-    return std::unexpected("DeviceInfo.channelNames has " + std::to_string(info.channelNames.size()) +
-                           " entries; expected 0 or channelCount (" + std::to_string(info.channelCount) + ")");
+    return invalid("DeviceInfo.channelNames has " + std::to_string(info.channelNames.size()) +
+                   " entries; expected 0 or channelCount (" + std::to_string(info.channelCount) + ")");
   size_t size = 3 + 1 + info.name.size() + 1 + info.serialNumber.size() + 1 + info.firmwareVersion.size() + 1;
   if (!hasDefaultNames(info)) {
     for (const auto& n : info.channelNames) {
-      if (n.size() > kMaxChannelNameSize)
-        return std::unexpected("channel name '" + n + "' is longer than 23 bytes");
+      if (n.size() > kMaxChannelNameSize) return invalid("channel name '" + n + "' is longer than 23 bytes");
       size += 1 + n.size();
     }
   }
   return size;
 }
 
-std::expected<size_t, std::string> sampleSize(const msg::SampleFrame& f, uint32_t headerSequence) {
+std::expected<size_t, Diagnostics> sampleSize(const msg::SampleFrame& f, uint32_t headerSequence) {
   const Sample& s = f.sample;
   if (s.channelCount < 1 || s.channelCount > kMaxChannels)
-    return std::unexpected("Sample.channelCount " + std::to_string(s.channelCount) + " is outside 1.." +
-                           std::to_string(kMaxChannels));
+    return invalid("Sample.channelCount " + std::to_string(s.channelCount) + " is outside 1.." +
+                   std::to_string(kMaxChannels));
   if (f.bitsPerChannel < 1 || f.bitsPerChannel > 32)
-    return std::unexpected("bitsPerChannel " + std::to_string(f.bitsPerChannel) + " is outside 1..32");
+    return invalid("bitsPerChannel " + std::to_string(f.bitsPerChannel) + " is outside 1..32");
   if (s.sequence != headerSequence)
-    return std::unexpected("Sample.sequence " + std::to_string(s.sequence) + " differs from Message.sequence " +
-                           std::to_string(headerSequence));
+    return invalid("Sample.sequence " + std::to_string(s.sequence) + " differs from Message.sequence " +
+                   std::to_string(headerSequence));
   const uint64_t limit = f.bitsPerChannel == 32 ? (uint64_t{1} << 32) : (uint64_t{1} << f.bitsPerChannel);
   for (int i = 0; i < s.channelCount; ++i) {
     if (s.counts[i] >= limit)
-      return std::unexpected("channel " + std::to_string(i) + " count " + std::to_string(s.counts[i]) +
-                             " does not fit in " + std::to_string(f.bitsPerChannel) + " bits");
+      return invalid("channel " + std::to_string(i) + " count " + std::to_string(s.counts[i]) + " does not fit in " +
+                     std::to_string(f.bitsPerChannel) + " bits");
     if (f.hasChannelFlags && static_cast<uint8_t>(s.flags[i]) > 2)
-      return std::unexpected("channel " + std::to_string(i) + " has flag value " +
-                             std::to_string(static_cast<int>(s.flags[i])) + " (expected 0..2)");
+      return invalid("channel " + std::to_string(i) + " has flag value " +
+                     std::to_string(static_cast<int>(s.flags[i])) + " (expected 0..2)");
   }
-  if (f.hasDeviceTime && s.deviceTimeNs < 0) return std::unexpected("Sample.deviceTimeNs is negative");
+  if (f.hasDeviceTime && s.deviceTimeNs < 0) return invalid("Sample.deviceTimeNs is negative");
   return 3 + (f.hasDeviceTime ? 8 : 0) + packedCountBytes(s.channelCount, f.bitsPerChannel) +
          (f.hasChannelFlags ? packedFlagBytes(s.channelCount) : 0);
 }
 
-std::expected<size_t, std::string> payloadSize(const Message& m) {
+std::expected<size_t, Diagnostics> payloadSize(const Message& m) {
   struct Visitor {
     uint32_t sequence;
-    std::expected<size_t, std::string> operator()(const msg::Hello& h) const {
+    std::expected<size_t, Diagnostics> operator()(const msg::Hello& h) const {
       auto s = deviceInfoSize(h.info);
       if (!s) return s;
       return *s + 1;
     }
-    std::expected<size_t, std::string> operator()(const msg::Info& i) const { return deviceInfoSize(i.info); }
-    std::expected<size_t, std::string> operator()(const msg::SampleFrame& f) const { return sampleSize(f, sequence); }
-    std::expected<size_t, std::string> operator()(const msg::Ack&) const { return size_t{1}; }
-    std::expected<size_t, std::string> operator()(const msg::Error& e) const {
-      if (e.text.size() > kMaxErrorTextSize) return std::unexpected("Error.text is longer than 255 bytes");
+    std::expected<size_t, Diagnostics> operator()(const msg::Info& i) const { return deviceInfoSize(i.info); }
+    std::expected<size_t, Diagnostics> operator()(const msg::SampleFrame& f) const { return sampleSize(f, sequence); }
+    std::expected<size_t, Diagnostics> operator()(const msg::Ack&) const { return size_t{1}; }
+    std::expected<size_t, Diagnostics> operator()(const msg::Error& e) const {
+      if (e.text.size() > kMaxErrorTextSize) return invalid("Error.text is longer than 255 bytes");
       return 3 + e.text.size();
     }
-    std::expected<size_t, std::string> operator()(const msg::HostHello&) const { return size_t{1}; }
-    std::expected<size_t, std::string> operator()(const msg::GetInfo&) const { return size_t{0}; }
-    std::expected<size_t, std::string> operator()(const msg::Poll&) const { return size_t{0}; }
-    std::expected<size_t, std::string> operator()(const msg::StartStream& s) const {
-      if (s.rateHz == 0) return std::unexpected("StartStream.rateHz is 0");
+    std::expected<size_t, Diagnostics> operator()(const msg::HostHello&) const { return size_t{1}; }
+    std::expected<size_t, Diagnostics> operator()(const msg::GetInfo&) const { return size_t{0}; }
+    std::expected<size_t, Diagnostics> operator()(const msg::Poll&) const { return size_t{0}; }
+    std::expected<size_t, Diagnostics> operator()(const msg::StartStream& s) const {
+      if (s.rateHz == 0) return invalid("StartStream.rateHz is 0");
       return size_t{2};
     }
-    std::expected<size_t, std::string> operator()(const msg::StopStream&) const { return size_t{0}; }
+    std::expected<size_t, Diagnostics> operator()(const msg::StopStream&) const { return size_t{0}; }
   };
   return std::visit(Visitor{m.sequence}, m.payload);
 }
@@ -404,19 +408,19 @@ Message sampleMessage(const Sample& sample, uint8_t bitsPerChannel, bool hasDevi
 
 // ---- Encoder ----
 
-std::expected<size_t, std::string> encodedFrameSize(const Message& message) {
+std::expected<size_t, Diagnostics> encodedFrameSize(const Message& message) {
   auto payload = payloadSize(message);
   if (!payload) return std::unexpected(payload.error());
-  if (*payload > kMaxPayloadSize) return std::unexpected("payload exceeds kMaxPayloadSize");
+  if (*payload > kMaxPayloadSize) return invalid("payload exceeds kMaxPayloadSize");
   return kFrameHeaderSize + *payload + kFrameCrcSize;
 }
 
-std::expected<size_t, std::string> encodeFrame(const Message& message, std::span<uint8_t> out) {
+std::expected<size_t, Diagnostics> encodeFrame(const Message& message, std::span<uint8_t> out) {
   auto size = encodedFrameSize(message);
   if (!size) return size;
   if (out.size() < *size)
-    return std::unexpected("output span holds " + std::to_string(out.size()) + " bytes; the frame needs " +
-                           std::to_string(*size));
+    return invalid("output span holds " + std::to_string(out.size()) + " bytes; the frame needs " +
+                   std::to_string(*size));
   const size_t payload = *size - kFrameHeaderSize - kFrameCrcSize;
   uint8_t* p = out.data();
   p[0] = kSync0;
@@ -428,16 +432,13 @@ std::expected<size_t, std::string> encodeFrame(const Message& message, std::span
   put16(p + kOffLength, static_cast<uint16_t>(payload));
   put16(p + kOffHeaderCrc, crc16CcittFalse(std::span(p + kOffVersion, kOffHeaderCrc - kOffVersion)));
   uint8_t* end = putPayload(p + kFrameHeaderSize, message);
-  if (static_cast<size_t>(end - p) != kFrameHeaderSize + payload) {  // a bug: payloadSize and putPayload disagree
-    std::fprintf(stderr, "%s:%d: internal error: wrote %zu payload bytes, sized %zu\n", __FILE__, __LINE__,
-                 static_cast<size_t>(end - p) - kFrameHeaderSize, payload);
-    std::abort();
-  }
+  // A bug when they differ: payloadSize() and putPayload() disagree.
+  IMPS_CHECK_EQ(static_cast<size_t>(end - p), kFrameHeaderSize + payload);
   put16(end, crc16CcittFalse(std::span(p + kOffVersion, end)));
   return *size;
 }
 
-std::expected<void, std::string> appendFrame(const Message& message, std::vector<uint8_t>& out) {
+std::expected<void, Diagnostics> appendFrame(const Message& message, std::vector<uint8_t>& out) {
   auto size = encodedFrameSize(message);
   if (!size) return std::unexpected(size.error());
   const size_t old = out.size();
@@ -450,7 +451,7 @@ std::expected<void, std::string> appendFrame(const Message& message, std::vector
   return {};
 }
 
-std::expected<std::vector<uint8_t>, std::string> encodeDeviceInfo(const DeviceInfo& info) {
+std::expected<std::vector<uint8_t>, Diagnostics> encodeDeviceInfo(const DeviceInfo& info) {
   auto size = deviceInfoSize(info);
   if (!size) return std::unexpected(size.error());
   std::vector<uint8_t> out(*size);
@@ -458,11 +459,11 @@ std::expected<std::vector<uint8_t>, std::string> encodeDeviceInfo(const DeviceIn
   return out;
 }
 
-std::expected<DeviceInfo, std::string> decodeDeviceInfo(std::span<const uint8_t> bytes) {
+std::expected<DeviceInfo, Diagnostics> decodeDeviceInfo(std::span<const uint8_t> bytes) {
   Reader r{bytes.data(), bytes.data() + bytes.size()};
   DeviceInfo info;
   if (!readDeviceInfo(r, info))
-    return std::unexpected("malformed DeviceInfo block (" + std::to_string(bytes.size()) + " bytes)");
+    return invalid("malformed DeviceInfo block (" + std::to_string(bytes.size()) + " bytes)");
   return info;
 }
 

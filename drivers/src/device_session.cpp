@@ -110,7 +110,7 @@ struct DeviceSession::Io {
   bool pump(int waitMs) {
     auto n = transport->read(readBuffer, std::max(0, std::min(waitMs, o.ioWaitMs)));
     if (!n) {
-      s.setError(n.error());
+      s.setError(errorText(n.error()));
       return false;
     }
     if (*n == 0) return true;
@@ -152,11 +152,11 @@ struct DeviceSession::Io {
   bool send(const Message& m) {
     writeBuffer.clear();
     if (auto r = appendFrame(m, writeBuffer); !r) {
-      s.setError("internal: cannot encode command: " + r.error());
+      s.setError("internal: cannot encode command: " + firstMessage(r.error()));
       return false;
     }
     if (auto r = transport->write(writeBuffer, o.replyTimeoutMs); !r) {
-      s.setError(r.error());
+      s.setError(errorText(r.error()));
       return false;
     }
     return true;
@@ -479,7 +479,7 @@ void DeviceSession::run() {
     auto transport = opener_();
     if (!transport) {
       bump(counters_.openFailures);
-      setError(transport.error());
+      setError(errorText(transport.error()));
       if (wasConnected) setState(ConnectionState::Lost);
       const int64_t until = steadyNowNs() + options_.reconnectIntervalMs * kMs;
       while (!stopRequested_.load() && steadyNowNs() < until) std::this_thread::sleep_for(std::chrono::milliseconds(5));

@@ -32,8 +32,9 @@ const char* toString(AcquisitionMode mode) { return mode == AcquisitionMode::Str
 
 namespace {
 
-std::unexpected<std::string> fail(size_t offset, std::string_view what) {
-  return std::unexpected(cat("spec:1:", offset + 1, ": error: ", what));
+// A spec is one line of text: "spec:1:COLUMN", COLUMN 1-based.
+std::unexpected<Diagnostics> fail(size_t offset, std::string what) {
+  return diagnosticError({"spec", 1, static_cast<int>(offset + 1)}, std::move(what));
 }
 
 template <class T>
@@ -48,7 +49,7 @@ bool parseHexId(std::string_view s, uint16_t& out) { return s.size() >= 1 && s.s
 }  // namespace
 
 // `osc.udp://[ADDRESS]:PORT`: the text after the scheme.
-std::expected<DeviceSpec, std::string> parseOscSpec(std::string_view text) {
+std::expected<DeviceSpec, Diagnostics> parseOscSpec(std::string_view text) {
   constexpr std::string_view kPrefix = "osc.udp://";
   if (!text.starts_with(kPrefix)) return fail(0, "expected osc.udp://:PORT (or osc.udp://ADDRESS:PORT)");
   const std::string_view rest = text.substr(kPrefix.size());
@@ -64,7 +65,7 @@ std::expected<DeviceSpec, std::string> parseOscSpec(std::string_view text) {
   return spec;
 }
 
-std::expected<DeviceSpec, std::string> parseDeviceSpec(std::string_view text) {
+std::expected<DeviceSpec, Diagnostics> parseDeviceSpec(std::string_view text) {
   DeviceSpec spec;
   if (text.starts_with("osc.")) return parseOscSpec(text);
   // A bare device node ("/dev/ttyACM0?baud=9600") is a serial port: as if written "serial:/dev/ttyACM0…".

@@ -27,8 +27,9 @@ constexpr size_t kMaxLocalUsages = 1024;  // bounds Usage Minimum..Maximum expan
 constexpr uint8_t kApplicationCollection = 0x01;
 constexpr uint16_t kButtonPage = 0x09, kKeyboardPage = 0x07, kLedPage = 0x08, kGenericDesktopPage = 0x01;
 
-std::unexpected<std::string> fail(size_t offset, std::string_view what) {
-  return std::unexpected(cat("report descriptor:", offset, ": error: ", what));
+// Descriptor bytes are not a text file: the position is the 0-based byte offset, part of the "file" name.
+std::unexpected<Diagnostics> fail(size_t offset, std::string what) {
+  return diagnosticError({cat("report descriptor:", offset)}, std::move(what));
 }
 
 struct Globals {
@@ -106,7 +107,7 @@ const HidReportSize* HidReportDescriptor::report(HidReportKind kind, uint8_t id)
   return nullptr;
 }
 
-std::expected<HidReportDescriptor, std::string> parseHidReportDescriptor(std::span<const uint8_t> bytes) {
+std::expected<HidReportDescriptor, Diagnostics> parseHidReportDescriptor(std::span<const uint8_t> bytes) {
   if (bytes.empty()) return fail(0, "empty report descriptor");
   HidReportDescriptor out;
   Globals g;
@@ -245,7 +246,7 @@ int HidInputLayout::bitsPerChannel() const {
   return bits;
 }
 
-std::expected<HidInputLayout, std::string> hidArmatureLayout(const HidReportDescriptor& d) {
+std::expected<HidInputLayout, Diagnostics> hidArmatureLayout(const HidReportDescriptor& d) {
   // ---- Count the channels of every input report; pick the richest.
   auto isChannelField = [](const HidField& f) {
     return f.kind == HidReportKind::Input && !(f.flags & kHidConstant) && (f.flags & kHidVariable) &&
@@ -270,8 +271,10 @@ std::expected<HidInputLayout, std::string> hidArmatureLayout(const HidReportDesc
       bestCount = n;
     }
   }
-  if (!best) return std::unexpected(std::string("report descriptor: error: no input report carries a channel "
-                                                "(an absolute Data Variable Input item of 1..32 bits)"));
+  if (!best)
+    return diagnosticError({"report descriptor"},
+                           "no input report carries a channel (an absolute Data Variable "
+                           "Input item of 1..32 bits)");
 
   HidInputLayout layout;
   layout.usesReportIds = d.usesReportIds;
@@ -355,15 +358,15 @@ DeviceInfo hidFallbackInfo(const HidInputLayout& layout, std::string name, std::
   return info;
 }
 
-std::expected<DeviceInfo, std::string> parseHidInfoReport(std::span<const uint8_t> report, bool usesReportIds) {
+std::expected<DeviceInfo, Diagnostics> parseHidInfoReport(std::span<const uint8_t> report, bool usesReportIds) {
   if (usesReportIds) report = report.empty() ? report : report.subspan(1);
   BinaryDecoder decoder;
   decoder.feed(report);
   auto m = decoder.next();
-  if (!m) return std::unexpected(std::string("the INFO feature report holds no valid binary-protocol frame"));
+  if (!m) return diagnosticError({}, "the INFO feature report holds no valid binary-protocol frame");
   if (const auto* i = std::get_if<msg::Info>(&m->payload)) return i->info;
-  return std::unexpected(cat("the INFO feature report holds a frame of type 0x", hex4(uint8_t(m->type())).substr(2),
-                             ", not INFO"));
+  return diagnosticError(
+      {}, cat("the INFO feature report holds a frame of type 0x", hex4(uint8_t(m->type())).substr(2), ", not INFO"));
 }
 
 // ---- Decoder
@@ -449,13 +452,13 @@ std::optional<Sample> HidReportDecoder::decode(std::span<const uint8_t> report, 
 
 // ---- Device side
 
-std::expected<std::vector<uint8_t>, std::string> encodeHidInputReport(const HidInputLayout& layout,
+std::expected<std::vector<uint8_t>, Diagnostics> encodeHidInputReport(const HidInputLayout& layout,
                                                                       const Sample& sample) {
   if (sample.channelCount != layout.channels.size())
-    return std::unexpected(cat("the sample has ", sample.channelCount, " channels, the report ",
-                               layout.channels.size()));
+    return diagnosticError(
+        {}, cat("the sample has ", sample.channelCount, " channels, the report ", layout.channels.size()));
   if (layout.reportSize == 0 || layout.reportSize > kMaxHidReportSize)
-    return std::unexpected(std::string("the layout has no valid report size"));
+    return diagnosticError({}, "the layout has no valid report size");
   std::vector<uint8_t> out(layout.reportSize, 0);
   if (layout.usesReportIds) out[0] = layout.reportId;
   uint8_t* data = out.data() + (layout.usesReportIds ? 1 : 0);
@@ -529,12 +532,13 @@ std::vector<uint8_t> hidArmatureDescriptor(const HidArmatureDescriptorOptions& o
   return d;
 }
 
-std::expected<std::vector<uint8_t>, std::string> hidInfoReport(const DeviceInfo& info, uint8_t reportId,
+std::expected<std::vector<uint8_t>, Diagnostics> hidInfoReport(const DeviceInfo& info, uint8_t reportId,
                                                                size_t dataSize) {
   std::vector<uint8_t> frame;
   if (auto r = appendFrame(Message{0, kFlagReply, msg::Info{info}}, frame); !r) return std::unexpected(r.error());
   if (frame.size() > dataSize)
-    return std::unexpected(cat("the INFO frame takes ", frame.size(), " bytes; the feature report holds ", dataSize));
+    return diagnosticError({},
+                           cat("the INFO frame takes ", frame.size(), " bytes; the feature report holds ", dataSize));
   std::vector<uint8_t> out;
   if (reportId) out.push_back(reportId);
   out.insert(out.end(), frame.begin(), frame.end());

@@ -46,13 +46,14 @@ void initHidapi() {
 }
 
 // /dev/hidraw3 -> /sys/class/hidraw/hidraw3/device/report_descriptor (what hidapi 0.14 reads on Linux).
-std::expected<std::vector<uint8_t>, std::string> readReportDescriptor(const std::string& devicePath) {
+// Errors name the sysfs file in their message (they are wrapped into the device's error).
+IoResult<std::vector<uint8_t>> readReportDescriptor(const std::string& devicePath) {
   const auto path = std::filesystem::path("/sys/class/hidraw") /
                     std::filesystem::path(devicePath).filename() / "device" / "report_descriptor";
   std::ifstream in(path, std::ios::binary);
-  if (!in) return std::unexpected(cat("cannot read ", path.string()));
+  if (!in) return std::unexpected(IoError{"", cat("cannot read ", path.string())});
   std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (bytes.empty()) return std::unexpected(cat(path.string(), " is empty"));
+  if (bytes.empty()) return std::unexpected(IoError{"", cat(path.string(), " is empty")});
   return bytes;
 }
 
@@ -92,22 +93,25 @@ std::vector<HidDeviceEntry> enumerate(uint16_t vid, uint16_t pid) {
 void describeLayout(HidDeviceEntry& entry) {
   auto bytes = readReportDescriptor(entry.path);
   if (!bytes) {
-    entry.layoutError = bytes.error();
+    entry.layoutError = bytes.error().str();
     return;
   }
   auto parsed = parseHidReportDescriptor(*bytes);
   if (!parsed) {
-    entry.layoutError = parsed.error();
+    entry.layoutError = firstError(parsed.error());
     return;
   }
   auto layout = hidArmatureLayout(*parsed);
-  if (!layout) entry.layoutError = layout.error();
-  else entry.layout = std::move(*layout);
+  if (!layout) {
+    entry.layoutError = firstError(layout.error());
+    return;
+  }
+  entry.layout = std::move(*layout);
 }
 
 }  // namespace
 
-std::expected<std::vector<HidDeviceEntry>, std::string> listHidDevices() {
+IoResult<std::vector<HidDeviceEntry>> listHidDevices() {
   std::vector<HidDeviceEntry> out = enumerate(0, 0);
   for (HidDeviceEntry& e : out) describeLayout(e);
   return out;
@@ -123,15 +127,15 @@ struct HidTransport::Impl {
 HidTransport::HidTransport(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 HidTransport::~HidTransport() = default;
 
-std::expected<std::unique_ptr<HidTransport>, std::string> HidTransport::open(uint16_t vendorId, uint16_t productId,
-                                                                            const std::string& serialNumber) {
+IoResult<std::unique_ptr<HidTransport>> HidTransport::open(uint16_t vendorId, uint16_t productId,
+                                                           const std::string& serialNumber) {
   const std::string spec = specText(vendorId, productId);
   // ---- Find the node: by VID:PID and, when given, serial number.
   std::vector<HidDeviceEntry> found = enumerate(vendorId, productId);
   auto match = std::ranges::find_if(
       found, [&](const HidDeviceEntry& e) { return serialNumber.empty() || e.serialNumber == serialNumber; });
   if (match == found.end()) {
-    std::string message = cat(spec, ": error: no such HID device");
+    std::string message = "no such HID device";
     if (!serialNumber.empty()) {
       message += cat(" with serial number '", serialNumber, "'");
       if (!found.empty()) {
@@ -140,17 +144,18 @@ std::expected<std::unique_ptr<HidTransport>, std::string> HidTransport::open(uin
         message += ")";
       }
     }
-    return std::unexpected(message + "; `puppeteer devices` lists what is attached");
+    return std::unexpected(IoError{spec, message + "; `puppeteer devices` lists what is attached", ENODEV});
   }
   HidDeviceEntry entry = *match;
 
   // ---- The report descriptor gives the layout.
   auto descriptor = readReportDescriptor(entry.path);
-  if (!descriptor) return std::unexpected(cat(spec, ": error: ", entry.path, ": ", descriptor.error()));
+  if (!descriptor) return std::unexpected(IoError{spec, cat(entry.path, ": ", descriptor.error().str())});
+  // A descriptor that does not parse or has no channels makes the device unusable: it cannot be opened as one.
   auto parsed = parseHidReportDescriptor(*descriptor);
-  if (!parsed) return std::unexpected(cat(spec, ": error: ", entry.path, ": ", parsed.error()));
+  if (!parsed) return std::unexpected(IoError{spec, cat(entry.path, ": ", firstError(parsed.error()))});
   auto layout = hidArmatureLayout(*parsed);
-  if (!layout) return std::unexpected(cat(spec, ": error: ", entry.path, ": ", layout.error()));
+  if (!layout) return std::unexpected(IoError{spec, cat(entry.path, ": ", firstError(layout.error()))});
   entry.layout = *layout;
 
   // ---- Open the node.
@@ -159,9 +164,9 @@ std::expected<std::unique_ptr<HidTransport>, std::string> HidTransport::open(uin
   impl->device = hid_open_path(entry.path.c_str());
   if (!impl->device) {
     const int err = errno;
-    std::string message = cat(spec, ": error: cannot open ", entry.path, ": ", hidError(nullptr));
+    std::string message = cat("cannot open ", entry.path, ": ", hidError(nullptr));
     if (err == EACCES) message += " (see docs/devices.md, \"Using the rig without root\")";
-    return std::unexpected(message);
+    return std::unexpected(IoError{spec, std::move(message), err});
   }
   std::unique_ptr<HidTransport> t(new HidTransport(std::move(impl)));
 
@@ -183,7 +188,8 @@ std::expected<std::unique_ptr<HidTransport>, std::string> HidTransport::open(uin
       report.resize(static_cast<size_t>(n));
       auto fromDevice = parseHidInfoReport(report, /*usesReportIds=*/true);  // the number byte is always there
       if (!fromDevice) {
-        t->warnings_.push_back(cat(entry.path, ": warning: ", fromDevice.error(), "; using the USB strings"));
+        t->warnings_.push_back(
+            cat(entry.path, ": warning: ", firstMessage(fromDevice.error()), "; using the USB strings"));
       } else if (fromDevice->channelCount != static_cast<int>(layout->channels.size())) {
         t->warnings_.push_back(cat(entry.path, ": warning: the INFO feature report says ", fromDevice->channelCount,
                                    " channels, the report descriptor ", layout->channels.size(),
@@ -200,19 +206,19 @@ std::expected<std::unique_ptr<HidTransport>, std::string> HidTransport::open(uin
   return t;
 }
 
-std::expected<size_t, std::string> HidTransport::read(std::span<uint8_t> out, int timeoutMs) {
+IoResult<size_t> HidTransport::read(std::span<uint8_t> out, int timeoutMs) {
   if (out.empty()) return 0;
   const int n = hid_read_timeout(impl_->device, out.data(), out.size(), std::max(timeoutMs, 0));
   // hidapi's only sign of an unplug: -1 (poll reported POLLHUP/POLLERR, or read failed).
   if (n < 0)
-    return std::unexpected(cat(entry_.path, ": error: HID read failed (unplugged?): ", hidError(impl_->device)));
+    return std::unexpected(IoError{entry_.path, cat("HID read failed (unplugged?): ", hidError(impl_->device))});
   return static_cast<size_t>(n);
 }
 
-std::expected<void, std::string> HidTransport::write(std::span<const uint8_t> bytes, int) {
+IoResult<void> HidTransport::write(std::span<const uint8_t> bytes, int) {
   const int n = hid_write(impl_->device, bytes.data(), bytes.size());
   if (n < 0 || static_cast<size_t>(n) != bytes.size())
-    return std::unexpected(cat(entry_.path, ": error: HID write failed: ", hidError(impl_->device)));
+    return std::unexpected(IoError{entry_.path, cat("HID write failed: ", hidError(impl_->device))});
   return {};
 }
 
@@ -222,7 +228,7 @@ std::string HidTransport::description() const {
 }
 
 TransportOpener hidOpener(uint16_t vendorId, uint16_t productId, std::string serialNumber) {
-  return [=]() -> std::expected<std::unique_ptr<ByteTransport>, std::string> {
+  return [=]() -> IoResult<std::unique_ptr<ByteTransport>> {
     auto t = HidTransport::open(vendorId, productId, serialNumber);
     if (!t) return std::unexpected(t.error());
     return std::unique_ptr<ByteTransport>(std::move(*t));

@@ -19,11 +19,12 @@ struct Reader {
   std::span<const uint8_t> bytes;
   size_t base = 0;  // offset of `bytes` in the whole datagram, for messages
 
-  std::unexpected<std::string> fail(size_t at, std::string_view what) const {
-    return std::unexpected(cat("osc:byte ", base + at, ": error: ", what));
+  // A datagram has no lines: the position is the byte offset, part of the "file" name ("osc:byte 12").
+  std::unexpected<Diagnostics> fail(size_t at, std::string what) const {
+    return diagnosticError({cat("osc:byte ", base + at)}, std::move(what));
   }
   // An OSC-string at `at`: ASCII up to a NUL, padded with NULs to a multiple of 4. Advances `at`.
-  std::expected<std::string_view, std::string> string(size_t& at, std::string_view what) const {
+  std::expected<std::string_view, Diagnostics> string(size_t& at, std::string_view what) const {
     const size_t begin = at;
     const void* nul = at < bytes.size() ? std::memchr(bytes.data() + at, 0, bytes.size() - at) : nullptr;
     if (!nul) return fail(begin, cat("expected ", what, " ending in a NUL byte"));
@@ -50,7 +51,7 @@ struct Arguments {
   size_t left() const { return tags.size() - index; }
 
   // The next argument as an integer (i or h).
-  std::expected<int64_t, std::string> integer(std::string_view what) {
+  std::expected<int64_t, Diagnostics> integer(std::string_view what) {
     const char tag = index < tags.size() ? tags[index] : '\0';
     const size_t n = tag == 'i' ? 4 : tag == 'h' ? 8 : 0;
     if (n == 0) return r->fail(at, cat("expected ", what, " as an OSC integer (type i or h)"));
@@ -60,7 +61,7 @@ struct Arguments {
     return v;
   }
   // The next argument as a finite number (f, d, i or h).
-  std::expected<double, std::string> number(std::string_view what) {
+  std::expected<double, Diagnostics> number(std::string_view what) {
     const char tag = index < tags.size() ? tags[index] : '\0';
     const size_t n = (tag == 'f' || tag == 'i') ? 4 : (tag == 'd' || tag == 'h') ? 8 : 0;
     if (n == 0) return r->fail(at, cat("expected ", what, " as an OSC number (type f, d, i or h)"));
@@ -82,14 +83,14 @@ struct Arguments {
     return v;
   }
   // The next argument as a finite float32 (a double beyond float's range is refused, not turned into infinity).
-  std::expected<float, std::string> single(std::string_view what) {
+  std::expected<float, Diagnostics> single(std::string_view what) {
     const size_t start = at;
     auto v = number(what);
     if (!v) return std::unexpected(v.error());
     if (!std::isfinite(float(*v))) return r->fail(start, cat(what, " is beyond the range of a float"));
     return float(*v);
   }
-  std::expected<void, std::string> end(std::string_view address) const {
+  std::expected<void, Diagnostics> end(std::string_view address) const {
     if (index != tags.size()) return r->fail(at, cat("unexpected extra arguments to ", address));
     return {};
   }
@@ -101,13 +102,13 @@ struct Decoder {
   Sample& channels;
   bool haveFrame = false, haveChannels = false, haveJointsOrRoot = false;
 
-  std::expected<void, std::string> element(const Reader& r, int depth) {
+  std::expected<void, Diagnostics> element(const Reader& r, int depth) {
     if (r.bytes.size() % 4 != 0) return r.fail(0, "expected a size that is a multiple of 4 bytes");
     if (r.bytes.size() >= 8 && std::memcmp(r.bytes.data(), "#bundle", 8) == 0) return bundle(r, depth);
     return message(r);
   }
 
-  std::expected<void, std::string> bundle(const Reader& r, int depth) {
+  std::expected<void, Diagnostics> bundle(const Reader& r, int depth) {
     if (depth >= kMaxBundleDepth) return r.fail(0, "bundles nested deeper than 4");
     if (!r.has(8, 8)) return r.fail(8, "expected the bundle's 8-byte time tag");
     size_t at = 16;
@@ -124,7 +125,7 @@ struct Decoder {
     return {};
   }
 
-  std::expected<void, std::string> message(const Reader& r) {
+  std::expected<void, Diagnostics> message(const Reader& r) {
     size_t at = 0;
     auto address = r.string(at, "an OSC address");
     if (!address) return std::unexpected(address.error());
@@ -143,7 +144,7 @@ struct Decoder {
     return {};  // a later version's message: skipped
   }
 
-  std::expected<void, std::string> frame(Arguments& a, std::string_view address) {
+  std::expected<void, Diagnostics> frame(Arguments& a, std::string_view address) {
     if (haveFrame) return a.r->fail(0, "a second /imps/frame in one packet");
     auto counter = a.integer("the frame counter");
     if (!counter) return std::unexpected(counter.error());
@@ -163,7 +164,7 @@ struct Decoder {
     return a.end(address);
   }
 
-  std::expected<void, std::string> root(Arguments& a, std::string_view address) {
+  std::expected<void, Diagnostics> root(Arguments& a, std::string_view address) {
     for (float& v : pose.root) {
       auto n = a.single("a root translation coordinate");
       if (!n) return std::unexpected(n.error());
@@ -173,7 +174,7 @@ struct Decoder {
     return a.end(address);
   }
 
-  std::expected<void, std::string> joint(Arguments& a, std::string_view address) {
+  std::expected<void, Diagnostics> joint(Arguments& a, std::string_view address) {
     const std::string_view name = address.substr(kJointPrefix.size());
     if (name.empty() || name.size() > kMaxOscJointName)
       return a.r->fail(0, cat("expected a joint name of 1..", kMaxOscJointName, " bytes after /imps/joint/"));
@@ -194,7 +195,7 @@ struct Decoder {
     return {};
   }
 
-  std::expected<void, std::string> rawChannels(Arguments& a, std::string_view address) {
+  std::expected<void, Diagnostics> rawChannels(Arguments& a, std::string_view address) {
     if (haveChannels) return a.r->fail(0, "a second /imps/channels in one packet");
     if (a.left() == 0 || a.left() > size_t(kMaxChannels))
       return a.r->fail(a.at, cat("expected 1..", kMaxChannels, " channel counts"));
@@ -215,8 +216,8 @@ struct Decoder {
 
 }  // namespace
 
-std::expected<OscDecoded, std::string> decodeOscPacket(std::span<const uint8_t> packet, int64_t arrivalNs,
-                                                        OscPose& pose, Sample& channels) {
+std::expected<OscDecoded, Diagnostics> decodeOscPacket(std::span<const uint8_t> packet, int64_t arrivalNs,
+                                                       OscPose& pose, Sample& channels) {
   pose.jointCount = 0;
   pose.hasRoot = false;
   Decoder d{pose, channels};

@@ -29,25 +29,26 @@ void bump(std::atomic<uint64_t>& c, uint64_t by = 1) {
 
 }  // namespace
 
-std::expected<std::unique_ptr<OscReceiver>, std::string> OscReceiver::open(OscReceiverOptions options,
-                                                                           PoseMailbox& channels) {
+IoResult<std::unique_ptr<OscReceiver>> OscReceiver::open(OscReceiverOptions options, PoseMailbox& channels) {
   const std::string name = cat("osc.udp://", options.host, ":", options.port);
   sockaddr_in address{};
   address.sin_family = AF_INET;
   address.sin_port = htons(options.port);
   address.sin_addr.s_addr = htonl(INADDR_ANY);
   if (!options.host.empty() && inet_pton(AF_INET, options.host.c_str(), &address.sin_addr) != 1)
-    return std::unexpected(name + ": error: expected a numeric IPv4 address to listen on (or none: osc.udp://:PORT)");
+    return std::unexpected(
+        IoError{name, "expected a numeric IPv4 address to listen on (or none: osc.udp://:PORT)", EINVAL});
   const int fd = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-  if (fd < 0) return std::unexpected(cat(name, ": error: cannot create a UDP socket: ", std::strerror(errno)));
+  if (fd < 0) return std::unexpected(IoError::fromErrno(name, "cannot create a UDP socket", errno));
   // Room for bursts: a 1 kHz stream of ~1 KB bundles queues a second's worth while the I/O thread is descheduled.
   const int bufferBytes = 1 << 20;
   setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &bufferBytes, sizeof bufferBytes);
   if (bind(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) != 0) {
     const int e = errno;
     ::close(fd);
-    return std::unexpected(cat(name, ": error: cannot listen: ", std::strerror(e),
-                               e == EADDRINUSE ? " (another program receives on this port)" : ""));
+    IoError error = IoError::fromErrno(name, "cannot listen", e);
+    if (e == EADDRINUSE) error.message += " (another program receives on this port)";
+    return std::unexpected(std::move(error));
   }
   socklen_t length = sizeof address;
   getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length);
@@ -125,13 +126,13 @@ bool OscReceiver::handle(std::span<const uint8_t> packet, int64_t arrivalNs) {
   bump(counters_.packets);
   bump(counters_.bytes, packet.size());
   auto decoded = packet.size() > kMaxOscPacket
-                     ? std::expected<OscDecoded, std::string>(std::unexpected(
-                           cat("osc:byte 0: error: a datagram larger than ", kMaxOscPacket, " bytes")))
+                     ? std::expected<OscDecoded, Diagnostics>(
+                           diagnosticError({"osc:byte 0"}, cat("a datagram larger than ", kMaxOscPacket, " bytes")))
                      : decodeOscPacket(packet, arrivalNs, *pose_, sample_);
   if (!decoded) {
     bump(counters_.malformed);
     std::lock_guard lock(mutex_);
-    lastError_ = decoded.error();
+    lastError_ = firstError(decoded.error());
     return false;
   }
   switch (decoded->kind) {

@@ -59,9 +59,9 @@ struct OscPoseSender::Targets {
   }
 };
 
-std::expected<void, std::string> checkOscTargetUrl(std::string_view url) {
-  auto fail = [](size_t at, std::string_view what) {
-    return std::unexpected(cat("osc:1:", at + 1, ": error: ", what));
+std::expected<void, Diagnostics> checkOscTargetUrl(std::string_view url, std::string file) {
+  auto fail = [&](size_t at, std::string what) {
+    return diagnosticError({file, 1, static_cast<int>(at + 1)}, std::move(what));
   };
   if (!url.starts_with(kScheme)) return fail(0, "expected osc.udp://HOST:PORT");
   const std::string_view rest = url.substr(kScheme.size());
@@ -88,13 +88,13 @@ std::vector<uint8_t> encodeOscPose(const OscPose& pose) {
   return out;
 }
 
-std::expected<std::unique_ptr<OscPoseSender>, std::string> OscPoseSender::open(const std::vector<std::string>& urls,
+std::expected<std::unique_ptr<OscPoseSender>, Diagnostics> OscPoseSender::open(const std::vector<std::string>& urls,
                                                                                size_t queueCapacity) {
   auto targets = std::make_unique<Targets>();
   for (const std::string& url : urls) {
-    if (auto ok = checkOscTargetUrl(url); !ok) return std::unexpected(url + ": " + ok.error());
+    if (auto ok = checkOscTargetUrl(url, url + ": osc"); !ok) return std::unexpected(ok.error());
     lo_address a = lo_address_new_from_url(url.c_str());
-    if (!a) return std::unexpected(url + ": error: liblo cannot use this address");
+    if (!a) return diagnosticError({url}, "liblo cannot use this address");
     targets->addresses.push_back(a);
   }
   return std::unique_ptr<OscPoseSender>(new OscPoseSender(urls, std::move(targets), queueCapacity));

@@ -34,6 +34,12 @@ std::string spError(std::string_view what) {
   return text;
 }
 
+// libserialport's last failure on `path`: its message, and the OS error code it kept.
+IoError spFailure(std::string path, std::string_view what) {
+  const int code = sp_last_error_code();
+  return IoError{std::move(path), spError(what), code};
+}
+
 std::string baseName(const std::string& path) { return std::filesystem::path(path).filename().string(); }
 
 // sysfs attribute of the tty's device (e.g. /sys/class/tty/ttyUSB0/device/latency_timer); "" when absent.
@@ -98,9 +104,9 @@ bool isPseudoTerminal(const std::string& path) {
 
 }  // namespace
 
-std::expected<std::vector<SerialPortInfo>, std::string> listSerialPorts() {
+IoResult<std::vector<SerialPortInfo>> listSerialPorts() {
   sp_port** ports = nullptr;
-  if (sp_list_ports(&ports) != SP_OK) return std::unexpected(spError("listing serial ports"));
+  if (sp_list_ports(&ports) != SP_OK) return std::unexpected(spFailure("", "listing serial ports"));
   std::vector<SerialPortInfo> out;
   for (sp_port** p = ports; *p; ++p) describe(*p, out.emplace_back());
   sp_free_port_list(ports);
@@ -128,8 +134,8 @@ struct SerialTransport::Impl {
 SerialTransport::SerialTransport(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 SerialTransport::~SerialTransport() = default;
 
-std::expected<std::unique_ptr<SerialTransport>, std::string> SerialTransport::open(const std::string& path,
-                                                                                  SerialTransportOptions options) {
+IoResult<std::unique_ptr<SerialTransport>> SerialTransport::open(const std::string& path,
+                                                                 SerialTransportOptions options) {
   auto impl = std::make_unique<Impl>();
   impl->path = path;
   SerialPortInfo info;
@@ -138,7 +144,7 @@ std::expected<std::unique_ptr<SerialTransport>, std::string> SerialTransport::op
   if (isPseudoTerminal(path)) {
     // ---- Pseudo-terminal: raw mode by hand (the baud rate means nothing on a pty).
     impl->fd = ::open(path.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
-    if (impl->fd < 0) return std::unexpected(cat(path, ": error: cannot open: ", std::strerror(errno)));
+    if (impl->fd < 0) return std::unexpected(IoError::fromErrno(path, "cannot open", errno));
     termios tio{};
     if (::tcgetattr(impl->fd, &tio) == 0) {
       ::cfmakeraw(&tio);
@@ -152,14 +158,14 @@ std::expected<std::unique_ptr<SerialTransport>, std::string> SerialTransport::op
   // ---- A real (or umockdev-mocked) serial port through libserialport.
   if (sp_get_port_by_name(path.c_str(), &impl->port) != SP_OK) {
     impl->port = nullptr;
-    return std::unexpected(cat(path, ": error: ", spError("no such serial port")));
+    return std::unexpected(spFailure(path, "no such serial port"));
   }
   if (sp_open(impl->port, SP_MODE_READ_WRITE) != SP_OK) {
-    std::string message = spError("cannot open");
+    IoError error = spFailure(path, "cannot open");
     sp_free_port(impl->port);
     impl->port = nullptr;
-    if (errno == EACCES) message += " (see docs/devices.md, \"Using the rig without root\")";
-    return std::unexpected(cat(path, ": error: ", message));
+    if (error.code == EACCES) error.message += " (see docs/devices.md, \"Using the rig without root\")";
+    return std::unexpected(std::move(error));
   }
   sp_port_config* config = nullptr;
   bool configured = sp_new_config(&config) == SP_OK;
@@ -170,9 +176,8 @@ std::expected<std::unique_ptr<SerialTransport>, std::string> SerialTransport::op
                sp_set_config_dtr(config, SP_DTR_ON) == SP_OK && sp_set_config_rts(config, SP_RTS_ON) == SP_OK &&
                sp_set_config(impl->port, config) == SP_OK;
   if (config) sp_free_config(config);
-  if (!configured) return std::unexpected(cat(path, ": error: ", spError("cannot configure 8N1")));
-  if (sp_get_port_handle(impl->port, &impl->fd) != SP_OK)
-    return std::unexpected(cat(path, ": error: ", spError("no OS handle")));
+  if (!configured) return std::unexpected(spFailure(path, "cannot configure 8N1"));
+  if (sp_get_port_handle(impl->port, &impl->fd) != SP_OK) return std::unexpected(spFailure(path, "no OS handle"));
   describe(impl->port, info);
   info.path = path;
 
@@ -193,38 +198,39 @@ std::expected<std::unique_ptr<SerialTransport>, std::string> SerialTransport::op
   return transport;
 }
 
-std::expected<size_t, std::string> SerialTransport::read(std::span<uint8_t> out, int timeoutMs) {
+IoResult<size_t> SerialTransport::read(std::span<uint8_t> out, int timeoutMs) {
   if (out.empty()) return 0;
   pollfd p{impl_->fd, POLLIN, 0};
   const int ready = ::poll(&p, 1, std::max(timeoutMs, 0));
   if (ready < 0) {
     if (errno == EINTR) return 0;
-    return std::unexpected(cat(impl_->path, ": error: poll: ", std::strerror(errno)));
+    return std::unexpected(IoError::fromErrno(impl_->path, "poll", errno));
   }
   if (ready == 0) {
     // A device node that vanished while nothing arrived (some drivers never raise a hang-up on a quiet port).
     if (::access(impl_->path.c_str(), F_OK) != 0)
-      return std::unexpected(cat(impl_->path, ": error: device node vanished"));
+      return std::unexpected(IoError{impl_->path, "device node vanished", ENODEV});
     return 0;
   }
   if (p.revents & (POLLERR | POLLNVAL))
-    return std::unexpected(cat(impl_->path, ": error: the port reported an error (unplugged?)"));
+    return std::unexpected(IoError{impl_->path, "the port reported an error (unplugged?)", EIO});
   ssize_t n = 0;
   if (impl_->plainFd) {
     n = ::read(impl_->fd, out.data(), out.size());
     if (n < 0 && (errno == EAGAIN || errno == EINTR)) n = 0;
-    else if (n < 0) return std::unexpected(cat(impl_->path, ": error: read: ", std::strerror(errno)));
+    else if (n < 0)
+      return std::unexpected(IoError::fromErrno(impl_->path, "read", errno));
   } else {
     const sp_return r = sp_nonblocking_read(impl_->port, out.data(), out.size());
-    if (r < 0) return std::unexpected(cat(impl_->path, ": error: ", spError("read")));
+    if (r < 0) return std::unexpected(spFailure(impl_->path, "read"));
     n = r;
   }
   if (n == 0 && (p.revents & POLLHUP))
-    return std::unexpected(cat(impl_->path, ": error: the device hung up (unplugged?)"));
+    return std::unexpected(IoError{impl_->path, "the device hung up (unplugged?)", EIO});
   return static_cast<size_t>(n);
 }
 
-std::expected<void, std::string> SerialTransport::write(std::span<const uint8_t> bytes, int timeoutMs) {
+IoResult<void> SerialTransport::write(std::span<const uint8_t> bytes, int timeoutMs) {
   const int64_t deadline = (steadyNowNs() / 1'000'000) + std::max(timeoutMs, 1);
   size_t done = 0;
   while (done < bytes.size()) {
@@ -232,19 +238,20 @@ std::expected<void, std::string> SerialTransport::write(std::span<const uint8_t>
     if (impl_->plainFd) {
       n = ::write(impl_->fd, bytes.data() + done, bytes.size() - done);
       if (n < 0 && (errno == EAGAIN || errno == EINTR)) n = 0;
-      else if (n < 0) return std::unexpected(cat(impl_->path, ": error: write: ", std::strerror(errno)));
+      else if (n < 0)
+        return std::unexpected(IoError::fromErrno(impl_->path, "write", errno));
     } else {
       const sp_return r = sp_nonblocking_write(impl_->port, bytes.data() + done, bytes.size() - done);
-      if (r < 0) return std::unexpected(cat(impl_->path, ": error: ", spError("write")));
+      if (r < 0) return std::unexpected(spFailure(impl_->path, "write"));
       n = r;
     }
     done += static_cast<size_t>(n);
     if (done == bytes.size()) break;
     const int64_t left = deadline - (steadyNowNs() / 1'000'000);
-    if (left <= 0) return std::unexpected(cat(impl_->path, ": error: write timed out"));
+    if (left <= 0) return std::unexpected(IoError{impl_->path, "write timed out", ETIMEDOUT});
     pollfd p{impl_->fd, POLLOUT, 0};
     if (::poll(&p, 1, static_cast<int>(std::min<int64_t>(left, 100))) > 0 && (p.revents & (POLLERR | POLLNVAL)))
-      return std::unexpected(cat(impl_->path, ": error: the port reported an error (unplugged?)"));
+      return std::unexpected(IoError{impl_->path, "the port reported an error (unplugged?)", EIO});
   }
   return {};
 }
@@ -256,7 +263,7 @@ std::string SerialTransport::description() const {
 }
 
 TransportOpener serialOpener(std::string path, SerialTransportOptions options) {
-  return [path = std::move(path), options]() -> std::expected<std::unique_ptr<ByteTransport>, std::string> {
+  return [path = std::move(path), options]() -> IoResult<std::unique_ptr<ByteTransport>> {
     auto t = SerialTransport::open(path, options);
     if (!t) return std::unexpected(t.error());
     return std::unique_ptr<ByteTransport>(std::move(*t));

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <condition_variable>
 #include <cstring>
@@ -55,22 +56,23 @@ std::string openProblem(int code) {
   return cat("cannot open: ", usbError(code));
 }
 
-// The INFO vendor control request (docs/protocol.md, "USB transport"): the DeviceInfo block, or why not.
-std::expected<DeviceInfo, std::string> requestInfo(libusb_device_handle* h, int timeoutMs) {
-  std::vector<unsigned char> buf(kUsbInfoMaxLength);
-  const int n = libusb_control_transfer(h, kUsbInfoRequestType, kUsbInfoRequest, 0, 0, buf.data(),
-                                        static_cast<uint16_t>(buf.size()), static_cast<unsigned>(timeoutMs));
-  if (n < 0) return std::unexpected(cat("the INFO control request failed: ", usbError(n)));
-  return decodeDeviceInfo(std::span<const uint8_t>(buf.data(), static_cast<size_t>(n)));
-}
-
-// Fills the strings and INFO of an open device into `info`; problems go to info.problem.
+// Fills the strings and INFO of an open device into `info`; problems go to info.problem. INFO comes from the
+// vendor control request (docs/protocol.md, "USB transport"): the DeviceInfo block.
 void describeOpen(libusb_device_handle* h, const libusb_device_descriptor& d, int timeoutMs, UsbDeviceInfo& info) {
   info.manufacturer = stringDescriptor(h, d.iManufacturer);
   info.product = stringDescriptor(h, d.iProduct);
   info.serialNumber = stringDescriptor(h, d.iSerialNumber);
-  if (auto i = requestInfo(h, timeoutMs)) info.info = std::move(*i);
-  else info.problem = i.error();
+  std::vector<unsigned char> buf(kUsbInfoMaxLength);
+  const int n = libusb_control_transfer(h, kUsbInfoRequestType, kUsbInfoRequest, 0, 0, buf.data(),
+                                        static_cast<uint16_t>(buf.size()), static_cast<unsigned>(timeoutMs));
+  if (n < 0) {
+    info.problem = cat("the INFO control request failed: ", usbError(n));
+    return;
+  }
+  if (auto i = decodeDeviceInfo(std::span<const uint8_t>(buf.data(), static_cast<size_t>(n))))
+    info.info = std::move(*i);
+  else
+    info.problem = firstMessage(i.error());
 }
 
 UsbDeviceInfo identity(libusb_device* dev, const libusb_device_descriptor& d) {
@@ -131,14 +133,15 @@ std::optional<VendorInterface> findVendorInterface(libusb_device* dev) {
 
 // ---- Listing --------------------------------------------------------------------------------------------------
 
-std::expected<std::vector<UsbDeviceInfo>, std::string> listUsbDevices(std::span<const UsbId> ids) {
+IoResult<std::vector<UsbDeviceInfo>> listUsbDevices(std::span<const UsbId> ids) {
   libusb_context* ctx = nullptr;
-  if (const int r = libusb_init(&ctx); r != 0) return std::unexpected(cat("usb: error: libusb_init: ", usbError(r)));
+  if (const int r = libusb_init(&ctx); r != 0)
+    return std::unexpected(IoError{"usb", cat("libusb_init: ", usbError(r))});
   libusb_device** list = nullptr;
   const ssize_t count = libusb_get_device_list(ctx, &list);
   if (count < 0) {
     libusb_exit(ctx);
-    return std::unexpected(cat("usb: error: listing devices: ", usbError(static_cast<int>(count))));
+    return std::unexpected(IoError{"usb", cat("listing devices: ", usbError(static_cast<int>(count)))});
   }
   std::vector<UsbDeviceInfo> out;
   for (ssize_t i = 0; i < count; ++i) {
@@ -255,10 +258,10 @@ UsbTransport::~UsbTransport() = default;
 
 bool UsbTransport::detachedKernelDriver() const { return impl_->detached; }
 
-std::expected<std::unique_ptr<UsbTransport>, std::string> UsbTransport::open(const UsbTransportOptions& options) {
+IoResult<std::unique_ptr<UsbTransport>> UsbTransport::open(const UsbTransportOptions& options) {
   auto impl = std::make_unique<Impl>();
   impl->name = idText(options.vendorId, options.productId);
-  auto error = [&](const std::string& what) { return std::unexpected(cat(impl->name, ": error: ", what)); };
+  auto error = [&](std::string what) { return std::unexpected(IoError{impl->name, std::move(what)}); };
   if (const int r = libusb_init(&impl->ctx); r != 0) {
     impl->ctx = nullptr;
     return error(cat("libusb_init: ", usbError(r)));
@@ -364,7 +367,7 @@ std::expected<std::unique_ptr<UsbTransport>, std::string> UsbTransport::open(con
   return transport;
 }
 
-std::expected<size_t, std::string> UsbTransport::read(std::span<uint8_t> out, int timeoutMs) {
+IoResult<size_t> UsbTransport::read(std::span<uint8_t> out, int timeoutMs) {
   Impl& s = *impl_;
   if (out.empty()) return 0;
   if (s.received.size() == 0 && s.failure.empty()) s.pump(timeoutMs);
@@ -373,13 +376,13 @@ std::expected<size_t, std::string> UsbTransport::read(std::span<uint8_t> out, in
     s.received.consume(n);
     return n;
   }
-  if (!s.failure.empty()) return std::unexpected(cat(s.name, ": error: ", s.failure));
+  if (!s.failure.empty()) return std::unexpected(IoError{s.name, s.failure});
   return 0;
 }
 
-std::expected<void, std::string> UsbTransport::write(std::span<const uint8_t> bytes, int timeoutMs) {
+IoResult<void> UsbTransport::write(std::span<const uint8_t> bytes, int timeoutMs) {
   Impl& s = *impl_;
-  if (!s.failure.empty()) return std::unexpected(cat(s.name, ": error: ", s.failure));
+  if (!s.failure.empty()) return std::unexpected(IoError{s.name, s.failure});
   if (bytes.empty()) return {};
   int sent = 0;
   auto* data = const_cast<unsigned char*>(bytes.data());  // libusb's API is not const-correct; OUT only reads it
@@ -390,8 +393,8 @@ std::expected<void, std::string> UsbTransport::write(std::span<const uint8_t> by
   if (r == 0 && sent == length) return {};
   if (r == LIBUSB_ERROR_NO_DEVICE) s.fail("the device was unplugged");
   if (r == LIBUSB_ERROR_TIMEOUT || r == 0)
-    return std::unexpected(cat(s.name, ": error: write timed out after ", sent, " of ", length, " bytes"));
-  return std::unexpected(cat(s.name, ": error: write failed: ", usbError(r)));
+    return std::unexpected(IoError{s.name, cat("write timed out after ", sent, " of ", length, " bytes"), ETIMEDOUT});
+  return std::unexpected(IoError{s.name, cat("write failed: ", usbError(r))});
 }
 
 std::string UsbTransport::description() const {
@@ -446,21 +449,21 @@ struct UsbHotplugMonitor::Impl {
 UsbHotplugMonitor::UsbHotplugMonitor(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 UsbHotplugMonitor::~UsbHotplugMonitor() = default;
 
-std::expected<std::unique_ptr<UsbHotplugMonitor>, std::string> UsbHotplugMonitor::start(UsbId id) {
+IoResult<std::unique_ptr<UsbHotplugMonitor>> UsbHotplugMonitor::start(UsbId id) {
   const std::string name = idText(id.vendorId, id.productId);
   if (!libusb_has_capability(LIBUSB_CAP_HAS_HOTPLUG))
-    return std::unexpected(cat(name, ": error: this libusb has no hotplug support"));
+    return std::unexpected(IoError{name, "this libusb has no hotplug support"});
   auto impl = std::make_unique<Impl>();
   if (const int r = libusb_init(&impl->ctx); r != 0) {
     impl->ctx = nullptr;
-    return std::unexpected(cat(name, ": error: libusb_init: ", usbError(r)));
+    return std::unexpected(IoError{name, cat("libusb_init: ", usbError(r))});
   }
   const int r = libusb_hotplug_register_callback(
       impl->ctx,
       static_cast<libusb_hotplug_event>(LIBUSB_HOTPLUG_EVENT_DEVICE_ARRIVED | LIBUSB_HOTPLUG_EVENT_DEVICE_LEFT),
       LIBUSB_HOTPLUG_ENUMERATE, id.vendorId, id.productId, LIBUSB_HOTPLUG_MATCH_ANY, &Impl::onEvent, impl.get(),
       &impl->callback);
-  if (r != 0) return std::unexpected(cat(name, ": error: cannot register for hotplug events: ", usbError(r)));
+  if (r != 0) return std::unexpected(IoError{name, cat("cannot register for hotplug events: ", usbError(r))});
   impl->registered = true;
   Impl* self = impl.get();
   impl->thread = std::thread([self] {
@@ -494,10 +497,10 @@ bool UsbHotplugMonitor::waitForDepartures(uint64_t departures, int timeoutMs) co
 TransportOpener usbOpener(UsbTransportOptions options, std::shared_ptr<UsbHotplugMonitor> monitor,
                           int arrivalWaitMs) {
   return [options = std::move(options), monitor = std::move(monitor),
-          arrivalWaitMs]() -> std::expected<std::unique_ptr<ByteTransport>, std::string> {
+          arrivalWaitMs]() -> IoResult<std::unique_ptr<ByteTransport>> {
     if (monitor && !monitor->waitForPresent(arrivalWaitMs))
-      return std::unexpected(cat(idText(options.vendorId, options.productId),
-                                 ": error: not attached (waiting for it to be plugged in)"));
+      return std::unexpected(IoError{idText(options.vendorId, options.productId),
+                                     "not attached (waiting for it to be plugged in)", ENODEV});
     auto t = UsbTransport::open(options);
     if (!t) return std::unexpected(t.error());
     return std::unique_ptr<ByteTransport>(std::move(*t));

@@ -96,11 +96,14 @@ struct LiveDevice {
 int openDevice(const std::string& specText, LiveDevice& live, drivers::DeviceInfo& info) {
   auto spec = drivers::parseDeviceSpec(specText);
   if (!spec) {
-    std::fprintf(stderr, "%s\n", spec.error().c_str());
+    std::fputs(spec.error().str().c_str(), stderr);
     return kExitUsage;
   }
   auto opener = openerForSpec(*spec, live.clock, "calibrate");
-  if (!opener) return opener.error();
+  if (!opener) {
+    std::fputs(opener.error().diagnostics.str().c_str(), stderr);
+    return exitCodeFor(opener.error().kind);
+  }
   drivers::PoseMailboxOptions mo;
   mo.queueCapacity = 1 << 14;
   live.mailbox = std::make_unique<drivers::PoseMailbox>(mo);

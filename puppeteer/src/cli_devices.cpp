@@ -60,11 +60,11 @@ void printHidDevices(Json* json) {
                         {"channels", d.layout ? Json(d.layout->channels.size()) : Json(nullptr)},
                         {"problem", d.layout ? "" : d.layoutError},
                         {"spec", "hid:" + hexId(d.vendorId, d.productId, d.serialNumber)}});
-    (*json)["hid"] = {{"error", hid ? "" : hid.error()}, {"devices", std::move(list)}};
+    (*json)["hid"] = {{"error", hid ? "" : drivers::errorText(hid.error())}, {"devices", std::move(list)}};
     return;
   }
   if (!hid) {
-    std::printf("HID devices: cannot list: %s\n", hid.error().c_str());
+    std::printf("HID devices: cannot list: %s\n", drivers::errorText(hid.error()).c_str());
     return;
   }
   std::printf("HID devices (%zu):\n", hid->size());
@@ -100,11 +100,11 @@ void printUsbArmatures(Json* json) {
                         {"firmware", d.info ? Json(d.info->firmwareVersion) : Json(nullptr)},
                         {"problem", d.problem},
                         {"spec", "usb:" + hexId(d.vendorId, d.productId, d.serialNumber)}});
-    (*json)["usb"] = {{"error", usb ? "" : usb.error()}, {"devices", std::move(list)}};
+    (*json)["usb"] = {{"error", usb ? "" : drivers::errorText(usb.error())}, {"devices", std::move(list)}};
     return;
   }
   if (!usb) {
-    std::printf("USB armatures: cannot list: %s\n", usb.error().c_str());
+    std::printf("USB armatures: cannot list: %s\n", drivers::errorText(usb.error()).c_str());
     return;
   }
   std::printf("USB armatures (%zu):\n", usb->size());
@@ -141,7 +141,7 @@ Json serialPortsJson(const std::vector<drivers::SerialPortInfo>& ports) {
 int runDevices(bool json) {
   auto ports = drivers::listSerialPorts();
   if (!ports) {
-    std::fprintf(stderr, "puppeteer devices: error: %s\n", ports.error().c_str());
+    std::fprintf(stderr, "puppeteer devices: error: %s\n", drivers::errorText(ports.error()).c_str());
     return kExitIoError;
   }
   rankPorts(*ports);  // likely armatures first, motherboard UARTs last
@@ -186,7 +186,7 @@ struct SimArgs {
 int runSim(const SimArgs& a) {
   auto spec = drivers::parseDeviceSpec(a.device);
   if (!spec) {
-    std::fprintf(stderr, "%s\n", spec.error().c_str());
+    std::fputs(spec.error().str().c_str(), stderr);
     return kExitUsage;
   }
   if (spec->kind != drivers::DeviceKind::Sim) {
@@ -196,7 +196,7 @@ int runSim(const SimArgs& a) {
   }
   auto options = sim::armatureOptionsFromSpec(*spec);
   if (!options) {
-    std::fprintf(stderr, "%s\n", options.error().c_str());
+    std::fputs(options.error().str().c_str(), stderr);
     return kExitInvalidInput;
   }
   if (!a.pty) {
@@ -208,7 +208,7 @@ int runSim(const SimArgs& a) {
   // ---- A pseudo-terminal pair: the simulator drives the master, the drivers open the slave path.
   auto pty = sim::PseudoTerminal::open();
   if (!pty) {
-    std::fprintf(stderr, "puppeteer sim: error: %s\n", pty.error().c_str());
+    std::fprintf(stderr, "puppeteer sim: error: %s\n", drivers::errorText(pty.error()).c_str());
     return kExitIoError;
   }
   const std::string slave = pty->slavePath();
@@ -268,7 +268,7 @@ void printRecordProgress(const std::string& state, const drivers::DeviceSessionS
 int runRecord(const RecordArgs& a) {
   auto spec = drivers::parseDeviceSpec(a.device);
   if (!spec) {
-    std::fprintf(stderr, "%s\n", spec.error().c_str());
+    std::fputs(spec.error().str().c_str(), stderr);
     return kExitUsage;
   }
   if (int rc = checkOutputPath("record", "-o", a.output); rc != kExitOk) return rc;
@@ -288,7 +288,10 @@ int runRecord(const RecordArgs& a) {
   }
   imps::SteadyClock clock;
   auto opener = openerForSpec(*spec, clock, "record");
-  if (!opener) return opener.error();
+  if (!opener) {
+    std::fputs(opener.error().diagnostics.str().c_str(), stderr);
+    return exitCodeFor(opener.error().kind);
+  }
 
   catchInterrupts();
   drivers::PoseMailboxOptions mo;
@@ -317,7 +320,7 @@ int runRecord(const RecordArgs& a) {
       auto created = app::SessionRecorder::create(a.output, withChannelCount(*info, batch.front().channelCount),
                                                   cal ? &*cal : nullptr);
       if (!created) {
-        std::fprintf(stderr, "%s\n", created.error().c_str());
+        std::fprintf(stderr, "%s\n", drivers::errorText(created.error()).c_str());
         exitCode = kExitIoError;
         return false;
       }
@@ -326,7 +329,7 @@ int runRecord(const RecordArgs& a) {
       for (const std::string& w : session.warnings()) std::fprintf(stderr, "%s\n", w.c_str());
     }
     if (auto r = recorder->append(batch, &*info); !r) {
-      std::fprintf(stderr, "%s\n", r.error().c_str());
+      std::fprintf(stderr, "%s\n", drivers::errorText(r.error()).c_str());
       exitCode = kExitIoError;
       return false;
     }
@@ -344,7 +347,7 @@ int runRecord(const RecordArgs& a) {
     if (recorder && now - lastCounters >= std::chrono::seconds(1)) {
       // A crash keeps the counts of the last second.
       if (auto r = recorder->appendCounters(session.stats()); !r) {
-        std::fprintf(stderr, "%s\n", r.error().c_str());
+        std::fprintf(stderr, "%s\n", drivers::errorText(r.error()).c_str());
         exitCode = kExitIoError;
         break;
       }
@@ -372,11 +375,12 @@ int runRecord(const RecordArgs& a) {
   }
   const drivers::DeviceSessionStats st = session.stats();
   if (auto r = recorder->appendCounters(st); !r) {
-    std::fprintf(stderr, "%s\n", r.error().c_str());
+    std::fprintf(stderr, "%s\n", drivers::errorText(r.error()).c_str());
     return kExitIoError;
   }
   if (auto r = recorder->close(); !r) {
-    if (exitCode == kExitOk) std::fprintf(stderr, "%s\n", r.error().c_str());  // else the write error was printed
+    // else the write error was printed
+    if (exitCode == kExitOk) std::fprintf(stderr, "%s\n", drivers::errorText(r.error()).c_str());
     return kExitIoError;
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - *firstSample).count();

@@ -168,7 +168,7 @@ std::unique_ptr<ViewerPipeline> makePipeline(const LiveArgs& a, int* exitCode) {
     const int j = p ? pipeline->character().findJoint(p->joint) : -2;
     if (j < 0) {
       std::fprintf(stderr, "puppeteer: error: --pose %s: %s\n", text.c_str(),
-                   j == -2 ? p.error().c_str() : "no joint of that name");
+                   j == -2 ? p.error().all().front().message.c_str() : "no joint of that name");
       *exitCode = kExitUsage;
       return nullptr;
     }
@@ -253,7 +253,7 @@ std::optional<std::vector<ScriptedEvent>> parseScript(const LiveArgs& a) {
   if (!a.keys.empty()) {
     auto keys = parseScriptedKeys(a.keys);
     if (!keys) {
-      std::fprintf(stderr, "puppeteer: error: %s\n", keys.error().c_str());
+      std::fprintf(stderr, "puppeteer: error: %s\n", keys.error().all().front().message.c_str());
       return std::nullopt;
     }
     script = std::move(*keys);
@@ -261,7 +261,7 @@ std::optional<std::vector<ScriptedEvent>> parseScript(const LiveArgs& a) {
   for (const std::string& d : a.drags) {
     auto drag = parseScriptedDrag(d);
     if (!drag) {
-      std::fprintf(stderr, "puppeteer: error: %s\n", drag.error().c_str());
+      std::fprintf(stderr, "puppeteer: error: %s\n", drag.error().all().front().message.c_str());
       return std::nullopt;
     }
     script.push_back(std::move(*drag));
@@ -326,15 +326,17 @@ bool driveActor(const LiveArgs& a, const WorldCharacter& c, const std::string& s
   }
   auto spec = drivers::parseDeviceSpec(source);
   if (!spec) {
-    std::fprintf(stderr, "puppeteer view: error: --drive %s=%s: not a clip (.wrl), a session or .bvh file, or a "
-                         "device spec: %s\n", c.name.c_str(), source.c_str(), spec.error().c_str());
+    std::fprintf(stderr,
+                 "puppeteer view: error: --drive %s=%s: not a clip (.wrl), a session or .bvh file, or a "
+                 "device spec: %s\n",
+                 c.name.c_str(), source.c_str(), spec.error().all().front().str().c_str());
     *code = kExitUsage;
     return false;
   }
   if (spec->kind == drivers::DeviceKind::Osc) {
     auto osc = OscPoseSource::open(*spec, character, std::nullopt);
     if (!osc) {
-      std::fprintf(stderr, "puppeteer view: %s\n", osc.error().c_str());
+      std::fprintf(stderr, "puppeteer view: %s\n", drivers::errorText(osc.error()).c_str());
       *code = kExitIoError;
       return false;
     }
@@ -343,7 +345,8 @@ bool driveActor(const LiveArgs& a, const WorldCharacter& c, const std::string& s
   }
   auto opener = openerForSpec(*spec, clock, "view");
   if (!opener) {
-    *code = opener.error();
+    std::fputs(opener.error().diagnostics.str().c_str(), stderr);
+    *code = exitCodeFor(opener.error().kind);
     return false;
   }
   actor.source = std::make_unique<LivePoseSource>(*opener, drivers::sessionOptionsFor(*spec), character, source,
@@ -525,7 +528,7 @@ std::optional<SampleMapper> readCalibration(const std::string& path, const Chara
 bool checkOscOutArgs(const LiveArgs& a) {
   for (const std::string& url : a.oscOut) {
     if (auto ok = drivers::checkOscTargetUrl(url); !ok) {
-      std::fprintf(stderr, "puppeteer: error: --osc-out %s: %s\n", url.c_str(), ok.error().c_str());
+      std::fprintf(stderr, "puppeteer: error: --osc-out %s: %s\n", url.c_str(), ok.error().all().front().str().c_str());
       return false;
     }
   }
@@ -615,7 +618,9 @@ std::optional<SampleMapper> replayMapper(const std::string& sessionPath, const s
     if (!options) return fail();
     auto clipMap = ClipPoseMap::create(session, character, *options);
     if (!clipMap) {
-      std::fprintf(stderr, "puppeteer: error: %s: %s\n", sessionPath.c_str(), clipMap.error().c_str());
+      const Diagnostic& d = clipMap.error().all().front();
+      std::fprintf(stderr, "puppeteer: error: %s: %s\n", sessionPath.c_str(),
+                   (d.loc.file.empty() ? d.message : d.str()).c_str());
       return fail();
     }
     printRetargetReport(name, map, clipMap->retargeter().report());
@@ -734,7 +739,7 @@ int runLive(const LiveArgs& a) {
   if (!script) return kExitUsage;
   auto spec = drivers::parseDeviceSpec(a.device);
   if (!spec) {
-    std::fprintf(stderr, "%s\n", spec.error().c_str());
+    std::fputs(spec.error().str().c_str(), stderr);
     return kExitUsage;
   }
   int code = kExitOk;
@@ -763,14 +768,17 @@ int runLive(const LiveArgs& a) {
     }
     auto source = OscPoseSource::open(*spec, pipeline->character(), std::move(mapper));
     if (!source) {
-      std::fprintf(stderr, "puppeteer live: %s\n", source.error().c_str());
+      std::fprintf(stderr, "puppeteer live: %s\n", drivers::errorText(source.error()).c_str());
       return kExitIoError;
     }
     return runWithOscOut(a, *pipeline, **source, v);
   }
   imps::SteadyClock clock;  // the simulated armature's; outlives the source below
   auto opener = openerForSpec(*spec, clock, "live");
-  if (!opener) return opener.error();
+  if (!opener) {
+    std::fputs(opener.error().diagnostics.str().c_str(), stderr);
+    return exitCodeFor(opener.error().kind);
+  }
   LiveSourceOptions live;
   live.recordPath = a.record;
   live.recordDir = a.recordDir;

@@ -2,18 +2,19 @@
 // Device spec -> transport opener.
 #include "device_opener.h"
 
-#include <cstdio>
+#include <string>
 
 #include "cli.h"
 #include "drivers/hid_transport.h"
 #include "drivers/serial_transport.h"
 #include "drivers/usb_transport.h"
+#include "imps/check.h"
 #include "sim/simulated_armature.h"
 
 namespace imps::app {
 
-std::expected<drivers::TransportOpener, int> openerForSpec(const drivers::DeviceSpec& spec, imps::Clock& clock,
-                                                           const char* command) {
+std::expected<drivers::TransportOpener, OpenerError> openerForSpec(const drivers::DeviceSpec& spec, imps::Clock& clock,
+                                                                   const char* command) {
   switch (spec.kind) {
     case drivers::DeviceKind::Serial: {
       drivers::SerialTransportOptions options;
@@ -33,22 +34,22 @@ std::expected<drivers::TransportOpener, int> openerForSpec(const drivers::Device
     }
     case drivers::DeviceKind::Sim: {
       auto options = sim::armatureOptionsFromSpec(spec);
-      if (!options) {
-        std::fprintf(stderr, "%s\n", options.error().c_str());
-        return std::unexpected(int(kExitInvalidInput));
-      }
+      if (!options) return std::unexpected(OpenerError{OpenerError::Kind::BadSpec, std::move(options.error())});
       return sim::simulatedOpener(*options, clock);
     }
     case drivers::DeviceKind::Osc:
-      // An OSC stream carries poses (or channels) as datagrams, not a byte stream: only the live app reads it.
-      std::fprintf(stderr,
-                   "puppeteer %s: error: %s is an OSC pose stream (docs/osc.md): drive a character with it in "
-                   "`puppeteer live SCENE --device %s`\n",
-                   command, drivers::formatDeviceSpec(spec).c_str(), drivers::formatDeviceSpec(spec).c_str());
-      return std::unexpected(int(kExitUsage));
+      break;
   }
-  std::fprintf(stderr, "puppeteer %s: error: unknown device kind\n", command);  // every DeviceKind is handled above
-  return std::unexpected(int(kExitUsage));
+  // An OSC stream carries poses (or channels) as datagrams, not a byte stream: only the live app reads it.
+  IMPS_CHECK(spec.kind == drivers::DeviceKind::Osc);  // every other DeviceKind is handled above
+  const std::string text = drivers::formatDeviceSpec(spec);
+  OpenerError error{OpenerError::Kind::NotBytes, {}};
+  std::string message = text + " is an OSC pose stream (docs/osc.md): drive a character with it in ";
+  message += "`puppeteer live SCENE --device " + text + "`";
+  error.diagnostics.error({std::string("puppeteer ") + command}, std::move(message));
+  return std::unexpected(std::move(error));
 }
+
+int exitCodeFor(OpenerError::Kind kind) { return kind == OpenerError::Kind::NotBytes ? kExitUsage : kExitInvalidInput; }
 
 }  // namespace imps::app

@@ -89,7 +89,7 @@ std::expected<std::unique_ptr<drivers::OscPoseSender>, int> openOscOut(const std
   if (urls.empty()) return nullptr;
   auto sender = drivers::OscPoseSender::open(urls);
   if (!sender) {
-    std::fprintf(stderr, "puppeteer: error: --osc-out %s\n", sender.error().c_str());
+    std::fprintf(stderr, "puppeteer: error: --osc-out %s\n", sender.error().all().front().str().c_str());
     return std::unexpected(int(kExitUsage));
   }
   const OscPoseWriter writer(character);
@@ -102,10 +102,10 @@ std::expected<std::unique_ptr<drivers::OscPoseSender>, int> openOscOut(const std
 
 // ---- OSC in
 
-std::expected<std::unique_ptr<OscPoseSource>, std::string> OscPoseSource::open(const drivers::DeviceSpec& spec,
-                                                                             const Character& character,
-                                                                             std::optional<SampleMapper> calibration,
-                                                                             drivers::OscReceiverOptions options) {
+IoResult<std::unique_ptr<OscPoseSource>> OscPoseSource::open(const drivers::DeviceSpec& spec,
+                                                             const Character& character,
+                                                             std::optional<SampleMapper> calibration,
+                                                             drivers::OscReceiverOptions options) {
   std::unique_ptr<OscPoseSource> source(
       new OscPoseSource(character, drivers::formatDeviceSpec(spec), std::move(calibration)));
   options.host = spec.path;

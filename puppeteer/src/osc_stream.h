@@ -68,11 +68,10 @@ std::expected<std::unique_ptr<drivers::OscPoseSender>, int> openOscOut(const std
 // device's samples. Counters in the HUD and at the end.
 class OscPoseSource final : public PoseSource {
  public:
-  // Binds the port now: the error text when it cannot. `character` must outlive the source.
-  static std::expected<std::unique_ptr<OscPoseSource>, std::string> open(const drivers::DeviceSpec& spec,
-                                                                        const Character& character,
-                                                                        std::optional<SampleMapper> calibration,
-                                                                        drivers::OscReceiverOptions options = {});
+  // Binds the port now: OscReceiver::open's error when it cannot. `character` must outlive the source.
+  static IoResult<std::unique_ptr<OscPoseSource>> open(const drivers::DeviceSpec& spec, const Character& character,
+                                                       std::optional<SampleMapper> calibration,
+                                                       drivers::OscReceiverOptions options = {});
   ~OscPoseSource() override;
   bool poll(SkeletonCache& skeleton, int64_t* arrivalNs) override;
   void describe(HudInfo& info) override;

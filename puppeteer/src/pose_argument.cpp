@@ -14,6 +14,12 @@ constexpr const char* kExpected =
     "expected JOINT=AX,AY,AZ,ANGLE (ANGLE in degrees, or e.g. 1.2rad) with a non-zero axis, or JOINT=TX,TY,TZ "
     "(metres)";
 
+std::unexpected<Diagnostics> badArgument() {
+  Diagnostics d;
+  d.error({}, kExpected);
+  return std::unexpected(std::move(d));
+}
+
 // A finite number filling `text` exactly.
 bool readNumber(std::string_view text, double* value) {
   if (!text.empty() && text.front() == '+') text.remove_prefix(1);
@@ -48,25 +54,25 @@ std::vector<std::string_view> splitCommas(std::string_view text) {
 
 }  // namespace
 
-std::expected<PoseArgument, std::string> parsePoseArgument(std::string_view text) {
+std::expected<PoseArgument, Diagnostics> parsePoseArgument(std::string_view text) {
   const size_t eq = text.find('=');
-  if (eq == std::string_view::npos || eq == 0) return std::unexpected(kExpected);
+  if (eq == std::string_view::npos || eq == 0) return badArgument();
   PoseArgument p;
   p.joint = std::string(text.substr(0, eq));
   const std::vector<std::string_view> parts = splitCommas(text.substr(eq + 1));
   double v[3] = {0, 0, 0};
-  if (parts.size() != 3 && parts.size() != 4) return std::unexpected(kExpected);
+  if (parts.size() != 3 && parts.size() != 4) return badArgument();
   for (size_t i = 0; i < 3; ++i)
-    if (!readNumber(parts[i], &v[i])) return std::unexpected(kExpected);
+    if (!readNumber(parts[i], &v[i])) return badArgument();
   if (parts.size() == 3) {
     p.translation = true;
     p.offset = glm::vec3(static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2]));
     return p;
   }
   double radians = 0;
-  if (!readAngle(parts[3], &radians)) return std::unexpected(kExpected);
+  if (!readAngle(parts[3], &radians)) return badArgument();
   p.axis = glm::vec3(static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2]));
-  if (!(glm::length(p.axis) > 0.0f)) return std::unexpected(kExpected);
+  if (!(glm::length(p.axis) > 0.0f)) return badArgument();
   p.radians = static_cast<float>(radians);
   return p;
 }

@@ -9,6 +9,7 @@
 #include <glm/gtc/quaternion.hpp>
 #include <glm/vec3.hpp>
 
+#include "imps/diagnostic.h"
 #include "imps/skeleton_cache.h"
 
 namespace imps::app {
@@ -25,8 +26,9 @@ struct PoseArgument {
   glm::vec3 offset{0.0f};            // translation, metres
 };
 
-// Parses one argument. Errors say what was expected ("expected JOINT=AX,AY,AZ,ANGLE … or JOINT=TX,TY,TZ …").
-std::expected<PoseArgument, std::string> parsePoseArgument(std::string_view text);
+// Parses one argument. Errors: one diagnostic without a position that says what was expected
+// ("expected JOINT=AX,AY,AZ,ANGLE … or JOINT=TX,TY,TZ …").
+std::expected<PoseArgument, Diagnostics> parsePoseArgument(std::string_view text);
 
 // Applies `p` to joint `joint` of `skeleton` on top of the current local pose (rotations compose on the left, in the
 // parent's frame; offsets add). Call skeleton.update() afterwards.

@@ -48,9 +48,16 @@ bool parseFloat(std::string_view s, float* out) {
   return ec == std::errc() && end == s.data() + s.size() && std::isfinite(*out) && *out >= 0.0f;
 }
 
+// A bad argument: one diagnostic without a position, its message naming the option.
+std::unexpected<Diagnostics> argumentError(std::string message) {
+  Diagnostics d;
+  d.error({}, std::move(message));
+  return std::unexpected(std::move(d));
+}
+
 }  // namespace
 
-std::expected<std::vector<ScriptedEvent>, std::string> parseScriptedKeys(std::string_view text) {
+std::expected<std::vector<ScriptedEvent>, Diagnostics> parseScriptedKeys(std::string_view text) {
   std::vector<ScriptedEvent> events;
   size_t start = 0;
   while (start <= text.size()) {
@@ -69,9 +76,9 @@ std::expected<std::vector<ScriptedEvent>, std::string> parseScriptedKeys(std::st
     }
     if (at == std::string_view::npos || at == 0 || !parseInt(item.substr(at + 1), &e.frame) ||
         (e.key = keyCode(key)) == 0)
-      return std::unexpected("--keys: '" + std::string(item) +
-                             "': expected [ctrl+][shift+]KEY@FRAME (KEY: a-z, 0-9, [, ], F12, Esc, Backspace; "
-                             "FRAME >= 0)");
+      return argumentError("--keys: '" + std::string(item) +
+                           "': expected [ctrl+][shift+]KEY@FRAME (KEY: a-z, 0-9, [, ], F12, Esc, Backspace; "
+                           "FRAME >= 0)");
     e.keyName = std::string(item.substr(0, at));
     events.push_back(std::move(e));
     start = end + 1;
@@ -79,9 +86,9 @@ std::expected<std::vector<ScriptedEvent>, std::string> parseScriptedKeys(std::st
   return events;
 }
 
-std::expected<ScriptedEvent, std::string> parseScriptedDrag(std::string_view text) {
+std::expected<ScriptedEvent, Diagnostics> parseScriptedDrag(std::string_view text) {
   auto fail = [&] {
-    return std::unexpected("--drag: '" + std::string(text) + "': expected X0,Y0,X1,Y1@FRAME[+shift] (window pixels)");
+    return argumentError("--drag: '" + std::string(text) + "': expected X0,Y0,X1,Y1@FRAME[+shift] (window pixels)");
   };
   ScriptedEvent e;
   e.kind = ScriptedEvent::Kind::Drag;

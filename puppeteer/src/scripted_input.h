@@ -9,6 +9,8 @@
 #include <string_view>
 #include <vector>
 
+#include "imps/diagnostic.h"
+
 namespace imps::app {
 
 // One injected event, delivered at the start of frame `frame` (0 = the first rendered frame).
@@ -24,14 +26,14 @@ struct ScriptedEvent {
 };
 
 // Parses a --keys list: comma-separated KEY@FRAME, KEY one of a–z, 0–9, "[", "]", F12, Esc, Backspace, optionally
-// after modifiers "ctrl+" and "shift+" (ctrl+z, ctrl+shift+z); case insensitive for the names. Errors: "--keys:
-// 'x@': expected KEY@FRAME …".
-std::expected<std::vector<ScriptedEvent>, std::string> parseScriptedKeys(std::string_view text);
+// after modifiers "ctrl+" and "shift+" (ctrl+z, ctrl+shift+z); case insensitive for the names. Errors: one
+// diagnostic without a position, "--keys: 'x@': expected KEY@FRAME …".
+std::expected<std::vector<ScriptedEvent>, Diagnostics> parseScriptedKeys(std::string_view text);
 
 // Parses one --drag: X0,Y0,X1,Y1@FRAME, optionally followed by "+shift". Coordinates are window pixels (non-negative
 // numbers); the drag presses the left button at (X0, Y0), moves in `steps` steps to (X1, Y1) and releases, all
-// before frame FRAME is drawn.
-std::expected<ScriptedEvent, std::string> parseScriptedDrag(std::string_view text);
+// before frame FRAME is drawn. Errors: one diagnostic without a position, "--drag: 'TEXT': expected …".
+std::expected<ScriptedEvent, Diagnostics> parseScriptedDrag(std::string_view text);
 
 // The events of `events` due at `frame`, in the order given (stable by frame).
 std::vector<ScriptedEvent> eventsAt(const std::vector<ScriptedEvent>& events, int frame);

@@ -4,8 +4,10 @@
 
 namespace imps::app {
 
-std::expected<void, std::string> appendCalibration(sim::SessionWriter& writer, const calibration::Calibration& c) {
-  return writer.appendCalibration(c.toJson());
+IoResult<void> appendCalibration(sim::SessionWriter& writer, const calibration::Calibration& c) {
+  auto r = writer.appendCalibration(c.toJson());
+  if (!r) return std::unexpected(sessionWriterError(writer.path(), r.error()));
+  return {};
 }
 
 bool isBvhChannelMapping(std::string_view json) {

@@ -5,18 +5,38 @@
 
 #include <cstddef>
 #include <expected>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <type_traits>
 
 #include "calibration/calibration.h"
+#include "imps/io_error.h"
 #include "sim/session_file.h"
 
 namespace imps::app {
 
 // Appends `calibration` as the session's calibration from the next sample on (SessionWriter::appendCalibration
-// with the calibration file's text). Errors are the writer's.
-std::expected<void, std::string> appendCalibration(sim::SessionWriter& writer, const calibration::Calibration& c);
+// with the calibration file's text). Errors are the writer's, as an IoError (sessionWriterError).
+IoResult<void> appendCalibration(sim::SessionWriter& writer, const calibration::Calibration& c);
+
+// A SessionWriter error about the file at `path` as an IoError: an IoError as it is, the first of Diagnostics at
+// its file, or a message "PATH: error: …" as {PATH, "…"}. (A template so that it fits whichever the writer returns.)
+template <class E>
+IoError sessionWriterError(const std::filesystem::path& path, const E& error) {
+  if constexpr (std::is_same_v<E, IoError>) {
+    return error;
+  } else if constexpr (std::is_same_v<E, Diagnostics>) {
+    if (error.all().empty()) return IoError{path.string(), "cannot write"};
+    return IoError{error.all().front().loc.file, error.all().front().message};
+  } else {
+    const std::string prefix = path.string() + ": error: ";
+    std::string message(error);
+    if (message.starts_with(prefix)) return IoError{path.string(), message.substr(prefix.size())};
+    return IoError{"", std::move(message)};
+  }
+}
 
 // Whether a CALIBRATION blob is the BVH channel mapping `puppeteer convert` wrote into sessions made from BVH clips
 // before rig-map calibrations existed (`{"source":"bvh",…}`, no version; examples/simple_biped_wave.session had

@@ -8,12 +8,11 @@
 
 namespace imps::app {
 
-std::expected<SessionRecorder, std::string> SessionRecorder::create(const std::filesystem::path& path,
-                                                                    const drivers::DeviceInfo& device,
-                                                                    const calibration::Calibration* calibration,
-                                                                    sim::SessionWriterOptions options) {
+IoResult<SessionRecorder> SessionRecorder::create(const std::filesystem::path& path, const drivers::DeviceInfo& device,
+                                                  const calibration::Calibration* calibration,
+                                                  sim::SessionWriterOptions options) {
   auto writer = sim::SessionWriter::create(path, device, options);
-  if (!writer) return std::unexpected(writer.error());
+  if (!writer) return std::unexpected(sessionWriterError(path, writer.error()));
   SessionRecorder recorder(std::move(*writer), device);
   if (calibration) {
     if (auto r = recorder.appendCalibration(*calibration); !r) return std::unexpected(r.error());
@@ -21,38 +20,41 @@ std::expected<SessionRecorder, std::string> SessionRecorder::create(const std::f
   return recorder;
 }
 
-std::expected<void, std::string> SessionRecorder::append(std::span<const drivers::Sample> samples,
-                                                         const drivers::DeviceInfo* latest) {
+IoResult<void> SessionRecorder::append(std::span<const drivers::Sample> samples, const drivers::DeviceInfo* latest) {
   for (const drivers::Sample& s : samples) {
     if (s.channelCount != layout_.channelCount)
       if (auto r = changeLayout(s.channelCount, latest); !r) return r;
-    if (auto r = writer_.append(s, device_); !r) return r;
+    if (auto r = writer_.append(s, device_); !r) return std::unexpected(sessionWriterError(path(), r.error()));
   }
   return {};
 }
 
-std::expected<void, std::string> SessionRecorder::changeLayout(int channelCount, const drivers::DeviceInfo* latest) {
+IoResult<void> SessionRecorder::changeLayout(int channelCount, const drivers::DeviceInfo* latest) {
   drivers::DeviceInfo next =
       withChannelCount(latest && latest->channelCount == channelCount ? *latest : layout_, channelCount);
   auto index = writer_.appendLayoutChange(next, device_);
-  if (!index) return std::unexpected(index.error());
+  if (!index) return std::unexpected(sessionWriterError(path(), index.error()));
   device_ = *index;
   layout_ = std::move(next);
   ++layoutChanges_;
   return {};
 }
 
-std::expected<void, std::string> SessionRecorder::appendCounters(const drivers::DeviceSessionStats& stats) {
+IoResult<void> SessionRecorder::appendCounters(const drivers::DeviceSessionStats& stats) {
   std::vector<sim::SessionCounter> counters;
   for (const drivers::NamedCounter& c : drivers::namedCounters(stats)) counters.push_back({c.name, c.value});
-  return writer_.appendCounters(0, counters);
+  if (auto r = writer_.appendCounters(0, counters); !r) return std::unexpected(sessionWriterError(path(), r.error()));
+  return {};
 }
 
-std::expected<void, std::string> SessionRecorder::appendCalibration(const calibration::Calibration& calibration) {
+IoResult<void> SessionRecorder::appendCalibration(const calibration::Calibration& calibration) {
   return app::appendCalibration(writer_, calibration);
 }
 
-std::expected<void, std::string> SessionRecorder::close() { return writer_.close(); }
+IoResult<void> SessionRecorder::close() {
+  if (auto r = writer_.close(); !r) return std::unexpected(sessionWriterError(path(), r.error()));
+  return {};
+}
 
 drivers::DeviceInfo withChannelCount(drivers::DeviceInfo device, int channelCount) {
   if (device.channelCount == channelCount) return device;

@@ -13,6 +13,7 @@
 #include "calibration/calibration.h"
 #include "drivers/device_session.h"
 #include "drivers/sample.h"
+#include "imps/io_error.h"
 #include "sim/session_file.h"
 
 namespace imps::app {
@@ -22,11 +23,11 @@ namespace imps::app {
 class SessionRecorder {
  public:
   // Creates `path` (an existing file is an error: recordings never overwrite) for `device`, and records
-  // `calibration` (may be null) as in force from the first sample on. Errors are the writer's "path: error: …".
-  static std::expected<SessionRecorder, std::string> create(const std::filesystem::path& path,
-                                                            const drivers::DeviceInfo& device,
-                                                            const calibration::Calibration* calibration,
-                                                            sim::SessionWriterOptions options = {});
+  // `calibration` (may be null) as in force from the first sample on. Errors are the writer's, as an IoError naming
+  // `path` (drivers::errorText prints "path: error: …").
+  static IoResult<SessionRecorder> create(const std::filesystem::path& path, const drivers::DeviceInfo& device,
+                                          const calibration::Calibration* calibration,
+                                          sim::SessionWriterOptions options = {});
 
   // Appends samples in order. A sample whose channel count differs from the layout in force (a line-protocol
   // device re-locked to another count, or another device came back on reconnect) starts a new layout: a LAYOUT
@@ -34,15 +35,14 @@ class SessionRecorder {
   // describes the new layout when its channel count matches (DeviceSession::deviceInfo() follows the decoder);
   // otherwise the previous description is kept with channels named ch0, ch1, … Write errors are returned (the
   // take is then unusable: stop it).
-  std::expected<void, std::string> append(std::span<const drivers::Sample> samples,
-                                          const drivers::DeviceInfo* latest = nullptr);
+  IoResult<void> append(std::span<const drivers::Sample> samples, const drivers::DeviceInfo* latest = nullptr);
   // Records the device link's counters (drivers::namedCounters) as they are now; the last call before close()
   // is what `puppeteer info` shows. Call it every second or so, so a crash keeps recent counts.
-  std::expected<void, std::string> appendCounters(const drivers::DeviceSessionStats& stats);
+  IoResult<void> appendCounters(const drivers::DeviceSessionStats& stats);
   // Records `calibration` as in force from the next sample on (a re-calibration during the take).
-  std::expected<void, std::string> appendCalibration(const calibration::Calibration& calibration);
+  IoResult<void> appendCalibration(const calibration::Calibration& calibration);
   // Flushes, writes the END record and closes the file.
-  std::expected<void, std::string> close();
+  IoResult<void> close();
 
   uint64_t samples() const { return writer_.samplesWritten(); }
   uint64_t layoutChanges() const { return layoutChanges_; }
@@ -51,7 +51,7 @@ class SessionRecorder {
  private:
   explicit SessionRecorder(sim::SessionWriter writer, const drivers::DeviceInfo& device)
       : writer_(std::move(writer)), layout_(device) {}
-  std::expected<void, std::string> changeLayout(int channelCount, const drivers::DeviceInfo* latest);
+  IoResult<void> changeLayout(int channelCount, const drivers::DeviceInfo* latest);
   sim::SessionWriter writer_;
   drivers::DeviceInfo layout_;  // the layout in force
   uint16_t device_ = 0;         // its device index in the file

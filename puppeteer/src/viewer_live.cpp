@@ -87,7 +87,7 @@ bool LivePoseSource::poll(SkeletonCache& skeleton, int64_t* arrivalNs) {
       recordStartNs_ = countersWrittenNs_ = steadyNowNs();
     } else {
       recordingWanted_ = false;
-      say("recording failed: " + created.error());
+      say("recording failed: " + drivers::errorText(created.error()));
     }
   }
   if (recorder_) {
@@ -99,7 +99,7 @@ bool LivePoseSource::poll(SkeletonCache& skeleton, int64_t* arrivalNs) {
     if (!r) {
       recorder_.reset();
       recordingWanted_ = false;
-      say("recording stopped: " + r.error());
+      say("recording stopped: " + drivers::errorText(r.error()));
     }
   }
   if (flow_.active() && flow_.update(batch_, steadyNowNs())) finishCalibration();
@@ -130,8 +130,8 @@ std::string LivePoseSource::stopRecording() {
   const std::string path = recorder_->path().string();
   auto closed = recorder_->close();
   recorder_.reset();
-  if (!appended) return "recording failed: " + appended.error();
-  if (!closed) return "recording failed: " + closed.error();
+  if (!appended) return "recording failed: " + drivers::errorText(appended.error());
+  if (!closed) return "recording failed: " + drivers::errorText(closed.error());
   char buf[96];
   std::snprintf(buf, sizeof buf, "recorded %llu samples (%.1f s) to ", static_cast<unsigned long long>(samples),
                 seconds);
@@ -205,7 +205,8 @@ void LivePoseSource::finishCalibration() {
                 result->calibration.rigMap().channels.size(), samples, result->maxNoiseDeg);
   std::string message = buf + out;
   if (recorder_) {
-    if (auto r = recorder_->appendCalibration(result->calibration); !r) message += "; not recorded: " + r.error();
+    if (auto r = recorder_->appendCalibration(result->calibration); !r)
+      message += "; not recorded: " + drivers::errorText(r.error());
   }
   map_.emplace(std::move(result->calibration), std::filesystem::path(out).filename().string());
   live_.calibrationPath = out;

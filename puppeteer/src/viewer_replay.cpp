@@ -108,11 +108,16 @@ SampleMapper::SampleMapper(ClipPoseMap clip, std::string label) : label_(std::mo
   clip_.emplace(std::move(clip));
 }
 
-std::expected<ClipPoseMap, std::string> ClipPoseMap::create(const sim::Session& session, const Character& character,
+std::expected<ClipPoseMap, Diagnostics> ClipPoseMap::create(const sim::Session& session, const Character& character,
                                                             const RetargetOptions& options) {
-  if (!session.skeleton) return std::unexpected("the session has no skeleton (it was not made from a BVH clip)");
+  auto fail = [](std::string message) {
+    Diagnostics d;
+    d.error({}, std::move(message));
+    return std::unexpected(std::move(d));
+  };
+  if (!session.skeleton) return fail("the session has no skeleton (it was not made from a BVH clip)");
   auto parsed = sim::readBvhText(session.skeleton->bvh, "session skeleton");
-  if (!parsed) return std::unexpected(parsed.error().all().front().str());  // the reader's one error
+  if (!parsed) return std::unexpected(parsed.error());
   ClipPoseMap m;
   m.clip_ = std::move(*parsed);
   m.unitsPerCount_ = session.skeleton->positionUnitsPerCount;
@@ -123,8 +128,8 @@ std::expected<ClipPoseMap, std::string> ClipPoseMap::create(const sim::Session& 
     slots += static_cast<size_t>(info.channelCount);
   }
   if (slots != m.clip_.channelCount())
-    return std::unexpected("the skeleton has " + std::to_string(m.clip_.channelCount()) + " channels but the devices " +
-                           std::to_string(slots));
+    return fail("the skeleton has " + std::to_string(m.clip_.channelCount()) + " channels but the devices " +
+                std::to_string(slots));
   for (const sim::BvhJoint& j : m.clip_.joints)
     for (sim::BvhChannel c : j.channels) m.rotation_.push_back(sim::isRotation(c));
   m.values_.assign(slots, 0.0f);
@@ -137,7 +142,7 @@ std::expected<ClipPoseMap, std::string> ClipPoseMap::create(const sim::Session& 
     m.read(d, session.samples[i]);
   }
   auto r = Retargeter::create(m.clip_, character, options);
-  if (!r) return std::unexpected(r.error());
+  if (!r) return fail(r.error());
   r->setReferenceFrame(m.values_);
   m.retargeter_.emplace(std::move(*r));
   return m;

@@ -62,9 +62,10 @@ class ChannelPoseMap {
 // translation scaled by leg length). The reference for translations is the session's first frame.
 class ClipPoseMap {
  public:
-  // Errors: the skeleton does not parse or its channels differ from the devices'.
-  static std::expected<ClipPoseMap, std::string> create(const sim::Session& session, const Character& character,
-                                                         const RetargetOptions& options);
+  // Errors: the skeleton does not parse (the reader's diagnostics, at "session skeleton:LINE:COLUMN"), or its
+  // channels differ from the devices', or it cannot be retargeted (one diagnostic without a position).
+  static std::expected<ClipPoseMap, Diagnostics> create(const sim::Session& session, const Character& character,
+                                                        const RetargetOptions& options);
   void apply(uint16_t device, const drivers::Sample& sample, SkeletonCache& skeleton);
   const Retargeter& retargeter() const { return *retargeter_; }
   const sim::BvhClip& clip() const { return clip_; }

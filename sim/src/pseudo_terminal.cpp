@@ -13,9 +13,9 @@
 
 namespace imps::sim {
 
-std::expected<PseudoTerminal, std::string> PseudoTerminal::open() {
+IoResult<PseudoTerminal> PseudoTerminal::open() {
   PseudoTerminal pty;
-  auto fail = [](const char* step) { return std::unexpected(std::string(step) + ": " + std::strerror(errno)); };
+  auto fail = [](const char* step) { return std::unexpected(IoError::fromErrno("", step, errno)); };
   pty.master_ = ::posix_openpt(O_RDWR | O_NOCTTY | O_CLOEXEC);
   if (pty.master_ < 0) return fail("cannot create a pseudo-terminal");
   if (::grantpt(pty.master_) != 0 || ::unlockpt(pty.master_) != 0) return fail("cannot unlock the pseudo-terminal");

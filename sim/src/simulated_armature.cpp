@@ -12,6 +12,7 @@
 #include <climits>
 #include <cmath>
 #include <numbers>
+#include <type_traits>
 
 namespace imps::sim {
 
@@ -73,13 +74,40 @@ bool parseValue(std::string_view s, T& out) {
 
 }  // namespace
 
-std::expected<ArmatureOptions, std::string> armatureOptionsFromSpec(const drivers::DeviceSpec& spec) {
+namespace {
+
+// What readSession() reported, as diagnostics: its Diagnostics as they are, an IoError as one diagnostic at its
+// path, or a message "PATH: error: …" as one diagnostic at PATH (a template, so whichever it returns compiles).
+template <class E>
+Diagnostics sessionDiagnostics(const std::string& path, const E& error) {
+  if constexpr (std::is_same_v<E, Diagnostics>) {
+    return error;
+  } else {
+    Diagnostics d;
+    if constexpr (std::is_same_v<E, IoError>) {
+      d.error({error.path}, error.message);
+    } else {
+      const std::string prefix = path + ": error: ";
+      std::string message = std::string(error);
+      if (message.starts_with(prefix)) message.erase(0, prefix.size());
+      while (!message.empty() && message.back() == '\n') message.pop_back();
+      d.error({path}, std::move(message));
+    }
+    return d;
+  }
+}
+
+}  // namespace
+
+std::expected<ArmatureOptions, Diagnostics> armatureOptionsFromSpec(const drivers::DeviceSpec& spec) {
   ArmatureOptions o;
   o.protocol = spec.protocol;
   if (spec.rateHz) o.rateHz = spec.rateHz;
   int channels = 32, bits = 12;
   auto bad = [](std::string_view key, std::string_view what) {
-    return std::unexpected("spec: error: sim key '" + std::string(key) + "': " + std::string(what));
+    Diagnostics d;
+    d.error({"spec"}, "sim key '" + std::string(key) + "': " + std::string(what));
+    return std::unexpected(std::move(d));
   };
   for (const auto& [key, value] : spec.simParams) {
     bool ok = true;
@@ -123,9 +151,12 @@ std::expected<ArmatureOptions, std::string> armatureOptionsFromSpec(const driver
   o.info.hasDeviceTimestamp = o.deviceTimestamps;
   if (!spec.path.empty()) {
     auto session = readSession(spec.path);
-    if (!session) return std::unexpected(session.error());
-    if (session->devices.empty() || session->samples.empty())
-      return std::unexpected(spec.path + ": error: the session has no samples to play");
+    if (!session) return std::unexpected(sessionDiagnostics(spec.path, session.error()));
+    if (session->devices.empty() || session->samples.empty()) {
+      Diagnostics d;
+      d.error({spec.path}, "the session has no samples to play");
+      return std::unexpected(std::move(d));
+    }
     o.info = session->devices.front();
     for (size_t i = 0; i < session->samples.size(); ++i)
       if (session->sampleDevice[i] == 0) o.recorded.push_back(session->samples[i]);
@@ -399,18 +430,18 @@ void SimulatedArmature::emitDueSamples(int64_t nowNs, std::vector<uint8_t>& out)
 SimulatedTransport::SimulatedTransport(std::shared_ptr<SimulatedArmature> armature, Clock& clock)
     : armature_(std::move(armature)), clock_(clock) {}
 
-std::expected<size_t, std::string> SimulatedTransport::read(std::span<uint8_t> out, int timeoutMs) {
+IoResult<size_t> SimulatedTransport::read(std::span<uint8_t> out, int timeoutMs) {
   if (pendingPos_ == pending_.size()) {
     pending_.clear();
     pendingPos_ = 0;
     int64_t now = clock_.nowNs();
-    if (armature_->unplugged(now)) return std::unexpected(std::string("sim: error: the device was unplugged"));
+    if (armature_->unplugged(now)) return std::unexpected(IoError{"sim", "the device was unplugged", ENODEV});
     armature_->produce(now, pending_);
     if (pending_.empty() && timeoutMs > 0) {
       const int64_t wake = std::min(armature_->nextDueNs(), now + int64_t{timeoutMs} * 1'000'000);
       clock_.sleepUntilNs(std::max(wake, now));
       now = clock_.nowNs();
-      if (armature_->unplugged(now)) return std::unexpected(std::string("sim: error: the device was unplugged"));
+      if (armature_->unplugged(now)) return std::unexpected(IoError{"sim", "the device was unplugged", ENODEV});
       armature_->produce(now, pending_);
     }
   }
@@ -420,9 +451,9 @@ std::expected<size_t, std::string> SimulatedTransport::read(std::span<uint8_t> o
   return n;
 }
 
-std::expected<void, std::string> SimulatedTransport::write(std::span<const uint8_t> bytes, int) {
+IoResult<void> SimulatedTransport::write(std::span<const uint8_t> bytes, int) {
   const int64_t now = clock_.nowNs();
-  if (armature_->unplugged(now)) return std::unexpected(std::string("sim: error: the device was unplugged"));
+  if (armature_->unplugged(now)) return std::unexpected(IoError{"sim", "the device was unplugged", ENODEV});
   armature_->receive(bytes, now);
   return {};
 }
@@ -434,9 +465,9 @@ std::string SimulatedTransport::description() const {
 
 drivers::TransportOpener simulatedOpener(ArmatureOptions options, Clock& clock) {
   auto armature = std::make_shared<SimulatedArmature>(std::move(options));
-  return [armature, &clock]() -> std::expected<std::unique_ptr<drivers::ByteTransport>, std::string> {
+  return [armature, &clock]() -> IoResult<std::unique_ptr<drivers::ByteTransport>> {
     const int64_t now = clock.nowNs();
-    if (armature->unplugged(now)) return std::unexpected(std::string("sim: error: the device is unplugged"));
+    if (armature->unplugged(now)) return std::unexpected(IoError{"sim", "the device is unplugged", ENODEV});
     armature->powerOn(now);
     return std::unique_ptr<drivers::ByteTransport>(new SimulatedTransport(armature, clock));
   };

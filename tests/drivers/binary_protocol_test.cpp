@@ -49,7 +49,7 @@ Bytes bytesOf(std::string_view hex) {
 Bytes encode(const Message& m) {
   Bytes out;
   auto ok = appendFrame(m, out);
-  EXPECT_TRUE(ok.has_value()) << (ok ? "" : ok.error());
+  EXPECT_TRUE(ok.has_value()) << (ok ? "" : ok.error().str());
   return out;
 }
 
@@ -675,13 +675,13 @@ TEST(BinaryProtocol, DeviceInfoBlockIsTheInfoPayload) {
   info.channelNames = {"hip", "knee", "ankle"};
   info.hasDeviceTimestamp = true;
   auto block = encodeDeviceInfo(info);
-  ASSERT_TRUE(block) << block.error();
+  ASSERT_TRUE(block) << block.error().str();
   std::vector<uint8_t> frame;
   ASSERT_TRUE(appendFrame(Message{0, kFlagReply, msg::Info{info}}, frame));
   ASSERT_EQ(frame.size(), kFrameHeaderSize + block->size() + kFrameCrcSize);
   EXPECT_TRUE(std::equal(block->begin(), block->end(), frame.begin() + kFrameHeaderSize));
   auto back = decodeDeviceInfo(*block);
-  ASSERT_TRUE(back) << back.error();
+  ASSERT_TRUE(back) << back.error().str();
   EXPECT_EQ(*back, info);
 
   std::vector<uint8_t> longer = *block;

@@ -56,8 +56,8 @@ class ScriptedTransport final : public ByteTransport {
     }
   }
 
-  std::expected<size_t, std::string> read(std::span<uint8_t> out, int timeoutMs) override {
-    if (failed_) return std::unexpected(std::string("scripted: unplugged"));
+  IoResult<size_t> read(std::span<uint8_t> out, int timeoutMs) override {
+    if (failed_) return std::unexpected(IoError{"scripted", "unplugged"});
     if (out_.empty()) {
       std::this_thread::sleep_for(std::chrono::milliseconds(std::min(timeoutMs, 5)));
       return 0;
@@ -69,8 +69,8 @@ class ScriptedTransport final : public ByteTransport {
     return n;
   }
 
-  std::expected<void, std::string> write(std::span<const uint8_t> bytes, int) override {
-    if (failed_) return std::unexpected(std::string("scripted: unplugged"));
+  IoResult<void> write(std::span<const uint8_t> bytes, int) override {
+    if (failed_) return std::unexpected(IoError{"scripted", "unplugged"});
     decoder_.feed(bytes);
     while (auto m = decoder_.next()) {
       {
@@ -126,10 +126,10 @@ class ScriptedTransport final : public ByteTransport {
 };
 
 TransportOpener scriptedOpener(Script& script) {
-  return [&script]() -> std::expected<std::unique_ptr<ByteTransport>, std::string> {
+  return [&script]() -> IoResult<std::unique_ptr<ByteTransport>> {
     std::lock_guard lock(script.mutex);
     const int n = script.opens++;
-    if (n < script.openFailures) return std::unexpected(std::string("scripted: no such device"));
+    if (n < script.openFailures) return std::unexpected(IoError{"scripted", "no such device"});
     return std::unique_ptr<ByteTransport>(new ScriptedTransport(script, n - script.openFailures));
   };
 }
@@ -252,7 +252,7 @@ TEST(DeviceSession, UnplugKeepsLastPoseAndReconnects) {
   ASSERT_TRUE(eventually([&] { return session.stats().reconnects == 1 && session.stats().samples == 40; }))
       << session.lastError() << " state " << toString(session.state());
   EXPECT_EQ(session.stats().connections, 2u);
-  EXPECT_NE(session.lastError().find("unplugged"), std::string::npos) << session.lastError();
+  EXPECT_NE(session.lastError().find("scripted: error: unplugged"), std::string::npos) << session.lastError();
   Sample newest;
   ASSERT_TRUE(mailbox.latest(newest));
   EXPECT_EQ(newest.sequence, 19u);  // the second connection's last sample (sequence restarts on reconnect)
@@ -266,8 +266,8 @@ TEST(DeviceSession, ReportsLostWhileTheDeviceIsAway) {
   PoseMailbox mailbox;
   int opens = 0;
   TransportOpener inner = scriptedOpener(script);
-  TransportOpener opener = [&]() -> std::expected<std::unique_ptr<ByteTransport>, std::string> {
-    if (opens++ >= 1) return std::unexpected(std::string("gone"));
+  TransportOpener opener = [&]() -> IoResult<std::unique_ptr<ByteTransport>> {
+    if (opens++ >= 1) return std::unexpected(IoError{"", "gone"});
     return inner();
   };
   DeviceSession session(opener, mailbox, fastOptions());

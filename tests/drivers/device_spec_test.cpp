@@ -10,7 +10,7 @@ namespace {
 
 TEST(DeviceSpec, SerialWithQuery) {
   auto spec = parseDeviceSpec("serial:/dev/ttyACM0?baud=57600&protocol=lines&channels=6");
-  ASSERT_TRUE(spec) << spec.error();
+  ASSERT_TRUE(spec) << spec.error().str();
   EXPECT_EQ(spec->kind, DeviceKind::Serial);
   EXPECT_EQ(spec->path, "/dev/ttyACM0");
   EXPECT_EQ(spec->baud, 57600);
@@ -21,7 +21,7 @@ TEST(DeviceSpec, SerialWithQuery) {
 
 TEST(DeviceSpec, SerialDefaultsAndPollMode) {
   auto spec = parseDeviceSpec("serial:/dev/ttyUSB0?mode=poll&rate=60");
-  ASSERT_TRUE(spec) << spec.error();
+  ASSERT_TRUE(spec) << spec.error().str();
   EXPECT_EQ(spec->baud, 115200);
   EXPECT_EQ(spec->protocol, WireProtocol::Binary);
   EXPECT_EQ(spec->mode, AcquisitionMode::Poll);
@@ -30,18 +30,18 @@ TEST(DeviceSpec, SerialDefaultsAndPollMode) {
 
 TEST(DeviceSpec, HidAndUsbIds) {
   auto hid = parseDeviceSpec("hid:2341:8036?serial=A1B2");
-  ASSERT_TRUE(hid) << hid.error();
+  ASSERT_TRUE(hid) << hid.error().str();
   EXPECT_EQ(hid->kind, DeviceKind::Hid);
   EXPECT_EQ(hid->vendorId, 0x2341);
   EXPECT_EQ(hid->productId, 0x8036);
   EXPECT_EQ(hid->serialNumber, "A1B2");
   auto usb = parseDeviceSpec("usb:1209:1");
-  ASSERT_TRUE(usb) << usb.error();
+  ASSERT_TRUE(usb) << usb.error().str();
   EXPECT_EQ(usb->vendorId, 0x1209);
   EXPECT_EQ(usb->productId, 0x0001);
   // A USB armature speaks the binary protocol: poll or stream mode and a rate (sessionOptionsFor passes them on).
   auto usbPoll = parseDeviceSpec("usb:1209:0001?serial=U1&mode=poll&rate=250");
-  ASSERT_TRUE(usbPoll) << usbPoll.error();
+  ASSERT_TRUE(usbPoll) << usbPoll.error().str();
   EXPECT_EQ(usbPoll->serialNumber, "U1");
   EXPECT_EQ(usbPoll->mode, AcquisitionMode::Poll);
   EXPECT_EQ(usbPoll->rateHz, 250);
@@ -52,7 +52,7 @@ TEST(DeviceSpec, HidAndUsbIds) {
 
 TEST(DeviceSpec, SimKeepsSimulatorKeysInOrder) {
   auto spec = parseDeviceSpec("sim:take3.session?rate=200&noise=2&channels=16");
-  ASSERT_TRUE(spec) << spec.error();
+  ASSERT_TRUE(spec) << spec.error().str();
   EXPECT_EQ(spec->kind, DeviceKind::Sim);
   EXPECT_EQ(spec->path, "take3.session");
   EXPECT_EQ(spec->rateHz, 200);
@@ -60,38 +60,39 @@ TEST(DeviceSpec, SimKeepsSimulatorKeysInOrder) {
   EXPECT_EQ(spec->simParams[0].first, "noise");
   EXPECT_EQ(spec->simParams[1].second, "16");
   auto bare = parseDeviceSpec("sim:");
-  ASSERT_TRUE(bare) << bare.error();
+  ASSERT_TRUE(bare) << bare.error().str();
   EXPECT_TRUE(bare->path.empty());
 }
 
 // A bare device node is a serial port, with the same keys (and error columns into the text as given).
 TEST(DeviceSpec, BareDevicePathIsASerialPort) {
   auto bare = parseDeviceSpec("/dev/ttyACM0");
-  ASSERT_TRUE(bare) << bare.error();
+  ASSERT_TRUE(bare) << bare.error().str();
   EXPECT_EQ(*bare, *parseDeviceSpec("serial:/dev/ttyACM0"));
   auto withKeys = parseDeviceSpec("/dev/ttyUSB0?baud=9600&protocol=lines");
-  ASSERT_TRUE(withKeys) << withKeys.error();
+  ASSERT_TRUE(withKeys) << withKeys.error().str();
   EXPECT_EQ(withKeys->kind, DeviceKind::Serial);
   EXPECT_EQ(withKeys->path, "/dev/ttyUSB0");
   EXPECT_EQ(withKeys->baud, 9600);
   auto bad = parseDeviceSpec("/dev/ttyACM0?bard=1");
   ASSERT_FALSE(bad);
-  EXPECT_NE(bad.error().find("spec:1:14: error: unknown key 'bard' for serial"), std::string::npos) << bad.error();
+  EXPECT_NE(bad.error().str().find("spec:1:14: error: unknown key 'bard' for serial"), std::string::npos)
+      << bad.error().str();
 }
 
 // A line device cannot say its encoders' bits: the spec can, and the session's DeviceInfo reports them, so that
 // calibrate (which checks a rig map against the device) and live agree on a 12-bit rig map.
 TEST(DeviceSpec, LineBitsReachTheSessionOptions) {
   auto lines = parseDeviceSpec("serial:/dev/ttyACM0?protocol=lines&bits=12");
-  ASSERT_TRUE(lines) << lines.error();
+  ASSERT_TRUE(lines) << lines.error().str();
   EXPECT_EQ(lines->bits, 12);
   EXPECT_EQ(sessionOptionsFor(*lines).lineBitsPerChannel, 12);
   auto unsaid = parseDeviceSpec("serial:/dev/ttyACM0?protocol=lines");
-  ASSERT_TRUE(unsaid) << unsaid.error();
+  ASSERT_TRUE(unsaid) << unsaid.error().str();
   EXPECT_EQ(sessionOptionsFor(*unsaid).lineBitsPerChannel, 32);
   // The simulator's own bits key tells the host too when it prints lines.
   auto sim = parseDeviceSpec("sim:?protocol=lines&bits=12");
-  ASSERT_TRUE(sim) << sim.error();
+  ASSERT_TRUE(sim) << sim.error().str();
   EXPECT_EQ(sessionOptionsFor(*sim).lineBitsPerChannel, 12);
 }
 
@@ -125,18 +126,18 @@ TEST(DeviceSpec, ErrorsSayWhereAndWhat) {
   for (const Case& c : cases) {
     auto spec = parseDeviceSpec(c.text);
     ASSERT_FALSE(spec) << c.text;
-    EXPECT_NE(spec.error().find(c.expected), std::string::npos) << c.text << " gave: " << spec.error();
+    EXPECT_NE(spec.error().str().find(c.expected), std::string::npos) << c.text << " gave: " << spec.error().str();
   }
 }
 
 TEST(DeviceSpec, OscPoseStream) {
   auto any = parseDeviceSpec("osc.udp://:9000");
-  ASSERT_TRUE(any) << any.error();
+  ASSERT_TRUE(any) << any.error().str();
   EXPECT_EQ(any->kind, DeviceKind::Osc);
   EXPECT_EQ(any->port, 9000);
   EXPECT_TRUE(any->path.empty());
   auto bound = parseDeviceSpec("osc.udp://127.0.0.1:9001/");
-  ASSERT_TRUE(bound) << bound.error();
+  ASSERT_TRUE(bound) << bound.error().str();
   EXPECT_EQ(bound->path, "127.0.0.1");
   EXPECT_EQ(bound->port, 9001);
   EXPECT_EQ(formatDeviceSpec(*bound), "osc.udp://127.0.0.1:9001");
@@ -149,7 +150,7 @@ TEST(DeviceSpec, FormatRoundTrips) {
                            "usb:1209:0001?serial=U1&mode=poll&rate=250",
                            "sim:?rate=1000&channels=64&noise=1", "osc.udp://:9000", "osc.udp://10.0.0.2:57120"}) {
     auto spec = parseDeviceSpec(text);
-    ASSERT_TRUE(spec) << spec.error();
+    ASSERT_TRUE(spec) << spec.error().str();
     EXPECT_EQ(formatDeviceSpec(*spec), text);
     auto again = parseDeviceSpec(formatDeviceSpec(*spec));
     ASSERT_TRUE(again);

@@ -50,16 +50,16 @@ void pack(std::vector<uint8_t>& out, uint32_t& bit, uint32_t n, uint64_t value) 
 
 HidInputLayout layoutOf(const std::vector<uint8_t>& descriptor) {
   auto parsed = parseHidReportDescriptor(descriptor);
-  EXPECT_TRUE(parsed) << parsed.error();
+  EXPECT_TRUE(parsed) << parsed.error().str();
   if (!parsed) return {};
   auto layout = hidArmatureLayout(*parsed);
-  EXPECT_TRUE(layout) << layout.error();
+  EXPECT_TRUE(layout) << layout.error().str();
   return layout ? *layout : HidInputLayout{};
 }
 
 TEST(HidReportDescriptor, ParsesAJoystick) {
   auto d = parseHidReportDescriptor(kJoystick);
-  ASSERT_TRUE(d) << d.error();
+  ASSERT_TRUE(d) << d.error().str();
   EXPECT_FALSE(d->usesReportIds);
   ASSERT_EQ(d->applications.size(), 1u);
   EXPECT_EQ(d->applications[0], hidUsage(0x01, 0x04));
@@ -199,18 +199,18 @@ TEST(HidReportDescriptor, BadDescriptorsGiveLocatedErrors) {
   for (const auto& c : cases) {
     auto d = parseHidReportDescriptor(c.bytes);
     ASSERT_FALSE(d) << c.message;
-    EXPECT_EQ(d.error().rfind(c.message, 0), 0u) << d.error();
+    EXPECT_EQ(d.error().str().rfind(c.message, 0), 0u) << d.error().str();
   }
   std::vector<uint8_t> deep;
   for (int i = 0; i < 17; ++i) deep.push_back(0xA4);
-  EXPECT_NE(parseHidReportDescriptor(deep).error().find("more than 16 nested Push"), std::string::npos);
+  EXPECT_NE(parseHidReportDescriptor(deep).error().str().find("more than 16 nested Push"), std::string::npos);
   // Parses, but has nothing to sample: only buttons.
   const std::vector<uint8_t> buttons = {0x05, 0x09, 0x19, 0x01, 0x29, 0x08, 0x75, 0x01, 0x95, 0x08, 0x81, 0x02};
   auto d = parseHidReportDescriptor(buttons);
-  ASSERT_TRUE(d) << d.error();
+  ASSERT_TRUE(d) << d.error().str();
   auto l = hidArmatureLayout(*d);
   ASSERT_FALSE(l);
-  EXPECT_NE(l.error().find("no input report carries a channel"), std::string::npos);
+  EXPECT_NE(l.error().str().find("no input report carries a channel"), std::string::npos);
 }
 
 // Encoder → decoder round trips on the IMPS armature descriptor: 8, 10, 12, 16 and 32-bit channels, with and
@@ -242,7 +242,7 @@ TEST(HidReportCodec, ArmatureRoundTripsAtEveryWidth) {
         s.counts[channels - 1] = max;
         if (channels > 2) s.flags[1] = ChannelFlag::NotConnected;
         auto report = encodeHidInputReport(l, s);
-        ASSERT_TRUE(report) << report.error();
+        ASSERT_TRUE(report) << report.error().str();
         auto back = dec.decode(*report, 5);
         ASSERT_TRUE(back);
         if (channels > 2) {
@@ -333,11 +333,11 @@ TEST(HidReportCodec, InfoFeatureReportRoundTrips) {
   info.bitsPerChannel = 12;
   info.channelNames = {"hip", "knee", "ankle"};
   auto report = hidInfoReport(info, 3, 100);
-  ASSERT_TRUE(report) << report.error();
+  ASSERT_TRUE(report) << report.error().str();
   EXPECT_EQ(report->size(), 101u);
   EXPECT_EQ((*report)[0], 3);
   auto back = parseHidInfoReport(*report, true);
-  ASSERT_TRUE(back) << back.error();
+  ASSERT_TRUE(back) << back.error().str();
   EXPECT_EQ(*back, info);
   EXPECT_FALSE(hidInfoReport(info, 3, 20));  // does not fit
   std::vector<uint8_t> zeros(40, 0);

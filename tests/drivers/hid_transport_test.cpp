@@ -63,7 +63,7 @@ DeviceInfo armatureInfo() {
 
 void setInfo(UmockdevHid& bed, int index) {
   auto report = hidInfoReport(armatureInfo(), 2, 200);
-  ASSERT_TRUE(report) << report.error();
+  ASSERT_TRUE(report) << report.error().str();
   bed.setFeatureReport(index, 2, *report);
 }
 
@@ -93,7 +93,7 @@ TEST(HidTransport, ListsDevicesWithDescriptorVerdicts) {
   ASSERT_TRUE(bed.add(pad)) << bed.lastError();
 
   auto list = listHidDevices();
-  ASSERT_TRUE(list) << list.error();
+  ASSERT_TRUE(list) << list.error().str();
   ASSERT_EQ(list->size(), 2u);
   const HidDeviceEntry& a = (*list)[0];
   EXPECT_EQ(a.path, "/dev/hidraw0");
@@ -126,7 +126,7 @@ TEST(HidTransport, OpensByVidPidAndSerialAndReadsInfo) {
   setInfo(bed, 0);  // the second unit answers no INFO: its description comes from USB strings
 
   auto first = HidTransport::open(0x2341, 0x8036);
-  ASSERT_TRUE(first) << first.error();
+  ASSERT_TRUE(first) << first.error().str();
   EXPECT_EQ((*first)->entry().path, "/dev/hidraw0");
   ASSERT_NE((*first)->hidDescription(), nullptr);
   EXPECT_EQ((*first)->hidDescription()->info, armatureInfo());
@@ -134,7 +134,7 @@ TEST(HidTransport, OpensByVidPidAndSerialAndReadsInfo) {
   EXPECT_NE((*first)->description().find("2341:8036"), std::string::npos) << (*first)->description();
 
   auto second = HidTransport::open(0x2341, 0x8036, "HID0002");
-  ASSERT_TRUE(second) << second.error();
+  ASSERT_TRUE(second) << second.error().str();
   EXPECT_EQ((*second)->entry().path, "/dev/hidraw1");
   const DeviceInfo& info = (*second)->hidDescription()->info;
   EXPECT_EQ(info.name, "Monkey HID");
@@ -148,10 +148,10 @@ TEST(HidTransport, OpensByVidPidAndSerialAndReadsInfo) {
 
   auto none = HidTransport::open(0x2341, 0x8036, "NOPE");
   ASSERT_FALSE(none);
-  EXPECT_NE(none.error().find("hid:2341:8036: error: no such HID device with serial number 'NOPE'"),
+  EXPECT_NE(errorText(none.error()).find("hid:2341:8036: error: no such HID device with serial number 'NOPE'"),
             std::string::npos)
-      << none.error();
-  EXPECT_NE(none.error().find("'HID0002'"), std::string::npos) << none.error();
+      << none.error().str();
+  EXPECT_NE(errorText(none.error()).find("'HID0002'"), std::string::npos) << none.error().str();
   EXPECT_FALSE(HidTransport::open(0x1209, 0x0001));
 }
 
@@ -160,7 +160,7 @@ TEST(HidTransport, EachReadIsOneReportAndTimeoutsReturnZero) {
   UmockdevHid bed;
   ASSERT_TRUE(bed.add(armature())) << bed.lastError();
   auto t = HidTransport::open(0x2341, 0x8036);
-  ASSERT_TRUE(t) << t.error();
+  ASSERT_TRUE(t) << t.error().str();
   ASSERT_TRUE(bed.waitForOpen(0, 2000));
   // Three reports written back to back arrive as three reads, not one merged chunk.
   const auto r1 = report(1, 10, 0x111, 0x222, 0x333), r2 = report(2, 20, 1, 2, 3);
@@ -169,19 +169,20 @@ TEST(HidTransport, EachReadIsOneReportAndTimeoutsReturnZero) {
   std::vector<uint8_t> buf(kMaxHidReportSize);
   for (const auto& want : {r1, r2, r3}) {
     auto n = (*t)->read(buf, 500);
-    ASSERT_TRUE(n) << n.error();
+    ASSERT_TRUE(n) << n.error().str();
     EXPECT_EQ(std::vector<uint8_t>(buf.begin(), buf.begin() + static_cast<std::ptrdiff_t>(*n)), want);
   }
   const auto start = std::chrono::steady_clock::now();
   auto n = (*t)->read(buf, 30);
-  ASSERT_TRUE(n) << n.error();
+  ASSERT_TRUE(n) << n.error().str();
   EXPECT_EQ(*n, 0u);
   EXPECT_GE(std::chrono::steady_clock::now() - start, std::chrono::milliseconds(25));
   // Unplug: hidapi's read fails (its only sign), and the device cannot be opened any more.
   bed.unplug(0);
   auto failed = (*t)->read(buf, 500);
   ASSERT_FALSE(failed);
-  EXPECT_NE(failed.error().find("/dev/hidraw0: error: HID read failed"), std::string::npos) << failed.error();
+  EXPECT_NE(errorText(failed.error()).find("/dev/hidraw0: error: HID read failed"), std::string::npos)
+      << errorText(failed.error());
   EXPECT_FALSE(HidTransport::open(0x2341, 0x8036));
 }
 
@@ -191,7 +192,7 @@ TEST(HidTransport, SessionStreamsSurvivesGarbageTimesOutAndReconnects) {
   ASSERT_TRUE(bed.add(armature())) << bed.lastError();
   setInfo(bed, 0);
   auto spec = parseDeviceSpec("hid:2341:8036?serial=HID0001");
-  ASSERT_TRUE(spec) << spec.error();
+  ASSERT_TRUE(spec) << spec.error().str();
   DeviceSessionOptions o = sessionOptionsFor(*spec);
   EXPECT_EQ(o.protocol, WireProtocol::HidReports);
   o.sampleTimeoutMs = 150;

@@ -75,7 +75,7 @@ std::unique_ptr<OscReceiver> openReceiver(PoseMailbox& mailbox, Collected* colle
     };
   }
   auto r = OscReceiver::open(std::move(options), mailbox);
-  EXPECT_TRUE(r) << r.error();
+  EXPECT_TRUE(r) << r.error().str();
   if (!r) return nullptr;
   (*r)->start();
   return std::move(*r);
@@ -91,7 +91,7 @@ TEST(OscStream, EveryFrameReachesTwoReceiversInOrder) {
   constexpr uint32_t kFrames = 300;
   {
     auto sender = OscPoseSender::open({target(*r1), target(*r2)}, 512);  // room for every frame: none dropped
-    ASSERT_TRUE(sender) << sender.error();
+    ASSERT_TRUE(sender) << sender.error().str();
     OscPose p = poseWithFrame(0);
     for (uint32_t i = 0; i < kFrames; ++i) {
       p.sampleTimeNs = 1000 + i;
@@ -271,7 +271,7 @@ TEST(OscStream, SenderQueueOverflowDropsFramesTheReceiverSeesAsGaps) {
   OscSenderStats st;
   {
     auto sender = OscPoseSender::open({target(*r)}, 2);  // a tiny queue: a burst overflows it
-    ASSERT_TRUE(sender) << sender.error();
+    ASSERT_TRUE(sender) << sender.error().str();
     const OscPose p = poseWithFrame(0);
     uint64_t queued = 0;
     for (uint64_t i = 0; i < kOffered; ++i) queued += (*sender)->send(p) ? 1 : 0;
@@ -313,12 +313,12 @@ TEST(OscStream, ReceiverOpenErrorsAreReported) {
   busy.port = first->port();
   auto second = OscReceiver::open(busy, mailbox);
   ASSERT_FALSE(second);
-  EXPECT_NE(second.error().find("cannot listen"), std::string::npos) << second.error();
+  EXPECT_NE(second.error().str().find("cannot listen"), std::string::npos) << second.error().str();
   OscReceiverOptions named;
   named.host = "localhost";
   auto bad = OscReceiver::open(named, mailbox);
   ASSERT_FALSE(bad);
-  EXPECT_NE(bad.error().find("numeric IPv4 address"), std::string::npos) << bad.error();
+  EXPECT_NE(bad.error().str().find("numeric IPv4 address"), std::string::npos) << bad.error().str();
 }
 
 }  // namespace

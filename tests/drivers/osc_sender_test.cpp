@@ -82,7 +82,7 @@ OscPose decoded(const std::vector<uint8_t>& datagram) {
   OscPose pose;
   Sample channels;
   auto result = decodeOscPacket(datagram, 0, pose, channels);
-  EXPECT_TRUE(result.has_value()) << (result ? "" : result.error());
+  EXPECT_TRUE(result.has_value()) << (result ? "" : result.error().str());
   EXPECT_EQ(result ? result->kind : OscPacketKind::Ignored, OscPacketKind::Pose);
   return pose;
 }
@@ -93,7 +93,7 @@ TEST(OscSender, EveryTargetGetsEveryFrameAsItsBundleWithCountersInOrder) {
   const int64_t before = steadyNowNs();
   {
     auto sender = OscPoseSender::open({a.url(), b.url()}, kFrames);  // room for every frame
-    ASSERT_TRUE(sender) << sender.error();
+    ASSERT_TRUE(sender) << sender.error().str();
     EXPECT_EQ((*sender)->targets(), (std::vector<std::string>{a.url(), b.url()}));
     for (uint32_t i = 0; i < kFrames; ++i) {
       OscPose p = posed(0.1f * float(i));
@@ -149,7 +149,7 @@ TEST(OscSender, AFullQueueDropsAndCountsFramesAndTheirCountersAreSkipped) {
   });
   {
     auto sender = OscPoseSender::open({sink.url()}, 2);  // a burst overflows two places
-    ASSERT_TRUE(sender) << sender.error();
+    ASSERT_TRUE(sender) << sender.error().str();
     uint64_t refused = 0;
     for (uint32_t i = 0; i < kOffered; ++i) {
       if ((*sender)->send(posed(0.0f)))
@@ -184,7 +184,7 @@ TEST(OscSender, TheDestructorSendsWhatIsQueued) {
   constexpr uint32_t kFrames = 32;
   {
     auto sender = OscPoseSender::open({sink.url()}, kFrames);
-    ASSERT_TRUE(sender) << sender.error();
+    ASSERT_TRUE(sender) << sender.error().str();
     for (uint32_t i = 0; i < kFrames; ++i) ASSERT_TRUE((*sender)->send(posed(0.0f)));
     // No flush: destruction itself must send them.
   }
@@ -200,10 +200,11 @@ TEST(OscSender, TargetUrlsAreChecked) {
   EXPECT_TRUE(checkOscTargetUrl("osc.udp://render-2.local:9000/"));
   auto scheme = checkOscTargetUrl("udp://127.0.0.1:9000");
   ASSERT_FALSE(scheme);
-  EXPECT_EQ(scheme.error(), "osc:1:1: error: expected osc.udp://HOST:PORT");
+  EXPECT_EQ(scheme.error().str(), "osc:1:1: error: expected osc.udp://HOST:PORT\n");
   auto port = checkOscTargetUrl("osc.udp://127.0.0.1:99999");
   ASSERT_FALSE(port);
-  EXPECT_EQ(port.error(), "osc:1:21: error: expected a port in 1..65535");
+  EXPECT_EQ(port.error().str(), "osc:1:21: error: expected a port in 1..65535\n");
+  EXPECT_EQ(port.error().all().front().loc.column, 21);
   EXPECT_FALSE(checkOscTargetUrl("osc.udp://:9000"));  // a target needs a host
   EXPECT_FALSE(checkOscTargetUrl("osc.udp://host"));
   EXPECT_FALSE(checkOscTargetUrl("osc.udp://127.0.0.1:0"));
@@ -213,7 +214,7 @@ TEST(OscSender, OpenRefusesTheFirstBadUrlNamingIt) {
   UdpSink sink;
   auto sender = OscPoseSender::open({sink.url(), "osc.tcp://127.0.0.1:9000", "also bad"});
   ASSERT_FALSE(sender);
-  EXPECT_EQ(sender.error(), "osc.tcp://127.0.0.1:9000: osc:1:1: error: expected osc.udp://HOST:PORT");
+  EXPECT_EQ(sender.error().str(), "osc.tcp://127.0.0.1:9000: osc:1:1: error: expected osc.udp://HOST:PORT\n");
 }
 
 }  // namespace

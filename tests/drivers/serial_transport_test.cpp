@@ -56,7 +56,7 @@ TEST(SerialTransport, ListsUsbPortsWithIdentity) {
   ASSERT_GE(bed.addAcm(), 0) << bed.lastError();
   ASSERT_GE(bed.addFtdi(16), 0) << bed.lastError();
   auto ports = listSerialPorts();
-  ASSERT_TRUE(ports) << ports.error();
+  ASSERT_TRUE(ports) << ports.error().str();
   ASSERT_EQ(ports->size(), 2u);
   const SerialPortInfo& acm = (*ports)[0];
   EXPECT_EQ(acm.path, "/dev/ttyACM0");
@@ -82,7 +82,7 @@ TEST(SerialTransport, MovesBytesBothWays) {
   const int master = bed.addAcm();
   ASSERT_GE(master, 0) << bed.lastError();
   auto t = SerialTransport::open("/dev/ttyACM0");
-  ASSERT_TRUE(t) << t.error();
+  ASSERT_TRUE(t) << t.error().str();
   EXPECT_EQ((*t)->info().vendorId, 0x2341);
   EXPECT_NE((*t)->description().find("2341:0043"), std::string::npos) << (*t)->description();
   EXPECT_TRUE((*t)->warnings().empty());
@@ -103,12 +103,12 @@ TEST(SerialTransport, ReadTimesOutWithNothing) {
   UmockdevSerial bed;
   ASSERT_GE(bed.addAcm(), 0) << bed.lastError();
   auto t = SerialTransport::open("/dev/ttyACM0");
-  ASSERT_TRUE(t) << t.error();
+  ASSERT_TRUE(t) << t.error().str();
   std::vector<uint8_t> buf(64);
   const auto start = std::chrono::steady_clock::now();
   auto n = (*t)->read(buf, 30);
   const auto elapsed = std::chrono::steady_clock::now() - start;
-  ASSERT_TRUE(n) << n.error();
+  ASSERT_TRUE(n) << n.error().str();
   EXPECT_EQ(*n, 0u);
   EXPECT_GE(elapsed, std::chrono::milliseconds(25));  // it waited rather than spinning
 }
@@ -118,7 +118,9 @@ TEST(SerialTransport, AbsentPortIsAnErrorNotACrash) {
   UmockdevSerial bed;  // empty: no ports at all
   auto t = SerialTransport::open("/dev/ttyACM0");
   ASSERT_FALSE(t);
-  EXPECT_NE(t.error().find("/dev/ttyACM0: error:"), std::string::npos) << t.error();
+  EXPECT_NE(errorText(t.error()).find("/dev/ttyACM0: error:"), std::string::npos) << t.error().str();
+  EXPECT_EQ(t.error().path, "/dev/ttyACM0");  // the device, so the message can name it
+  EXPECT_EQ(t.error().message.find("error:"), std::string::npos) << "the severity is added by errorText";
 }
 
 TEST(SerialTransport, UnplugMakesReadsFail) {
@@ -126,7 +128,7 @@ TEST(SerialTransport, UnplugMakesReadsFail) {
   UmockdevSerial bed;
   ASSERT_GE(bed.addAcm(), 0) << bed.lastError();
   auto t = SerialTransport::open("/dev/ttyACM0");
-  ASSERT_TRUE(t) << t.error();
+  ASSERT_TRUE(t) << t.error().str();
   bed.removeAcm();
   std::vector<uint8_t> buf(64);
   bool failed = false;
@@ -140,7 +142,7 @@ TEST(SerialTransport, LowersFtdiLatencyTimerWhenWritable) {
   UmockdevSerial bed;
   ASSERT_GE(bed.addFtdi(16), 0) << bed.lastError();
   auto t = SerialTransport::open("/dev/ttyUSB0");
-  ASSERT_TRUE(t) << t.error();
+  ASSERT_TRUE(t) << t.error().str();
   ASSERT_TRUE((*t)->info().latencyTimerMs.has_value());
   EXPECT_EQ(*(*t)->info().latencyTimerMs, 1);
   EXPECT_EQ(bed.sysAttribute("/sys/devices/pci0000:00/usb1/1-2/1-2:1.0/ttyUSB0/latency_timer"), "1\n");
@@ -154,7 +156,7 @@ TEST(SerialTransport, WarnsAboutFtdiLatencyWhenLeftAlone) {
   SerialTransportOptions options;
   options.ftdiLatencyMs = 0;  // do not touch it
   auto t = SerialTransport::open("/dev/ttyUSB0", options);
-  ASSERT_TRUE(t) << t.error();
+  ASSERT_TRUE(t) << t.error().str();
   EXPECT_EQ(*(*t)->info().latencyTimerMs, 16);
   ASSERT_EQ((*t)->warnings().size(), 1u);
   EXPECT_NE((*t)->warnings()[0].find("FTDI latency timer is 16 ms"), std::string::npos) << (*t)->warnings()[0];

@@ -57,7 +57,7 @@ UsbTransportOptions transportOptions(const std::string& serial = "") {
 // Session settings for a USB armature: as sessionOptionsFor() gives them for a usb: spec, with short timeouts.
 DeviceSessionOptions usbSessionOptions(const std::string& spec) {
   auto parsed = parseDeviceSpec(spec);
-  EXPECT_TRUE(parsed) << parsed.error();
+  EXPECT_TRUE(parsed) << parsed.error().str();
   DeviceSessionOptions o = sessionOptionsFor(*parsed);
   o.replyTimeoutMs = 300;
   o.reconnectIntervalMs = 50;
@@ -101,7 +101,7 @@ TEST(UsbTransport, ListsArmaturesWithStringsAndInfo) {
   ASSERT_NE(bed.plug(tableArmature(4), other, 3), nullptr) << bed.lastError();
 
   auto list = listUsbDevices();
-  ASSERT_TRUE(list) << list.error();
+  ASSERT_TRUE(list) << list.error().str();
   ASSERT_EQ(list->size(), 2u);
   const UsbDeviceInfo& first = (*list)[0];
   EXPECT_EQ(first.vendorId, 0x1209);
@@ -133,7 +133,7 @@ TEST(UsbTransport, OpensByVidPidAndBySerialNumber) {
 
   {
     auto t = UsbTransport::open(transportOptions("USB-B"));
-    ASSERT_TRUE(t) << t.error();
+    ASSERT_TRUE(t) << t.error().str();
     EXPECT_EQ((*t)->info().serialNumber, "USB-B");
     EXPECT_EQ((*t)->info().address, devB->devnum());
     EXPECT_EQ(devB->claims(), 1u);
@@ -143,14 +143,15 @@ TEST(UsbTransport, OpensByVidPidAndBySerialNumber) {
   EXPECT_EQ(devB->releases(), 1u);  // closing released the interface
 
   auto any = UsbTransport::open(transportOptions());
-  ASSERT_TRUE(any) << any.error();
+  ASSERT_TRUE(any) << any.error().str();
   EXPECT_EQ((*any)->info().serialNumber, "USB-A");  // the first unit
 
   auto missing = UsbTransport::open(transportOptions("NOPE"));
   ASSERT_FALSE(missing);
-  EXPECT_NE(missing.error().find("usb 1209:0001: error: no unit with serial number 'NOPE'"), std::string::npos)
-      << missing.error();
-  EXPECT_NE(missing.error().find("USB-B"), std::string::npos) << missing.error();
+  EXPECT_NE(errorText(missing.error()).find("usb 1209:0001: error: no unit with serial number 'NOPE'"),
+            std::string::npos)
+      << missing.error().str();
+  EXPECT_NE(errorText(missing.error()).find("USB-B"), std::string::npos) << missing.error().str();
 }
 
 TEST(UsbTransport, AbsentDeviceIsAnErrorNotACrash) {
@@ -158,9 +159,10 @@ TEST(UsbTransport, AbsentDeviceIsAnErrorNotACrash) {
   UmockdevUsb bed;  // empty bus
   auto t = UsbTransport::open(transportOptions());
   ASSERT_FALSE(t);
-  EXPECT_EQ(t.error(), "usb 1209:0001: error: not attached");
+  EXPECT_EQ(errorText(t.error()), "usb 1209:0001: error: not attached");
+  EXPECT_EQ(t.error().path, "usb 1209:0001");
   auto list = listUsbDevices();
-  ASSERT_TRUE(list) << list.error();
+  ASSERT_TRUE(list) << list.error().str();
   EXPECT_TRUE(list->empty());
 }
 
@@ -171,7 +173,7 @@ TEST(UsbTransport, ReadsInfoThroughTheVendorControlRequest) {
   FakeUsbArmature* dev = bed.plug(model);
   ASSERT_NE(dev, nullptr) << bed.lastError();
   auto t = UsbTransport::open(transportOptions());
-  ASSERT_TRUE(t) << t.error();
+  ASSERT_TRUE(t) << t.error().str();
   ASSERT_TRUE((*t)->info().info.has_value()) << (*t)->info().problem;
   EXPECT_EQ(*(*t)->info().info, model.info);
   EXPECT_EQ(dev->infoRequests(), 1u);
@@ -185,7 +187,7 @@ TEST(UsbTransport, DeviceWithoutInfoRequestOpensWithAWarning) {
   usb.answersInfoRequest = false;  // the request stalls
   ASSERT_NE(bed.plug(tableArmature(), usb), nullptr) << bed.lastError();
   auto t = UsbTransport::open(transportOptions());
-  ASSERT_TRUE(t) << t.error();
+  ASSERT_TRUE(t) << t.error().str();
   EXPECT_FALSE((*t)->info().info.has_value());
   ASSERT_EQ((*t)->warnings().size(), 1u);
   EXPECT_NE((*t)->warnings()[0].find("INFO control request failed"), std::string::npos) << (*t)->warnings()[0];
@@ -200,7 +202,7 @@ TEST(UsbTransport, DetachesAndReattachesAKernelDriver) {
   ASSERT_NE(dev, nullptr) << bed.lastError();
   {
     auto t = UsbTransport::open(transportOptions());
-    ASSERT_TRUE(t) << t.error();
+    ASSERT_TRUE(t) << t.error().str();
     EXPECT_TRUE((*t)->detachedKernelDriver());
     EXPECT_TRUE(dev->kernelDriverDetached());
   }
@@ -219,7 +221,7 @@ TEST(UsbTransport, MovesFramesBothWays) {
     FakeUsbArmature* dev = bed.plug(model, usb);
     ASSERT_NE(dev, nullptr) << bed.lastError();
     auto t = UsbTransport::open(transportOptions());
-    ASSERT_TRUE(t) << t.error();
+    ASSERT_TRUE(t) << t.error().str();
     BinaryDecoder decoder;
     // The boot HELLO the device queued before the host opened it arrives first.
     auto boot = readMessage(**t, decoder, MessageType::Hello);
@@ -242,7 +244,7 @@ TEST(UsbTransport, ReadTimesOutWithNothing) {
   UmockdevUsb bed;
   ASSERT_NE(bed.plug(tableArmature()), nullptr) << bed.lastError();
   auto t = UsbTransport::open(transportOptions());
-  ASSERT_TRUE(t) << t.error();
+  ASSERT_TRUE(t) << t.error().str();
   BinaryDecoder decoder;
   ASSERT_TRUE(readMessage(**t, decoder, MessageType::Hello));  // the boot HELLO; then the device is quiet
   std::vector<uint8_t> buf(64);
@@ -250,7 +252,7 @@ TEST(UsbTransport, ReadTimesOutWithNothing) {
   const auto start = std::chrono::steady_clock::now();
   auto n = (*t)->read(buf, 30);
   const auto elapsed = std::chrono::steady_clock::now() - start;
-  ASSERT_TRUE(n) << n.error();
+  ASSERT_TRUE(n) << n.error().str();
   EXPECT_EQ(*n, 0u);
   EXPECT_GE(elapsed, std::chrono::milliseconds(29));  // it waited rather than returning early
 }
@@ -261,12 +263,12 @@ TEST(UsbTransport, UnplugMakesReadsAndWritesFail) {
   FakeUsbArmature* dev = bed.plug(tableArmature());
   ASSERT_NE(dev, nullptr) << bed.lastError();
   auto t = UsbTransport::open(transportOptions());
-  ASSERT_TRUE(t) << t.error();
+  ASSERT_TRUE(t) << t.error().str();
   bed.unplug(dev);
   std::vector<uint8_t> buf(64);
   std::string error;
   for (int i = 0; i < 200 && error.empty(); ++i)
-    if (auto n = (*t)->read(buf, 20); !n) error = n.error();
+    if (auto n = (*t)->read(buf, 20); !n) error = n.error().str();
   EXPECT_NE(error.find("unplugged"), std::string::npos) << error;
   std::vector<uint8_t> frame;
   ASSERT_TRUE(appendFrame(Message{1, 0, msg::Poll{}}, frame));
@@ -390,7 +392,7 @@ TEST(UsbSession, UnplugMidStreamKeepsTheLastPoseAndReconnectsOnReplug) {
   FakeUsbArmature* dev = bed.plug(model);
   ASSERT_NE(dev, nullptr) << bed.lastError();
   auto monitor = UsbHotplugMonitor::start({0x1209, 0x0001});
-  ASSERT_TRUE(monitor) << monitor.error();
+  ASSERT_TRUE(monitor) << monitor.error().str();
   std::shared_ptr<UsbHotplugMonitor> hotplug(std::move(*monitor));
   ASSERT_TRUE(hotplug->waitForPresent(5'000));
 
@@ -440,7 +442,7 @@ TEST(UsbHotplugMonitor, CountsArrivalsAndDeparturesOfItsVidPid) {
   IMPS_REQUIRE_UMOCKDEV();
   UmockdevUsb bed;
   auto monitor = UsbHotplugMonitor::start({0x1209, 0x0001});
-  ASSERT_TRUE(monitor) << monitor.error();
+  ASSERT_TRUE(monitor) << monitor.error().str();
   UsbHotplugMonitor& m = **monitor;
   EXPECT_EQ(m.stats().present, 0);
   EXPECT_FALSE(m.waitForPresent(0));
@@ -467,7 +469,7 @@ TEST(UsbHotplugMonitor, CountsDevicesAttachedBeforeItStarted) {
   UmockdevUsb bed;
   ASSERT_NE(bed.plug(tableArmature()), nullptr) << bed.lastError();
   auto monitor = UsbHotplugMonitor::start({0x1209, 0x0001});
-  ASSERT_TRUE(monitor) << monitor.error();
+  ASSERT_TRUE(monitor) << monitor.error().str();
   EXPECT_TRUE((*monitor)->waitForPresent(0));
   EXPECT_EQ((*monitor)->stats().arrivals, 1u);
 }
@@ -476,21 +478,21 @@ TEST(UsbOpener, WithHotplugFailsFastWhileAbsentAndOpensOnArrival) {
   IMPS_REQUIRE_UMOCKDEV();
   UmockdevUsb bed;
   auto monitor = UsbHotplugMonitor::start({0x1209, 0x0001});
-  ASSERT_TRUE(monitor) << monitor.error();
+  ASSERT_TRUE(monitor) << monitor.error().str();
   std::shared_ptr<UsbHotplugMonitor> hotplug(std::move(*monitor));
   TransportOpener open = usbOpener(transportOptions(), hotplug, 20);
   auto absent = open();
   ASSERT_FALSE(absent);
-  EXPECT_NE(absent.error().find("not attached (waiting for it to be plugged in)"), std::string::npos)
-      << absent.error();
+  EXPECT_NE(absent.error().str().find("not attached (waiting for it to be plugged in)"), std::string::npos)
+      << absent.error().str();
 
   // A long arrival wait ends when the device arrives, not when the wait runs out.
   TransportOpener patient = usbOpener(transportOptions(), hotplug, 60'000);
-  std::expected<std::unique_ptr<ByteTransport>, std::string> opened = std::unexpected("not called");
+  IoResult<std::unique_ptr<ByteTransport>> opened = std::unexpected(IoError{"", "not called"});
   std::thread opener([&] { opened = patient(); });
   ASSERT_NE(bed.plug(tableArmature()), nullptr) << bed.lastError();
   opener.join();
-  ASSERT_TRUE(opened) << opened.error();
+  ASSERT_TRUE(opened) << opened.error().str();
   EXPECT_NE((*opened)->description().find("usb 1209:0001"), std::string::npos) << (*opened)->description();
 }
 

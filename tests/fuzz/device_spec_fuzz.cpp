@@ -13,8 +13,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);
   auto spec = parseDeviceSpec(text);
   if (!spec) {
-    if (spec.error().rfind("spec:1:", 0) != 0) {
-      std::fprintf(stderr, "error without a location: %s\n", spec.error().c_str());
+    if (spec.error().str().rfind("spec:1:", 0) != 0) {
+      std::fprintf(stderr, "error without a location: %s\n", spec.error().str().c_str());
       std::abort();
     }
     return 0;

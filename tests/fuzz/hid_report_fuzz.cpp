@@ -42,7 +42,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
 
   auto parsed = parseHidReportDescriptor(descriptor);
   if (!parsed) {
-    FUZZ_CHECK(parsed.error().rfind("report descriptor:", 0) == 0);
+    FUZZ_CHECK(parsed.error().str().rfind("report descriptor:", 0) == 0);
     return 0;
   }
   for (const HidField& f : parsed->fields) {
@@ -53,7 +53,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   auto layout = hidArmatureLayout(*parsed);
   if (!layout) {
-    FUZZ_CHECK(layout.error().rfind("report descriptor:", 0) == 0);
+    FUZZ_CHECK(layout.error().str().rfind("report descriptor:", 0) == 0);
     return 0;
   }
   checkLayout(*layout);

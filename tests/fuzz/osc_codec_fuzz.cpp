@@ -46,7 +46,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::span<const uint8_t> packet(data, size);
   auto decoded = decodeOscPacket(packet, 42, *pose, channels);
   if (!decoded) {
-    const std::string& e = decoded.error();
+    FUZZ_CHECK(decoded.error().errorCount() == 1);
+    const std::string e = decoded.error().str();
     FUZZ_CHECK(e.rfind("osc:byte ", 0) == 0);
     FUZZ_CHECK(e.find(": error: ") != std::string::npos);
     FUZZ_CHECK(std::strtoull(e.c_str() + 9, nullptr, 10) <= size);

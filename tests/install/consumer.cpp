@@ -53,7 +53,7 @@ int main(int argc, char** argv) {
 
   // drivers: enumerating serial ports runs libserialport (a machine may have none; an error is a message, not a crash).
   auto ports = imps::drivers::listSerialPorts();
-  if (!ports) std::fprintf(stderr, "note: %s\n", ports.error().c_str());
+  if (!ports) std::fprintf(stderr, "note: %s\n", imps::drivers::errorText(ports.error()).c_str());
 
   std::printf("%s %zu %zu\n", closed ? "closed" : "open", mesh.triangleCount(), back->frames.size());
   return closed && mesh.triangleCount() > 0 ? 0 : 1;

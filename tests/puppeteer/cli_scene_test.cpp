@@ -365,7 +365,7 @@ TEST(MeshCommand, LongWorkShowsProgressOnATerminalOnly) {
   ASSERT_EQ(piped.exitCode, kCliOk) << piped.err;
   EXPECT_EQ(piped.err, "");
   auto pty = sim::PseudoTerminal::open();
-  ASSERT_TRUE(pty) << pty.error();
+  ASSERT_TRUE(pty) << pty.error().str();
   test::ProgramOptions onTerminal;
   onTerminal.stderrPath = pty->slavePath();
   const test::ProgramRun shown = runPuppeteer(args, onTerminal);

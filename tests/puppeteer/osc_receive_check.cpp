@@ -39,7 +39,7 @@ int main(int argc, char** argv) {
   PoseMailbox channels;
   auto receiver = OscReceiver::open(options, channels);
   if (!receiver) {
-    std::fprintf(stderr, "%s\n", receiver.error().c_str());
+    std::fprintf(stderr, "%s\n", errorText(receiver.error()).c_str());
     return 1;
   }
   (*receiver)->start();

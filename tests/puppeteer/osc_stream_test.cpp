@@ -33,7 +33,7 @@ std::unique_ptr<OscPoseSource> openSource(std::optional<SampleMapper> calibratio
   spec.kind = drivers::DeviceKind::Osc;
   spec.path = "127.0.0.1";
   auto source = OscPoseSource::open(spec, biped(), std::move(calibration));
-  EXPECT_TRUE(source) << source.error();
+  EXPECT_TRUE(source) << source.error().str();
   return source ? std::move(*source) : nullptr;
 }
 
@@ -58,7 +58,7 @@ TEST(OscPoseStreaming, AReceivedPoseIsTheSentPoseBitForBit) {
   ASSERT_TRUE(source);
   {
     auto sender = drivers::OscPoseSender::open({target(*source)});
-    ASSERT_TRUE(sender) << sender.error();
+    ASSERT_TRUE(sender) << sender.error().str();
     const OscPoseWriter writer(biped());
     EXPECT_TRUE(writer.skippedJoints().empty());
     auto pose = std::make_unique<drivers::OscPose>();

@@ -15,7 +15,7 @@ constexpr float kPi = std::numbers::pi_v<float>;
 
 TEST(PoseArgument, AnglesAreDegreesUnlessWrittenOtherwise) {
   auto p = parsePoseArgument("Head=0,1,0,90");
-  ASSERT_TRUE(p.has_value()) << p.error();
+  ASSERT_TRUE(p.has_value()) << p.error().str();
   EXPECT_EQ(p->joint, "Head");
   EXPECT_FALSE(p->translation);
   EXPECT_NEAR(p->radians, kPi / 2, 1e-6f);
@@ -26,7 +26,7 @@ TEST(PoseArgument, AnglesAreDegreesUnlessWrittenOtherwise) {
 
 TEST(PoseArgument, ThreeNumbersMoveTheJointInMetres) {
   auto p = parsePoseArgument("Pelvis=0,0.25,-1");
-  ASSERT_TRUE(p.has_value()) << p.error();
+  ASSERT_TRUE(p.has_value()) << p.error().str();
   EXPECT_TRUE(p->translation);
   EXPECT_EQ(p->offset, glm::vec3(0, 0.25f, -1));
 }
@@ -38,7 +38,7 @@ TEST(PoseArgument, BadArgumentsAreRefused) {
     if (std::string(bad) == "Head=0,1,0") continue;  // three numbers: a translation, valid
     EXPECT_FALSE(p.has_value()) << bad;
     if (!p) {
-      EXPECT_NE(p.error().find("JOINT=AX,AY,AZ,ANGLE"), std::string::npos);
+      EXPECT_NE(p.error().str().find("JOINT=AX,AY,AZ,ANGLE"), std::string::npos);
     }
   }
 }

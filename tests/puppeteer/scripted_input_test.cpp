@@ -13,7 +13,7 @@ namespace {
 
 TEST(ScriptedInput, Keys) {
   auto keys = parseScriptedKeys("o@5,k@10,P@0,F12@3,Esc@40,[@1,]@2,7@8,backspace@9");
-  ASSERT_TRUE(keys) << keys.error();
+  ASSERT_TRUE(keys) << keys.error().str();
   ASSERT_EQ(keys->size(), 9u);
   EXPECT_EQ((*keys)[0].key, GLFW_KEY_O);
   EXPECT_EQ((*keys)[0].frame, 5);
@@ -31,7 +31,7 @@ TEST(ScriptedInput, Keys) {
 
 TEST(ScriptedInput, KeysWithModifiers) {
   auto keys = parseScriptedKeys("ctrl+z@3,Ctrl+Shift+Z@4,z@5,shift+w@6");
-  ASSERT_TRUE(keys) << keys.error();
+  ASSERT_TRUE(keys) << keys.error().str();
   ASSERT_EQ(keys->size(), 4u);
   EXPECT_EQ((*keys)[0].key, GLFW_KEY_Z);
   EXPECT_EQ((*keys)[0].mods, GLFW_MOD_CONTROL);
@@ -47,13 +47,13 @@ TEST(ScriptedInput, BadKeys) {
                           "ctrl+shift+@3", "alt+z@3", "ctrl+zz@3"}) {
     auto keys = parseScriptedKeys(bad);
     ASSERT_FALSE(keys) << bad;
-    EXPECT_NE(keys.error().find("--keys"), std::string::npos) << keys.error();
+    EXPECT_NE(keys.error().str().find("--keys"), std::string::npos) << keys.error().str();
   }
 }
 
 TEST(ScriptedInput, Drag) {
   auto d = parseScriptedDrag("320,200.5,380,260@5");
-  ASSERT_TRUE(d) << d.error();
+  ASSERT_TRUE(d) << d.error().str();
   EXPECT_EQ(d->kind, ScriptedEvent::Kind::Drag);
   EXPECT_EQ(d->frame, 5);
   EXPECT_FLOAT_EQ(d->x0, 320);
@@ -62,12 +62,12 @@ TEST(ScriptedInput, Drag) {
   EXPECT_FLOAT_EQ(d->y1, 260);
   EXPECT_FALSE(d->shift);
   auto twist = parseScriptedDrag("1,2,3,4@0+shift");
-  ASSERT_TRUE(twist) << twist.error();
+  ASSERT_TRUE(twist) << twist.error().str();
   EXPECT_TRUE(twist->shift);
   for (const char* bad : {"1,2,3@4", "1,2,3,4", "1,2,3,4,5@6", "1,2,3,x@4", "1,2,3,4@5+ctrl", "-1,2,3,4@5"}) {
     auto e = parseScriptedDrag(bad);
     ASSERT_FALSE(e) << bad;
-    EXPECT_NE(e.error().find("--drag"), std::string::npos);
+    EXPECT_NE(e.error().str().find("--drag"), std::string::npos);
   }
 }
 

@@ -75,9 +75,9 @@ struct Rig {
   Rig(const std::string& specText, std::optional<SampleMapper> mapper, LiveSourceOptions live)
       : skeleton(test::exampleCharacter("simple_biped")) {
     auto spec = drivers::parseDeviceSpec(specText);
-    EXPECT_TRUE(spec) << spec.error();
+    EXPECT_TRUE(spec) << spec.error().str();
     auto options = sim::armatureOptionsFromSpec(*spec);
-    EXPECT_TRUE(options) << options.error();
+    EXPECT_TRUE(options) << options.error().str();
     source = std::make_unique<LivePoseSource>(sim::simulatedOpener(*options, clock), drivers::sessionOptionsFor(*spec),
                                               test::exampleCharacter("simple_biped"), specText, std::move(mapper),
                                               std::move(live));
@@ -243,7 +243,7 @@ TEST(LiveCalibration, NoisyWindowIsRejectedAndNothingIsWritten) {
 TEST(LiveRecording, LayoutChangeMidTakeIsRecordedNotDropped) {
   TempDir dir;
   auto pty = sim::PseudoTerminal::open();
-  ASSERT_TRUE(pty) << pty.error();
+  ASSERT_TRUE(pty) << pty.error().str();
   LiveSourceOptions live;
   live.recordPath = (dir.path / "take.session").string();
   drivers::DeviceSessionOptions options;
@@ -325,9 +325,9 @@ TEST(LiveCalibration, KeyNeedsARigMapAndSomewhereToSave) {
 // channel's angle stays inside its joint's limits (no clamping needed), and the waving forearm really moves.
 TEST(LiveDefaultMotion, EveryGeneratedAngleIsWithinTheRigMapsLimits) {
   auto spec = drivers::parseDeviceSpec("sim:?rate=1000");
-  ASSERT_TRUE(spec) << spec.error();
+  ASSERT_TRUE(spec) << spec.error().str();
   auto options = sim::armatureOptionsFromSpec(*spec);
-  ASSERT_TRUE(options) << options.error();
+  ASSERT_TRUE(options) << options.error().str();
   const sim::SimulatedArmature armature(*options);
   auto cal = calibration::Calibration::readFile(kCalibration, &test::exampleCharacter("simple_biped"),
                                                 &options->info);
@@ -357,9 +357,9 @@ TEST(LiveDefaultMotion, EveryGeneratedAngleIsWithinTheRigMapsLimits) {
 // motion=still holds the calibration pose: the bundled calibration maps it to zero angles on every channel.
 TEST(LiveDefaultMotion, StillMotionIsTheBundledCalibrationsPose) {
   auto spec = drivers::parseDeviceSpec("sim:?motion=still");
-  ASSERT_TRUE(spec) << spec.error();
+  ASSERT_TRUE(spec) << spec.error().str();
   auto options = sim::armatureOptionsFromSpec(*spec);
-  ASSERT_TRUE(options) << options.error();
+  ASSERT_TRUE(options) << options.error().str();
   const sim::SimulatedArmature armature(*options);
   auto cal = calibration::Calibration::readFile(kCalibration, &test::exampleCharacter("simple_biped"),
                                                 &options->info);

@@ -38,7 +38,7 @@ class FreezableClock final : public Clock {
 
 TEST(ArmaturePty, Stream1kHz64ChannelsEverySampleInOrderByteExact) {
   auto pty = PseudoTerminal::open();
-  ASSERT_TRUE(pty) << pty.error();
+  ASSERT_TRUE(pty) << pty.error().str();
 
   // 4096 distinct poses using every bit of 16-bit counts, with some channels flagged.
   ArmatureOptions o;

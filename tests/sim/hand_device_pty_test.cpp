@@ -162,7 +162,7 @@ struct Rig {
 // Issue 14 item 2: a 500-sample hole behind a silence longer than the session timeout is 500 dropped samples.
 TEST(HandDevicePty, SamplesLostAcrossATimeoutAreCounted) {
   auto pty = PseudoTerminal::open();
-  ASSERT_TRUE(pty) << pty.error();
+  ASSERT_TRUE(pty) << pty.error().str();
   Rig rig(std::move(*pty));
   HandDevice device(rig.pty.master());
   DeviceSession session(serialOpener(rig.pty.slavePath()), rig.mailbox, quickOptions());
@@ -182,7 +182,7 @@ TEST(HandDevicePty, SamplesLostAcrossATimeoutAreCounted) {
 // HELLO unasked), so the numbers it sent meanwhile are dropped samples, not a fresh start.
 TEST(HandDevicePty, SamplesLostAcrossAReconnectAreCounted) {
   auto pty = PseudoTerminal::open();
-  ASSERT_TRUE(pty) << pty.error();
+  ASSERT_TRUE(pty) << pty.error().str();
   Rig rig(std::move(*pty));
   HandDevice device(rig.pty.master());
   DeviceSessionOptions o = quickOptions();
@@ -206,7 +206,7 @@ TEST(HandDevicePty, SamplesLostAcrossAReconnectAreCounted) {
 // while the device's numbering moves on (two dropped samples).
 TEST(HandDevicePty, PollModeFindsTheSampleBehindAForgedHeaderAndCountsUnansweredPolls) {
   auto pty = PseudoTerminal::open();
-  ASSERT_TRUE(pty) << pty.error();
+  ASSERT_TRUE(pty) << pty.error().str();
   Rig rig(std::move(*pty));
   HandDevice device(rig.pty.master());
   std::atomic<uint32_t> polls{0};
@@ -248,7 +248,7 @@ TEST(HandDevicePty, PollModeFindsTheSampleBehindAForgedHeaderAndCountsUnanswered
 // Issue 14 item 4: a frame sent twice is one sample, and the repeat is counted.
 TEST(HandDevicePty, RepeatedFrameIsPublishedOnceAndCounted) {
   auto pty = PseudoTerminal::open();
-  ASSERT_TRUE(pty) << pty.error();
+  ASSERT_TRUE(pty) << pty.error().str();
   Rig rig(std::move(*pty));
   HandDevice device(rig.pty.master());
   DeviceSession session(serialOpener(rig.pty.slavePath()), rig.mailbox, quickOptions());
@@ -273,7 +273,7 @@ TEST(HandDevicePty, RepeatedFrameIsPublishedOnceAndCounted) {
 // every data line is an 8-channel sample, none is skipped, and the device description says 8 channels.
 TEST(HandDevicePty, NumericBootBannerIsNotTakenForTheLayout) {
   auto pty = PseudoTerminal::open();
-  ASSERT_TRUE(pty) << pty.error();
+  ASSERT_TRUE(pty) << pty.error().str();
   Rig rig(std::move(*pty));
   HandDevice device(rig.pty.master());
   DeviceSessionOptions o = quickOptions();

@@ -42,7 +42,7 @@ int openPort(const PseudoTerminal& pty) { return ::open(pty.slavePath().c_str(),
 
 PseudoTerminal openPair() {
   auto pty = PseudoTerminal::open();
-  EXPECT_TRUE(pty.has_value()) << (pty ? "" : pty.error());
+  EXPECT_TRUE(pty.has_value()) << (pty ? "" : pty.error().str());
   return std::move(*pty);
 }
 

@@ -181,9 +181,9 @@ TEST(SimulatedArmature, PlaysRecordedSamples) {
 
 TEST(SimulatedArmature, SpecOptions) {
   auto spec = parseDeviceSpec("sim:?channels=64&bits=16&rate=1000&noise=1.5&banner=a|b&unplug_ms=300&replug_ms=200");
-  ASSERT_TRUE(spec) << spec.error();
+  ASSERT_TRUE(spec) << spec.error().str();
   auto o = armatureOptionsFromSpec(*spec);
-  ASSERT_TRUE(o) << o.error();
+  ASSERT_TRUE(o) << o.error().str();
   EXPECT_EQ(o->info.channelCount, 64);
   EXPECT_EQ(o->info.bitsPerChannel, 16);
   EXPECT_EQ(o->rateHz, 1000);
@@ -193,7 +193,7 @@ TEST(SimulatedArmature, SpecOptions) {
   EXPECT_EQ(o->replugAfterNs, 200 * kMs);
   auto bad = armatureOptionsFromSpec(*parseDeviceSpec("sim:?chanels=4"));
   ASSERT_FALSE(bad);
-  EXPECT_NE(bad.error().find("sim key 'chanels': unknown"), std::string::npos) << bad.error();
+  EXPECT_NE(bad.error().str().find("sim key 'chanels': unknown"), std::string::npos) << bad.error().str();
   EXPECT_FALSE(armatureOptionsFromSpec(*parseDeviceSpec("sim:?channels=65")));
   EXPECT_FALSE(armatureOptionsFromSpec(*parseDeviceSpec("sim:/nonexistent.session")));
 }
@@ -203,13 +203,14 @@ TEST(SimulatedArmature, TimeKeysOutOfRangeAreRefusedNotWrapped) {
   for (const char* key : {"boot_ms", "unplug_ms", "replug_ms"}) {
     auto bad = armatureOptionsFromSpec(*parseDeviceSpec(std::string("sim:?") + key + "=9223372036854"));
     ASSERT_FALSE(bad) << key;
-    EXPECT_NE(bad.error().find(std::string("sim key '") + key + "': bad value '9223372036854': expected milliseconds "
-                               "from 0 to 31536000000 (a year)"),
+    EXPECT_NE(bad.error().str().find(std::string("sim key '") + key +
+                                     "': bad value '9223372036854': expected milliseconds "
+                                     "from 0 to 31536000000 (a year)"),
               std::string::npos)
-        << bad.error();
+        << bad.error().str();
   }
   auto year = armatureOptionsFromSpec(*parseDeviceSpec("sim:?boot_ms=31536000000"));
-  ASSERT_TRUE(year) << year.error();
+  ASSERT_TRUE(year) << year.error().str();
   EXPECT_EQ(year->bootDelayNs, int64_t{31536000000} * kMs);
 }
 
@@ -218,7 +219,7 @@ TEST(SimulatedArmature, TimeKeysOutOfRangeAreRefusedNotWrapped) {
 TEST(SimulatedArmature, UnknownKeyListsEveryKnownKey) {
   auto bad = armatureOptionsFromSpec(*parseDeviceSpec("sim:?rat=1000"));
   ASSERT_FALSE(bad);
-  const std::string& message = bad.error();
+  const std::string& message = bad.error().str();
   const std::vector<std::pair<std::string, std::string>> keys = {
       {"protocol", "lines"}, {"mode", "poll"},     {"rate", "100"},        {"channels", "8"},   {"bits", "12"},
       {"motion", "still"},   {"period_s", "4"},    {"noise", "1"},         {"dropout", "0.1"},  {"garbage", "0.1"},
@@ -227,7 +228,7 @@ TEST(SimulatedArmature, UnknownKeyListsEveryKnownKey) {
   for (const auto& [key, value] : keys) {
     EXPECT_NE(message.find(" " + key), std::string::npos) << key << " is not listed: " << message;
     auto spec = parseDeviceSpec("sim:?" + key + "=" + value);
-    ASSERT_TRUE(spec) << key << ": " << spec.error();
+    ASSERT_TRUE(spec) << key << ": " << spec.error().str();
     EXPECT_TRUE(armatureOptionsFromSpec(*spec)) << key;
   }
   size_t listed = 1;
@@ -235,14 +236,14 @@ TEST(SimulatedArmature, UnknownKeyListsEveryKnownKey) {
   EXPECT_EQ(listed, keys.size()) << kSimKeys;
   auto motion = armatureOptionsFromSpec(*parseDeviceSpec("sim:?motion=dance"));
   ASSERT_FALSE(motion);
-  EXPECT_NE(motion.error().find("expected wave, still or sweep"), std::string::npos) << motion.error();
+  EXPECT_NE(motion.error().str().find("expected wave, still or sweep"), std::string::npos) << motion.error().str();
 }
 
 // motion=still holds one pose (mid-scale on every channel); the default wave moves; sweep covers 10..90 %.
 TEST(SimulatedArmature, GeneratedMotions) {
   auto make = [](const std::string& spec) {
     auto o = armatureOptionsFromSpec(*parseDeviceSpec(spec));
-    EXPECT_TRUE(o) << o.error();
+    EXPECT_TRUE(o) << o.error().str();
     return SimulatedArmature(*o);
   };
   const SimulatedArmature still = make("sim:?motion=still"), wave = make("sim:"), sweep = make("sim:?motion=sweep");
@@ -284,7 +285,7 @@ TEST(SimulatedArmatureSession, InProcessUnplugAndReplug) {
   auto spec = parseDeviceSpec("sim:?rate=200&channels=8&unplug_ms=400&replug_ms=300");
   ASSERT_TRUE(spec);
   auto options = armatureOptionsFromSpec(*spec);
-  ASSERT_TRUE(options) << options.error();
+  ASSERT_TRUE(options) << options.error().str();
   SteadyClock clock;
   PoseMailbox mailbox;
   DeviceSessionOptions so = fastOptions();

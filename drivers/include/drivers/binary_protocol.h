@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "drivers/receive_buffer.h"
+#include "imps/diagnostic.h"
 
 #include "drivers/sample.h"
 
@@ -142,22 +143,23 @@ Message sampleMessage(const Sample& sample, uint8_t bitsPerChannel, bool hasDevi
 
 // Bytes the whole frame of `message` takes, or what makes it unencodable (channel count outside 1..kMaxChannels,
 // bits outside 1..32, a count that does not fit its bits, a flag value > 2, a string over its limit, channel names
-// neither empty nor channelCount long, StartStream rate 0, negative device time, mismatched sample sequence).
-std::expected<size_t, std::string> encodedFrameSize(const Message& message);
+// neither empty nor channelCount long, StartStream rate 0, negative device time, mismatched sample sequence), as
+// one diagnostic without a position (printed "error: …"; the values come from the program, not a file).
+std::expected<size_t, Diagnostics> encodedFrameSize(const Message& message);
 
 // Writes one frame into `out` (which must hold at least encodedFrameSize bytes) and returns the bytes written.
 // Never allocates for Sample messages. Deterministic: equal messages give equal bytes.
-std::expected<size_t, std::string> encodeFrame(const Message& message, std::span<uint8_t> out);
+std::expected<size_t, Diagnostics> encodeFrame(const Message& message, std::span<uint8_t> out);
 
 // Appends one frame to `out`; `out` is unchanged on error.
-std::expected<void, std::string> appendFrame(const Message& message, std::vector<uint8_t>& out);
+std::expected<void, Diagnostics> appendFrame(const Message& message, std::vector<uint8_t>& out);
 
 // The DeviceInfo block alone (the payload of INFO, docs/protocol.md): what a USB armature returns for its vendor
 // GET_INFO control request. Errors as encodedFrameSize() gives them for an invalid description.
-std::expected<std::vector<uint8_t>, std::string> encodeDeviceInfo(const DeviceInfo& info);
-// Parses a DeviceInfo block that fills `bytes` exactly (the layout and limits of INFO's payload); the error says
-// that the block is malformed. Never throws.
-std::expected<DeviceInfo, std::string> decodeDeviceInfo(std::span<const uint8_t> bytes);
+std::expected<std::vector<uint8_t>, Diagnostics> encodeDeviceInfo(const DeviceInfo& info);
+// Parses a DeviceInfo block that fills `bytes` exactly (the layout and limits of INFO's payload); the error (one
+// diagnostic without a position) says that the block is malformed. Never throws.
+std::expected<DeviceInfo, Diagnostics> decodeDeviceInfo(std::span<const uint8_t> bytes);
 
 // ---- Decoder -------------------------------------------------------------------------------------------------
 

@@ -11,6 +11,8 @@
 #include <utility>
 #include <vector>
 
+#include "imps/diagnostic.h"
+
 namespace imps::drivers {
 
 enum class DeviceKind : uint8_t { Serial, Hid, Usb, Sim, Osc };
@@ -48,12 +50,13 @@ struct DeviceSpec {
 };
 
 // Parses a device spec; a bare path starting with '/' is a serial port ("/dev/ttyACM0" = "serial:/dev/ttyACM0").
-// Bad input gives "spec:1:COLUMN: error: what was expected" (COLUMN 1-based into `text`):
+// Bad input gives one diagnostic at spec:1:COLUMN, COLUMN 1-based into `text` (printed
+// "spec:1:COLUMN: error: what was expected"):
 // an unknown scheme, a missing path, VID/PID that are not 1..4 hex digits, an unknown or repeated key (catches
 // typos), or a value out of range (baud 1..4000000, rate 0..65535, channels 0..64, bits 1..32; bits only with
 // protocol=lines: a binary device reports its own; port 1..65535). An osc spec is `osc.udp://[ADDRESS]:PORT` and
 // takes no keys. Never throws.
-std::expected<DeviceSpec, std::string> parseDeviceSpec(std::string_view text);
+std::expected<DeviceSpec, Diagnostics> parseDeviceSpec(std::string_view text);
 
 // The canonical text of a spec; parseDeviceSpec(formatDeviceSpec(s)) == s. Keys at their defaults are omitted.
 std::string formatDeviceSpec(const DeviceSpec& spec);

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "drivers/sample.h"
+#include "imps/diagnostic.h"
 
 namespace imps::drivers {
 
@@ -74,11 +75,12 @@ struct HidReportDescriptor {
 
 // Parses a report descriptor (short items; long items are skipped). Understands Usage Page, Usage, Usage
 // Minimum/Maximum, Logical Minimum/Maximum, Report Size/Count/ID, Push/Pop, Input/Output/Feature, Collection and
-// End Collection; other items are accepted and ignored. Errors are "report descriptor:OFFSET: error: …" with the
-// 0-based byte offset of the offending item: a truncated item, Report ID 0, Pop without Push, more than 16
+// End Collection; other items are accepted and ignored. Errors are one diagnostic whose file is
+// "report descriptor:OFFSET" (printed "report descriptor:OFFSET: error: …"), OFFSET the 0-based byte offset of the
+// offending item: a truncated item, Report ID 0, Pop without Push, more than 16
 // pushes or 32 nested collections, unbalanced collections, a main item without an ID in a descriptor that uses
 // report IDs, a report larger than kMaxHidReportSize, or an empty descriptor. Never throws.
-std::expected<HidReportDescriptor, std::string> parseHidReportDescriptor(std::span<const uint8_t> bytes);
+std::expected<HidReportDescriptor, Diagnostics> parseHidReportDescriptor(std::span<const uint8_t> bytes);
 
 // ---- The armature's input report -----------------------------------------------------------------------------
 
@@ -131,7 +133,7 @@ struct HidDeviceDescription {
 // of an Input item that is Data, Variable and Absolute, 1..32 bits, not on the Button/Keyboard/LED pages and not
 // the IMPS sequence or device-time usage. Beyond 64 channels the rest are ignored (warned). Error
 // "report descriptor: error: …" when no input report has a channel.
-std::expected<HidInputLayout, std::string> hidArmatureLayout(const HidReportDescriptor& descriptor);
+std::expected<HidInputLayout, Diagnostics> hidArmatureLayout(const HidReportDescriptor& descriptor);
 
 // The description a HID armature gets when it sends no INFO feature report: channel count, widest channel,
 // names from the usages, device timestamp when a device-time field exists; name/serial/firmware as given.
@@ -139,8 +141,9 @@ DeviceInfo hidFallbackInfo(const HidInputLayout& layout, std::string name, std::
                            std::string firmwareVersion);
 
 // Reads the INFO frame out of a feature report's bytes (ID byte first when `usesReportIds`): the first valid
-// binary-protocol frame in it, which must be INFO (trailing zero padding is ignored). Errors name what is wrong.
-std::expected<DeviceInfo, std::string> parseHidInfoReport(std::span<const uint8_t> report, bool usesReportIds);
+// binary-protocol frame in it, which must be INFO (trailing zero padding is ignored). Errors name what is wrong
+// (one diagnostic without a position).
+std::expected<DeviceInfo, Diagnostics> parseHidInfoReport(std::span<const uint8_t> report, bool usesReportIds);
 
 // ---- Decoder -------------------------------------------------------------------------------------------------
 
@@ -195,8 +198,9 @@ class HidReportDecoder {
 // The input report for `sample` (device side: tests, the simulator, firmware reference). Counts are written as
 // their low bitSize bits; a NotConnected channel on a Null State field is written as all ones. The sequence
 // and device-time fields (when the layout has them) get sample.sequence and deviceTimeNs / 1000, truncated to
-// their size. Error when sample.channelCount differs from the layout's channel count.
-std::expected<std::vector<uint8_t>, std::string> encodeHidInputReport(const HidInputLayout& layout,
+// their size. Error (a diagnostic without a position) when sample.channelCount differs from the layout's channel
+// count.
+std::expected<std::vector<uint8_t>, Diagnostics> encodeHidInputReport(const HidInputLayout& layout,
                                                                       const Sample& sample);
 
 // The report descriptor of an IMPS HID armature (docs/protocol.md): an Application collection (IMPS page,
@@ -215,8 +219,8 @@ struct HidArmatureDescriptorOptions {
 std::vector<uint8_t> hidArmatureDescriptor(const HidArmatureDescriptorOptions& options);
 
 // The INFO feature report for `info` (ID byte first when `reportId` != 0), zero-padded to `dataSize` data bytes.
-// Error when the INFO frame does not fit or `info` cannot be encoded.
-std::expected<std::vector<uint8_t>, std::string> hidInfoReport(const DeviceInfo& info, uint8_t reportId,
+// Error (a diagnostic without a position) when the INFO frame does not fit or `info` cannot be encoded.
+std::expected<std::vector<uint8_t>, Diagnostics> hidInfoReport(const DeviceInfo& info, uint8_t reportId,
                                                                size_t dataSize);
 
 }  // namespace imps::drivers

@@ -32,7 +32,7 @@ struct HidDeviceEntry {
 
 // Every HID device hidapi finds, one entry per hidraw node, sorted by path. Thread-safe. Errors: hidapi's
 // message when enumeration itself fails (no devices is an empty list, not an error).
-std::expected<std::vector<HidDeviceEntry>, std::string> listHidDevices();
+IoResult<std::vector<HidDeviceEntry>> listHidDevices();
 
 // A HID armature's input report source. read() returns exactly one input report per call (as hidraw delivers
 // it: the report ID byte first when the device uses IDs), 0 on timeout, and an error when hidapi reports one —
@@ -42,17 +42,18 @@ std::expected<std::vector<HidDeviceEntry>, std::string> listHidDevices();
 // One thread at a time; closed by the destructor.
 class HidTransport final : public ByteTransport {
  public:
-  // Opens the first HID device with this VID:PID (and serial number, when not empty). Errors:
-  // "hid:VID:PID: error: …" — no such device (with what was found instead), permission denied (see the udev
-  // rules), a report descriptor that cannot be read or parsed, no input channels.
-  static std::expected<std::unique_ptr<HidTransport>, std::string> open(uint16_t vendorId, uint16_t productId,
-                                                                       const std::string& serialNumber = {});
+  // Opens the first HID device with this VID:PID (and serial number, when not empty). Errors name "hid:VID:PID"
+  // (errorText: "hid:VID:PID: error: …"): no such device (with what was found instead), permission denied (see
+  // the udev rules), a report descriptor that cannot be read or parsed (its diagnostic in the message), no input
+  // channels.
+  static IoResult<std::unique_ptr<HidTransport>> open(uint16_t vendorId, uint16_t productId,
+                                                      const std::string& serialNumber = {});
   ~HidTransport() override;
   HidTransport(const HidTransport&) = delete;
   HidTransport& operator=(const HidTransport&) = delete;
 
-  std::expected<size_t, std::string> read(std::span<uint8_t> out, int timeoutMs) override;
-  std::expected<void, std::string> write(std::span<const uint8_t> bytes, int timeoutMs) override;
+  IoResult<size_t> read(std::span<uint8_t> out, int timeoutMs) override;
+  IoResult<void> write(std::span<const uint8_t> bytes, int timeoutMs) override;
   std::string description() const override;
   std::vector<std::string> warnings() const override { return warnings_; }
   const HidDeviceDescription* hidDescription() const override { return &described_; }

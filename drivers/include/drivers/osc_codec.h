@@ -13,6 +13,7 @@
 #include <string_view>
 
 #include "drivers/sample.h"
+#include "imps/diagnostic.h"
 
 namespace imps::drivers {
 
@@ -60,10 +61,11 @@ struct OscDecoded {
 // 0..2^32-1, all flagged Valid); /imps/frame, when present with them, gives the Sample's sequence and deviceTimeNs.
 // Integers may be sent as OSC int32 (i) or int64 (h), numbers as float32 (f) or float64 (d) too; other /imps/
 // addresses and other programs' messages are skipped. On success fills `pose` or `channels` (arrivalTimeNs =
-// `arrivalNs`; the other output is left untouched) and says what it was. On bad input returns
-// "osc:byte N: error: what was expected" (N the 0-based offset into the datagram) and the outputs hold partial
-// data. Never throws, never reads outside `packet`, allocates only for the error text.
-std::expected<OscDecoded, std::string> decodeOscPacket(std::span<const uint8_t> packet, int64_t arrivalNs,
-                                                        OscPose& pose, Sample& channels);
+// `arrivalNs`; the other output is left untouched) and says what it was. On bad input returns one diagnostic
+// whose file is "osc:byte N", N the 0-based offset into the datagram (printed "osc:byte N: error: what was
+// expected"), and the outputs hold partial data. Never throws, never reads outside `packet`, allocates only for
+// the error.
+std::expected<OscDecoded, Diagnostics> decodeOscPacket(std::span<const uint8_t> packet, int64_t arrivalNs,
+                                                       OscPose& pose, Sample& channels);
 
 }  // namespace imps::drivers

@@ -64,9 +64,10 @@ struct OscReceiverStats {
 // thread (the frame loop). The mailbox is not owned, must outlive the receiver, and gets only raw-channel samples.
 class OscReceiver {
  public:
-  // Binds the socket now, so a busy port or a bad address is reported at once: "osc.udp://HOST:PORT: error: …".
-  static std::expected<std::unique_ptr<OscReceiver>, std::string> open(OscReceiverOptions options,
-                                                                       PoseMailbox& channels);
+  // Binds the socket now, so a busy port or a bad address is reported at once, as an IoError naming
+  // "osc.udp://HOST:PORT" (errorText: "osc.udp://HOST:PORT: error: …"; a host that is not a numeric IPv4
+  // address has code EINVAL).
+  static IoResult<std::unique_ptr<OscReceiver>> open(OscReceiverOptions options, PoseMailbox& channels);
   ~OscReceiver();  // stop(), closes the socket
   OscReceiver(const OscReceiver&) = delete;
   OscReceiver& operator=(const OscReceiver&) = delete;

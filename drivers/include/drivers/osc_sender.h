@@ -15,12 +15,14 @@
 #include <vector>
 
 #include "drivers/osc_codec.h"
+#include "imps/diagnostic.h"
 
 namespace imps::drivers {
 
-// Checks an OSC target URL: `osc.udp://HOST:PORT` with a non-empty host and a port in 1..65535. The error text is
-// "osc:1:COLUMN: error: what was expected" (COLUMN 1-based into `url`). Does not resolve the host.
-std::expected<void, std::string> checkOscTargetUrl(std::string_view url);
+// Checks an OSC target URL: `osc.udp://HOST:PORT` with a non-empty host and a port in 1..65535. The error is one
+// diagnostic at `file`:1:COLUMN, COLUMN 1-based into `url` (printed "osc:1:COLUMN: error: what was expected").
+// Does not resolve the host.
+std::expected<void, Diagnostics> checkOscTargetUrl(std::string_view url, std::string file = "osc");
 
 // The bundle liblo sends for `pose` (docs/osc.md): its bytes, for tests and the decoder's seed files.
 std::vector<uint8_t> encodeOscPose(const OscPose& pose);
@@ -37,9 +39,10 @@ struct OscSenderStats {
 // and lastError() from any thread; construct and destroy on the controlling thread.
 class OscPoseSender {
  public:
-  // Resolves every target and starts the thread. `queueCapacity` (rounded up to a power of two) frames may wait to
-  // be sent. Error: the first bad URL or unresolvable host, as "osc:1:COLUMN: error: …" or "URL: error: …".
-  static std::expected<std::unique_ptr<OscPoseSender>, std::string> open(const std::vector<std::string>& urls,
+  // Checks every target URL, makes its liblo address and starts the thread. `queueCapacity` (rounded up to a power
+  // of two) frames may wait to be sent. Error: one diagnostic for the first URL that is wrong, printed
+  // "URL: osc:1:COLUMN: error: …" (checkOscTargetUrl) or "URL: error: …" (liblo cannot use it).
+  static std::expected<std::unique_ptr<OscPoseSender>, Diagnostics> open(const std::vector<std::string>& urls,
                                                                          size_t queueCapacity = 64);
   ~OscPoseSender();  // sends what is queued, then stops and joins
   OscPoseSender(const OscPoseSender&) = delete;

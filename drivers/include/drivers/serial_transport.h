@@ -30,9 +30,9 @@ struct SerialPortInfo {
   bool latencyTimerWritable = false;
 };
 
-// Every serial port libserialport finds, sorted by path. Errors carry libserialport's message.
+// Every serial port libserialport finds, sorted by path. Errors carry libserialport's message (and no path).
 // Thread-safe (no shared state).
-std::expected<std::vector<SerialPortInfo>, std::string> listSerialPorts();
+IoResult<std::vector<SerialPortInfo>> listSerialPorts();
 
 struct SerialTransportOptions {
   int baud = 115200;
@@ -46,16 +46,15 @@ struct SerialTransportOptions {
 // returns as soon as bytes arrive. One thread at a time; the port is closed by the destructor.
 class SerialTransport final : public ByteTransport {
  public:
-  // Opens and configures `path`. Errors: "PATH: error: …" (absent, permission denied — see docs/devices.md on
-  // udev —, not a serial port, configuration refused).
-  static std::expected<std::unique_ptr<SerialTransport>, std::string> open(const std::string& path,
-                                                                          SerialTransportOptions options = {});
+  // Opens and configures `path`. Errors name `path` (errorText: "PATH: error: …"): absent, permission denied —
+  // see docs/devices.md on udev —, not a serial port, configuration refused; code is the OS's errno.
+  static IoResult<std::unique_ptr<SerialTransport>> open(const std::string& path, SerialTransportOptions options = {});
   ~SerialTransport() override;
   SerialTransport(const SerialTransport&) = delete;
   SerialTransport& operator=(const SerialTransport&) = delete;
 
-  std::expected<size_t, std::string> read(std::span<uint8_t> out, int timeoutMs) override;
-  std::expected<void, std::string> write(std::span<const uint8_t> bytes, int timeoutMs) override;
+  IoResult<size_t> read(std::span<uint8_t> out, int timeoutMs) override;
+  IoResult<void> write(std::span<const uint8_t> bytes, int timeoutMs) override;
   std::string description() const override;
   std::vector<std::string> warnings() const override { return warnings_; }
 

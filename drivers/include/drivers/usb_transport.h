@@ -46,9 +46,9 @@ struct UsbDeviceInfo {
 
 // Every attached device whose VID:PID is in `ids` (default: the known armatures), sorted by bus and address. Opens
 // each briefly to read its strings and INFO (not claiming any interface, so it does not disturb a program that is
-// using it). Errors only when libusb itself cannot start. Thread-safe (a private libusb context per call).
-std::expected<std::vector<UsbDeviceInfo>, std::string> listUsbDevices(
-    std::span<const UsbId> ids = kKnownUsbArmatures);
+// using it). Errors (path "usb") only when libusb itself cannot start. Thread-safe (a private libusb context per
+// call).
+IoResult<std::vector<UsbDeviceInfo>> listUsbDevices(std::span<const UsbId> ids = kKnownUsbArmatures);
 
 struct UsbTransportOptions {
   uint16_t vendorId = 0x1209, productId = 0x0001;
@@ -72,15 +72,15 @@ class UsbTransport final : public ByteTransport {
   // Finds the device (VID:PID, then serial number from its string descriptor), picks the first interface of class
   // 0xFF with an IN and an OUT bulk or interrupt endpoint, detaches a kernel driver bound to it, claims it, asks
   // for INFO (a device that does not answer gets a warning, not an error: the session asks GET_INFO anyway) and
-  // starts reading. Errors: "usb 1209:0001: error: …" (not attached, no such serial number, permission denied —
-  // see docs/devices.md on udev —, no vendor interface, interface busy).
-  static std::expected<std::unique_ptr<UsbTransport>, std::string> open(const UsbTransportOptions& options);
+  // starts reading. Errors name "usb 1209:0001" (errorText: "usb 1209:0001: error: …"): not attached, no such
+  // serial number, permission denied — see docs/devices.md on udev —, no vendor interface, interface busy.
+  static IoResult<std::unique_ptr<UsbTransport>> open(const UsbTransportOptions& options);
   ~UsbTransport() override;
   UsbTransport(const UsbTransport&) = delete;
   UsbTransport& operator=(const UsbTransport&) = delete;
 
-  std::expected<size_t, std::string> read(std::span<uint8_t> out, int timeoutMs) override;
-  std::expected<void, std::string> write(std::span<const uint8_t> bytes, int timeoutMs) override;
+  IoResult<size_t> read(std::span<uint8_t> out, int timeoutMs) override;
+  IoResult<void> write(std::span<const uint8_t> bytes, int timeoutMs) override;
   std::string description() const override;
   std::vector<std::string> warnings() const override { return warnings_; }
 
@@ -109,7 +109,7 @@ class UsbHotplugMonitor {
   };
   // Starts monitoring. Errors when libusb cannot start or has no hotplug support on this platform
   // (libusb_has_capability(LIBUSB_CAP_HAS_HOTPLUG) is false).
-  static std::expected<std::unique_ptr<UsbHotplugMonitor>, std::string> start(UsbId id);
+  static IoResult<std::unique_ptr<UsbHotplugMonitor>> start(UsbId id);
   ~UsbHotplugMonitor();  // deregisters and joins the event thread
   UsbHotplugMonitor(const UsbHotplugMonitor&) = delete;
   UsbHotplugMonitor& operator=(const UsbHotplugMonitor&) = delete;

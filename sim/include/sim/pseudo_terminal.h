@@ -6,6 +6,8 @@
 #include <expected>
 #include <string>
 
+#include "imps/io_error.h"
+
 namespace imps::sim {
 
 // Owns both ends. The simulator writes and reads `master()`; the drivers open `slavePath()`. The slave end is also
@@ -14,8 +16,8 @@ namespace imps::sim {
 // would see a hang-up each time the drivers close the port. Move-only; closing happens in the destructor.
 class PseudoTerminal {
  public:
-  // Creates the pair. The error says which step failed, with the OS's reason.
-  static std::expected<PseudoTerminal, std::string> open();
+  // Creates the pair. The error (no path: the pair has none yet) says which step failed, with the OS's reason.
+  static IoResult<PseudoTerminal> open();
 
   PseudoTerminal(PseudoTerminal&& other) noexcept;
   PseudoTerminal& operator=(PseudoTerminal&& other) noexcept;

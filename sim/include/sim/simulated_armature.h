@@ -72,9 +72,10 @@ struct ArmatureOptions {
 // Parses the `sim:` part of a device spec into options: spec.path (a session file to play; "" = generated motion),
 // spec.protocol, spec.rateHz and the simulator keys (kSimKeys): channels, bits, motion (wave, still, sweep),
 // period_s, noise, dropout, garbage, corrupt, banner (text; `|` separates lines), boot_ms, unplug_ms, replug_ms,
-// stream_at_boot (0/1), timestamps (0/1), seed. Errors name the key: "spec: error: sim key 'x': …"; an unknown key
-// lists every key a sim: spec takes, the spec's own (protocol, mode, rate) included.
-std::expected<ArmatureOptions, std::string> armatureOptionsFromSpec(const drivers::DeviceSpec& spec);
+// stream_at_boot (0/1), timestamps (0/1), seed. Errors are diagnostics: a bad key gives one at "spec" naming the
+// key ("spec: error: sim key 'x': …"; an unknown key lists every key a sim: spec takes, the spec's own (protocol,
+// mode, rate) included); a session file that cannot be read or has no samples gives the reader's, at its path.
+std::expected<ArmatureOptions, Diagnostics> armatureOptionsFromSpec(const drivers::DeviceSpec& spec);
 // Every key a `sim:` spec takes, comma-separated, as the unknown-key error lists them.
 extern const char* const kSimKeys;
 
@@ -145,8 +146,9 @@ class SimulatedTransport final : public drivers::ByteTransport {
  public:
   // `armature` is shared with the opener (it persists across reconnects, as a physical device does).
   SimulatedTransport(std::shared_ptr<SimulatedArmature> armature, Clock& clock);
-  std::expected<size_t, std::string> read(std::span<uint8_t> out, int timeoutMs) override;
-  std::expected<void, std::string> write(std::span<const uint8_t> bytes, int timeoutMs) override;
+  // Errors name "sim" (errorText: "sim: error: the device was unplugged").
+  IoResult<size_t> read(std::span<uint8_t> out, int timeoutMs) override;
+  IoResult<void> write(std::span<const uint8_t> bytes, int timeoutMs) override;
   std::string description() const override;
 
  private:
