@@ -269,6 +269,21 @@ std::optional<std::vector<ScriptedEvent>> parseScript(const LiveArgs& a) {
   return script;
 }
 
+// The viewer's props (--prop; not with --overlap) and scripted input, into `v`. Returns the exit code (kExitOk: go on).
+int addPropsAndScript(const LiveArgs& a, const Character& character, std::vector<ScriptedEvent> script,
+                      ViewerOptions& v) {
+  if (!a.props.empty() && a.overlap) {
+    std::fprintf(stderr, "puppeteer: error: --prop cannot be combined with --overlap\n");
+    return kExitUsage;
+  }
+  auto props = propsFor(a, character);
+  if (!props) return kExitInvalidInput;
+  v.props = std::move(*props);
+  v.script = std::move(script);
+  return kExitOk;
+}
+
+
 int runClip(const LiveArgs& a, const std::string& command);
 std::optional<sim::Session> loadSession(const std::string& path);
 std::optional<SampleMapper> replayMapper(const std::string& sessionPath, const sim::Session& session,
@@ -454,14 +469,7 @@ int runView(const LiveArgs& a) {
   auto pipeline = makePipeline(a, &code);
   if (!pipeline) return code;
   ViewerOptions v = viewerOptions(a, "IMPS Puppeteer: " + a.scene);
-  if (!a.props.empty() && a.overlap) {
-    std::fprintf(stderr, "puppeteer: error: --prop cannot be combined with --overlap\n");
-    return kExitUsage;
-  }
-  auto props = propsFor(a, pipeline->character());
-  if (!props) return kExitInvalidInput;
-  v.props = std::move(*props);
-  v.script = std::move(*script);
+  if (int rc = addPropsAndScript(a, pipeline->character(), std::move(*script), v); rc != kExitOk) return rc;
   return runViewer(*pipeline, nullptr, v);
 }
 
@@ -581,14 +589,7 @@ int runClip(const LiveArgs& a, const std::string& command) {
   // Headless runs (--frames) advance a fixed 1/60 s per frame, so a screenshot shows a known moment.
   ClipPoseSource source(std::move(*driver), a.speed, a.frames > 0 ? 1.0 / 60.0 : 0.0, name);
   ViewerOptions v = viewerOptions(a, "IMPS Puppeteer: " + command + " " + name);
-  if (!a.props.empty() && a.overlap) {
-    std::fprintf(stderr, "puppeteer: error: --prop cannot be combined with --overlap\n");
-    return kExitUsage;
-  }
-  auto props = propsFor(a, pipeline->character());
-  if (!props) return kExitInvalidInput;
-  v.props = std::move(*props);
-  v.script = std::move(*script);
+  if (int rc = addPropsAndScript(a, pipeline->character(), std::move(*script), v); rc != kExitOk) return rc;
   return runWithOscOut(a, *pipeline, source, v);
 }
 
@@ -693,14 +694,7 @@ int runReplay(const LiveArgs& given) {
   else
     source = std::make_unique<ReplayPoseSource>(*session, std::move(*mapper), a.speed, name);
   ViewerOptions v = viewerOptions(a, "IMPS Puppeteer: replay " + name);
-  if (!a.props.empty() && a.overlap) {
-    std::fprintf(stderr, "puppeteer: error: --prop cannot be combined with --overlap\n");
-    return kExitUsage;
-  }
-  auto props = propsFor(a, pipeline->character());
-  if (!props) return kExitInvalidInput;
-  v.props = std::move(*props);
-  v.script = std::move(*script);
+  if (int rc = addPropsAndScript(a, pipeline->character(), std::move(*script), v); rc != kExitOk) return rc;
   return runWithOscOut(a, *pipeline, *source, v);
 }
 
@@ -753,14 +747,7 @@ int runLive(const LiveArgs& a) {
     if (!mapper) return kExitInvalidInput;
   }
   ViewerOptions v = viewerOptions(a, "IMPS Puppeteer: live " + a.device);
-  if (!a.props.empty() && a.overlap) {
-    std::fprintf(stderr, "puppeteer: error: --prop cannot be combined with --overlap\n");
-    return kExitUsage;
-  }
-  auto props = propsFor(a, pipeline->character());
-  if (!props) return kExitInvalidInput;
-  v.props = std::move(*props);
-  v.script = std::move(*script);
+  if (int rc = addPropsAndScript(a, pipeline->character(), std::move(*script), v); rc != kExitOk) return rc;
   if (spec->kind == drivers::DeviceKind::Osc) {
     if (!a.record.empty()) {
       std::fprintf(stderr, "puppeteer: error: --record: an OSC pose stream is not recorded (record at the sender)\n");
