@@ -189,7 +189,9 @@ TEST(RecordCommand, SecondsCountFromTheFirstSample) {
   ASSERT_EQ(run.exitCode, kCliOk) << describe(run);
   const test::ProgramRun info = runPuppeteer({"info", "--json", take});
   ASSERT_EQ(info.exitCode, kCliOk) << describe(info);
-  EXPECT_GE(nlohmann::json::parse(info.out)["devices"][0]["seconds"].get<double>(), 0.3);
+  // Counted from the start instead, the 1 s boot would leave no samples at all; a loaded machine may deliver the
+  // half second's samples late, so anything clearly above zero shows the rule.
+  EXPECT_GE(nlohmann::json::parse(info.out)["devices"][0]["seconds"].get<double>(), 0.2);
 }
 
 // An unplugged and replugged device: the take goes on, info locates the outage and calls the restart a reboot.
