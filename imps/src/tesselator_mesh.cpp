@@ -837,7 +837,13 @@ bool windsOutward(const Tesselator::State& s, uint32_t a, uint32_t b, uint32_t c
   const glm::vec3 pa = s.vpos[a], face = glm::cross(s.vpos[b] - pa, s.vpos[c] - pa);
   const float near = 0.5f * glm::length(face);
   if (glm::dot(face, s.nrm[a]) > near && glm::dot(face, s.nrm[b]) > near && glm::dot(face, s.nrm[c]) > near) return true;
-  return glm::dot(face, s.field->sample((pa + s.vpos[b] + s.vpos[c]) / 3.0f).gradient) < 0.0f;
+  if (!s.foldScratchReady) {
+    Box box;
+    for (const glm::vec3& v : s.vpos) box.extend(v);
+    s.field->prepare(box, s.foldScratch);
+    s.foldScratchReady = true;
+  }
+  return glm::dot(face, s.field->sample((pa + s.vpos[b] + s.vpos[c]) / 3.0f, s.foldScratch).gradient) < 0.0f;
 }
 
 // The slot of directed edge a -> b in a's half-edge table (a -> b must exist).
@@ -862,11 +868,24 @@ void dropHalfEdge(Tesselator::State& s, uint32_t a, uint32_t b) {
   removeHalfEdge(s, a, b);
 }
 
+// Makes s.heTri valid for every half-edge out of v (s.heTriKnown[v]): those of each triangle around v, found by one
+// scan of the triangles (the batch at the start of unfoldTriangles makes this rare).
+void knowTrianglesAround(Tesselator::State& s, uint32_t v) {
+  if (s.heTriKnown[v]) return;
+  for (size_t t = 0; t < s.tris.size() / 3; ++t) {
+    const uint32_t* tri = &s.tris[3 * t];
+    if (tri[0] != v && tri[1] != v && tri[2] != v) continue;
+    for (int k = 0; k < 3; ++k) s.heTri[halfEdgeSlot(s, tri[k], tri[(k + 1) % 3])] = uint32_t(t);
+  }
+  s.heTriKnown[v] = 1;
+}
+
 // Flips the edge u -> v of triangle t = (u, v, w) if that unfolds it: its neighbour (v, u, x) and t become (u, x, w)
 // and (x, v, w), both winding with the normals, x -> w no edge yet. Returns whether it flipped.
 bool flipToUnfold(Tesselator::State& s, uint32_t t, int k) {
   uint32_t* tri = &s.tris[3 * size_t(t)];
   const uint32_t u = tri[k], v = tri[(k + 1) % 3], w = tri[(k + 2) % 3];
+  knowTrianglesAround(s, v);
   const size_t back = halfEdgeSlot(s, v, u);
   const uint32_t x = s.heThird[back], t2 = s.heTri[back];
   if (x == w || hasHalfEdge(s, w, x) || hasHalfEdge(s, x, w)) return false;
@@ -946,6 +965,7 @@ constexpr uint32_t kDead = ~0u;
 bool removeToUnfold(Tesselator::State& s, uint32_t p) {
   const size_t m = s.heCount[p];
   if (m < 3) return false;
+  knowTrianglesAround(s, p);
   uint32_t ring[kMaxHalfEdges], ringTri[kMaxHalfEdges], ears[3 * kMaxHalfEdges];
   ring[0] = s.heTo[size_t(p) * kMaxHalfEdges];
   for (size_t i = 0; i < m; ++i) {  // counter-clockwise: triangle (p, ring[i], ring[i + 1]) is ringTri[i]
@@ -981,17 +1001,24 @@ bool removeToUnfold(Tesselator::State& s, uint32_t p) {
 
 size_t unfoldTriangles(Tesselator::State& s) {
   const size_t triangles = s.tris.size() / 3;
+  s.foldScratchReady = false;
   s.folded.clear();
   for (uint32_t t = 0; t < triangles; ++t)
     if (!windsOutward(s, s.tris[3 * size_t(t)], s.tris[3 * size_t(t) + 1], s.tris[3 * size_t(t) + 2])) s.folded.push_back(t);
   if (s.folded.empty()) return 0;
+  // The triangle of each half-edge out of a fold's corners (the repairs look up no other, but for corners a flip
+  // brings in: knowTrianglesAround), in one scan; the repairs keep them up to date.
   s.heTri.resize(s.heTo.size());
-  for (uint32_t t = 0; t < triangles; ++t)
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t a = s.tris[3 * size_t(t) + size_t(k)], b = s.tris[3 * size_t(t) + size_t(k + 1) % 3];
-      s.heTri[halfEdgeSlot(s, a, b)] = t;
-    }
-  for (int round = 0; round < 3 && !s.folded.empty(); ++round) {
+  s.heTriKnown.assign(s.size(), 0);
+  for (uint32_t t : s.folded)
+    for (size_t k = 0; k < 3; ++k) s.heTriKnown[s.tris[3 * size_t(t) + k]] = 1;
+  for (uint32_t t = 0; t < triangles; ++t) {
+    const uint32_t* tri = &s.tris[3 * size_t(t)];
+    if (s.heTriKnown[tri[0]] | s.heTriKnown[tri[1]] | s.heTriKnown[tri[2]])
+      for (int k = 0; k < 3; ++k) s.heTri[halfEdgeSlot(s, tri[k], tri[(k + 1) % 3])] = t;
+  }
+  for (size_t round = 0, before = 0; round < 3 && s.folded.size() != before; ++round) {  // while a round helps
+    before = s.folded.size();
     size_t left = 0;
     for (uint32_t t : s.folded) {
       const uint32_t* tri = &s.tris[3 * size_t(t)];
