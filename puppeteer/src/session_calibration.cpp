@@ -5,7 +5,8 @@
 namespace imps::app {
 
 std::expected<void, std::string> appendCalibration(sim::SessionWriter& writer, const calibration::Calibration& c) {
-  return writer.appendCalibration(c.toJson());
+  if (auto r = writer.appendCalibration(c.toJson()); !r) return std::unexpected(r.error().firstError());
+  return {};
 }
 
 bool isBvhChannelMapping(std::string_view json) {

@@ -13,7 +13,7 @@ std::expected<SessionRecorder, std::string> SessionRecorder::create(const std::f
                                                                     const calibration::Calibration* calibration,
                                                                     sim::SessionWriterOptions options) {
   auto writer = sim::SessionWriter::create(path, device, options);
-  if (!writer) return std::unexpected(writer.error());
+  if (!writer) return std::unexpected(writer.error().firstError());
   SessionRecorder recorder(std::move(*writer), device);
   if (calibration) {
     if (auto r = recorder.appendCalibration(*calibration); !r) return std::unexpected(r.error());
@@ -26,7 +26,7 @@ std::expected<void, std::string> SessionRecorder::append(std::span<const drivers
   for (const drivers::Sample& s : samples) {
     if (s.channelCount != layout_.channelCount)
       if (auto r = changeLayout(s.channelCount, latest); !r) return r;
-    if (auto r = writer_.append(s, device_); !r) return r;
+    if (auto r = writer_.append(s, device_); !r) return std::unexpected(r.error().firstError());
   }
   return {};
 }
@@ -35,7 +35,7 @@ std::expected<void, std::string> SessionRecorder::changeLayout(int channelCount,
   drivers::DeviceInfo next =
       withChannelCount(latest && latest->channelCount == channelCount ? *latest : layout_, channelCount);
   auto index = writer_.appendLayoutChange(next, device_);
-  if (!index) return std::unexpected(index.error());
+  if (!index) return std::unexpected(index.error().firstError());
   device_ = *index;
   layout_ = std::move(next);
   ++layoutChanges_;
@@ -45,14 +45,18 @@ std::expected<void, std::string> SessionRecorder::changeLayout(int channelCount,
 std::expected<void, std::string> SessionRecorder::appendCounters(const drivers::DeviceSessionStats& stats) {
   std::vector<sim::SessionCounter> counters;
   for (const drivers::NamedCounter& c : drivers::namedCounters(stats)) counters.push_back({c.name, c.value});
-  return writer_.appendCounters(0, counters);
+  if (auto r = writer_.appendCounters(0, counters); !r) return std::unexpected(r.error().firstError());
+  return {};
 }
 
 std::expected<void, std::string> SessionRecorder::appendCalibration(const calibration::Calibration& calibration) {
   return app::appendCalibration(writer_, calibration);
 }
 
-std::expected<void, std::string> SessionRecorder::close() { return writer_.close(); }
+std::expected<void, std::string> SessionRecorder::close() {
+  if (auto r = writer_.close(); !r) return std::unexpected(r.error().firstError());
+  return {};
+}
 
 drivers::DeviceInfo withChannelCount(drivers::DeviceInfo device, int channelCount) {
   if (device.channelCount == channelCount) return device;

@@ -609,22 +609,21 @@ int runViewer(ViewerPipeline& pipeline, PoseSource* source, const ViewerOptions&
 
       if (s.saveRequested) {
         s.saveRequested = false;
-        std::string error;
         const bool anyPainted = std::find(s.painted.begin(), s.painted.end(), true) != s.painted.end();
-        const bool saved = savePaintedScene(pipeline.posedScene(), pipeline.character(), pipeline.textures(),
-                                            s.painted, options.savePath, &error);
+        const auto saved = savePaintedScene(pipeline.posedScene(), pipeline.character(), pipeline.textures(), s.painted,
+                                            options.savePath);
         report(s, saved ? "saved " + options.savePath + (anyPainted ? " with its painted textures" : "")
-                        : "save failed: " + error);
+                        : "save failed: " + saved.error().all().front().message);
       }
       const bool lastFrame = headless && frame + 1 >= options.frames;
       if (s.screenshotRequested || (lastFrame && !options.screenshot.empty())) {
         const std::string path =
             s.screenshotRequested ? "puppeteer-screenshot-" + std::to_string(++screenshotCount) + ".png" : options.screenshot;
         s.screenshotRequested = false;
-        std::string error;
-        if (savePng(Renderer::readPixels(s.width, s.height), s.width, s.height, path, &error)) {
+        if (auto saved = savePng(Renderer::readPixels(s.width, s.height), s.width, s.height, path); saved) {
           s.message = "screenshot " + path;
         } else {
+          const std::string& error = saved.error().all().front().message;
           s.message = "screenshot failed: " + error;
           std::fprintf(stderr, "puppeteer: error: %s\n", error.c_str());
           if (lastFrame) exitCode = kExitIoError;

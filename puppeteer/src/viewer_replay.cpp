@@ -137,7 +137,7 @@ std::expected<ClipPoseMap, std::string> ClipPoseMap::create(const sim::Session& 
     m.read(d, session.samples[i]);
   }
   auto r = Retargeter::create(m.clip_, character, options);
-  if (!r) return std::unexpected(r.error());
+  if (!r) return std::unexpected(r.error().all().front().message);
   r->setReferenceFrame(m.values_);
   m.retargeter_.emplace(std::move(*r));
   return m;

@@ -123,7 +123,7 @@ std::expected<ArmatureOptions, std::string> armatureOptionsFromSpec(const driver
   o.info.hasDeviceTimestamp = o.deviceTimestamps;
   if (!spec.path.empty()) {
     auto session = readSession(spec.path);
-    if (!session) return std::unexpected(session.error());
+    if (!session) return std::unexpected(session.error().firstError());
     if (session->devices.empty() || session->samples.empty())
       return std::unexpected(spec.path + ": error: the session has no samples to play");
     o.info = session->devices.front();

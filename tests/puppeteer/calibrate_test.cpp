@@ -64,7 +64,7 @@ uint32_t countFor(size_t ch, double angle, int sign = 1) {
 void writeSession(const std::filesystem::path& path, int rightElbowSign = 1,
                   const drivers::DeviceInfo& device = device32()) {
   auto w = sim::SessionWriter::create(path, device);
-  ASSERT_TRUE(w.has_value()) << w.error();
+  ASSERT_TRUE(w.has_value()) << w.error().str();
   for (int k = 0; k < 2000; ++k) {
     drivers::Sample s;
     s.sequence = static_cast<uint32_t>(k);
@@ -227,7 +227,7 @@ TEST(SessionCalibration, ReplayFindsTheCalibrationItWasCapturedWith) {
     ASSERT_TRUE(w->close().has_value());
   }
   auto session = sim::readSession(path);
-  ASSERT_TRUE(session.has_value()) << session.error();
+  ASSERT_TRUE(session.has_value()) << session.error().str();
   ASSERT_EQ(session->calibrations.size(), 2u);
   auto at5 = calibrationForSample(*session, 5, &biped(), path.string());
   auto at15 = calibrationForSample(*session, 15, &biped(), path.string());
@@ -251,7 +251,7 @@ TEST(SessionCalibration, ReplayFindsTheCalibrationItWasCapturedWith) {
 // not a calibration (channels map by name), so none is in force — no error to report.
 TEST(SessionCalibration, OldBvhChannelMappingIsNoCalibration) {
   auto old = sim::readSession(kSource + "/tests/data/sessions/legacy_bvh_mapping.session");
-  ASSERT_TRUE(old.has_value()) << old.error();
+  ASSERT_TRUE(old.has_value()) << old.error().str();
   ASSERT_EQ(old->calibrations.size(), 1u);
   EXPECT_TRUE(isBvhChannelMapping(old->calibrations[0].json));
   auto found = calibrationForSample(*old, 0, &biped(), "legacy_bvh_mapping.session");

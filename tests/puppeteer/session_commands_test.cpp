@@ -48,7 +48,7 @@ void writeSession(const std::filesystem::path& path, const std::vector<int64_t>&
   d.channelCount = 1;
   d.bitsPerChannel = 12;
   auto w = sim::SessionWriter::create(path, d);
-  ASSERT_TRUE(w.has_value()) << w.error();
+  ASSERT_TRUE(w.has_value()) << w.error().str();
   uint32_t sequence = 0;
   for (int64_t t : times) {
     drivers::Sample s;
