@@ -322,6 +322,21 @@ TEST(SessionFile, WriterRejectsBadUse) {
   EXPECT_FALSE(writer->append(s, 1));
 }
 
+TEST(SessionFile, AnUnreadableFileIsOneDiagnosticAtTheFile) {
+  // The reader fails two ways (the file cannot be opened, its bytes are not a session); callers treat both as a bad
+  // input, so both are Diagnostics, the I/O failure located at the file with no line.
+  const fs::path missing = tempDir() / "missing.session";
+  auto gone = readSession(missing);
+  ASSERT_FALSE(gone);
+  ASSERT_EQ(gone.error().all().size(), 1u);
+  const Diagnostic& d = gone.error().all().front();
+  EXPECT_EQ(d.severity, Severity::Error);
+  EXPECT_EQ(d.loc.file, missing.string());
+  EXPECT_EQ(d.loc.line, 0);
+  EXPECT_EQ(d.message, "cannot open session file: No such file or directory");
+  EXPECT_EQ(gone.error().str(), missing.string() + ": error: " + d.message + "\n");
+}
+
 TEST(SessionFile, ReaderErrorsAndUnknownRecords) {
   std::vector<uint8_t> junk(32, 'x');
   auto bad = readSessionBytes(junk, "junk.bin");
