@@ -62,10 +62,8 @@ std::expected<Calibration, Diagnostics> Calibration::readFile(const std::filesys
   return create(std::move(*map), character, device, devices);
 }
 
-std::expected<void, std::string> Calibration::save(const std::filesystem::path& path) const {
-  std::string error;
-  if (!imps::writeFileAtomically(path.string(), toJson(), &error)) return std::unexpected(error);
-  return {};
+IoResult<void> Calibration::save(const std::filesystem::path& path) const {
+  return imps::writeFileAtomically(path.string(), toJson());
 }
 
 double Calibration::rawAngle(size_t i, double count) const {

@@ -332,10 +332,11 @@ bool parseJson(std::string_view text, std::string_view fileName, JsonValue& out,
 std::expected<std::string, Diagnostics> readJsonFileText(const std::filesystem::path& path, std::string_view what) {
   auto text = readFileText(path, kMaxFileBytes);
   if (text) return std::move(*text);
-  const std::string reason = !std::filesystem::exists(path)       ? std::string("no such file")
-                             : text.error().starts_with("larger") ? text.error() + "; a " + std::string(what) +
-                                                                        " is a few kilobytes"
-                                                                  : std::string("not a readable file");
+  const std::string& message = text.error().message;
+  const std::string reason = !std::filesystem::exists(path) ? std::string("no such file")
+                             : message.starts_with("larger")
+                                 ? message + "; a " + std::string(what) + " is a few kilobytes"
+                                 : std::string("not a readable file");
   Diagnostics d;
   d.error({path.string(), 0, 0}, "cannot read " + std::string(what) + ": " + reason);
   return std::unexpected(d);

@@ -91,11 +91,12 @@ WindowAverage averageWindow(const RigMap& map, std::span<const drivers::Sample> 
   return out;
 }
 
-std::expected<RigMap, std::vector<std::string>> calibrateOffsets(RigMap map, std::span<const drivers::Sample> samples,
-                                                                 const WindowOptions& options, WindowAverage* report) {
+std::expected<RigMap, Diagnostics> calibrateOffsets(RigMap map, std::span<const drivers::Sample> samples,
+                                                    const WindowOptions& options, WindowAverage* report) {
   WindowAverage w = averageWindow(map, samples, options);
   if (!w.ok()) {
-    std::vector<std::string> problems = w.problems;
+    Diagnostics problems;
+    for (const std::string& p : w.problems) problems.error({}, p);
     if (report) *report = std::move(w);
     return std::unexpected(std::move(problems));
   }

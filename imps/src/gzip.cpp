@@ -15,9 +15,10 @@ bool isGzip(std::string_view bytes) {
   return bytes.size() >= 2 && static_cast<unsigned char>(bytes[0]) == 0x1F && static_cast<unsigned char>(bytes[1]) == 0x8B;
 }
 
-std::expected<std::string, std::string> gunzip(std::string_view bytes, size_t maxBytes) {
+std::expected<std::string, Diagnostics> gunzip(std::string_view bytes, size_t maxBytes) {
+  const auto fail = [](std::string reason) { return std::unexpected(singleError({}, std::move(reason))); };
   z_stream stream{};
-  if (inflateInit2(&stream, 16 + MAX_WBITS) != Z_OK) return std::unexpected(std::string("cannot start zlib"));
+  if (inflateInit2(&stream, 16 + MAX_WBITS) != Z_OK) return fail("cannot start zlib");
   std::string out;
   char buffer[1 << 16];
   size_t consumed = 0;
@@ -36,7 +37,7 @@ std::expected<std::string, std::string> gunzip(std::string_view bytes, size_t ma
     const size_t produced = sizeof buffer - stream.avail_out;
     if (produced > maxBytes - out.size()) {
       inflateEnd(&stream);
-      return std::unexpected("larger than the " + byteSizeText(maxBytes) + " limit when decompressed");
+      return fail("larger than the " + byteSizeText(maxBytes) + " limit when decompressed");
     }
     out.append(buffer, produced);
     if (status == Z_STREAM_END) {
@@ -50,12 +51,12 @@ std::expected<std::string, std::string> gunzip(std::string_view bytes, size_t ma
     }
     if (status == Z_BUF_ERROR && stream.avail_in == 0 && consumed >= bytes.size()) {
       inflateEnd(&stream);
-      return std::unexpected(std::string("truncated gzip data"));
+      return fail("truncated gzip data");
     }
     if (status != Z_OK && status != Z_BUF_ERROR) {
       const std::string reason = stream.msg != nullptr ? stream.msg : "error " + std::to_string(status);
       inflateEnd(&stream);
-      return std::unexpected("corrupt gzip data (" + reason + ")");
+      return fail("corrupt gzip data (" + reason + ")");
     }
   }
   inflateEnd(&stream);

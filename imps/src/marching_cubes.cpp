@@ -925,9 +925,9 @@ void gatherMesh(uint32_t edgeVertices, MarchingCubes::State& st, Mesh& out) {
 
 namespace imps {
 
-std::expected<glm::ivec3, std::string> planGrid(const Field& field, const MarchingCubesOptions& options) {
+std::expected<glm::ivec3, Diagnostics> planGrid(const Field& field, const MarchingCubesOptions& options) {
   const mc::GridPlan p = mc::planGridCells(field, options);
-  if (!p.error.empty()) return std::unexpected(p.error);
+  if (!p.error.empty()) return std::unexpected(singleError({}, p.error));
   return glm::ivec3(p.cells);
 }
 

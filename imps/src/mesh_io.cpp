@@ -27,10 +27,6 @@ namespace {
 // The binary formats are little-endian; the writers copy floats and integers as they sit in memory.
 static_assert(std::endian::native == std::endian::little, "mesh writers assume a little-endian host");
 
-void setError(std::string* error, std::string message) {
-  if (error) *error = std::move(message);
-}
-
 bool allFinite(const std::vector<float>& values) {
   return std::all_of(values.begin(), values.end(), [](float x) { return std::isfinite(x); });
 }
@@ -108,16 +104,19 @@ std::string lowercase(std::string_view s) {
   return out;
 }
 
-bool writeEncoded(const std::optional<std::vector<uint8_t>>& bytes, const std::string& path,
-                  const std::string& problem, std::string* error) {
-  if (!bytes) {
-    setError(error, path + ": " + problem);
-    return false;
-  }
-  return writeFileAtomically(path, *bytes, error);
+std::unexpected<Diagnostics> invalid(std::string problem) {
+  return std::unexpected(singleError({}, std::move(problem)));
 }
 
 }  // namespace
+
+std::expected<void, Diagnostics> saveEncodedMesh(const std::expected<std::vector<uint8_t>, Diagnostics>& bytes,
+                                                 const std::string& path) {
+  if (!bytes) return std::unexpected(singleError({}, path + ": " + bytes.error().all().front().message));
+  if (auto saved = writeFileAtomically(path, *bytes); !saved)
+    return std::unexpected(singleError({}, saved.error().message));
+  return {};
+}
 
 std::optional<MeshFormat> meshFormatForPath(std::string_view path) {
   const size_t slash = path.find_last_of('/');
@@ -131,11 +130,8 @@ std::optional<MeshFormat> meshFormatForPath(std::string_view path) {
   return std::nullopt;
 }
 
-std::optional<std::vector<uint8_t>> encodeObj(const Mesh& mesh, std::string* error) {
-  if (std::string problem = meshProblem(mesh); !problem.empty()) {
-    setError(error, std::move(problem));
-    return std::nullopt;
-  }
+std::expected<std::vector<uint8_t>, Diagnostics> encodeObj(const Mesh& mesh) {
+  if (std::string problem = meshProblem(mesh); !problem.empty()) return invalid(std::move(problem));
   const bool hasNormals = !mesh.normals.empty();
   const bool hasColors = !mesh.colors.empty();
   TextOut out(mesh.vertexCount() * (hasColors ? 80 : 40) * (hasNormals ? 2 : 1) + mesh.triangleCount() * 40 + 128);
@@ -186,11 +182,8 @@ std::optional<std::vector<uint8_t>> encodeObj(const Mesh& mesh, std::string* err
   return out.take();
 }
 
-std::optional<std::vector<uint8_t>> encodePly(const Mesh& mesh, std::string* error) {
-  if (std::string problem = meshProblem(mesh); !problem.empty()) {
-    setError(error, std::move(problem));
-    return std::nullopt;
-  }
+std::expected<std::vector<uint8_t>, Diagnostics> encodePly(const Mesh& mesh) {
+  if (std::string problem = meshProblem(mesh); !problem.empty()) return invalid(std::move(problem));
   const bool hasNormals = !mesh.normals.empty();
   const bool hasColors = !mesh.colors.empty();
   std::string header =
@@ -226,11 +219,8 @@ std::optional<std::vector<uint8_t>> encodePly(const Mesh& mesh, std::string* err
   return bytes;
 }
 
-std::optional<std::vector<uint8_t>> encodeGlb(const Mesh& mesh, std::string* error) {
-  if (std::string problem = meshProblem(mesh); !problem.empty()) {
-    setError(error, std::move(problem));
-    return std::nullopt;
-  }
+std::expected<std::vector<uint8_t>, Diagnostics> encodeGlb(const Mesh& mesh) {
+  if (std::string problem = meshProblem(mesh); !problem.empty()) return invalid(std::move(problem));
   using nlohmann::json;
   constexpr int kFloat = 5126, kUnsignedInt = 5125, kTriangles = 4;
   constexpr int kArrayBuffer = 34962, kElementArrayBuffer = 34963;
@@ -294,8 +284,7 @@ std::optional<std::vector<uint8_t>> encodeGlb(const Mesh& mesh, std::string* err
   const size_t binChunk = padded(binSize);
   const size_t total = 12 + 8 + jsonChunk + (hasTriangles ? 8 + binChunk : 0);
   if (total > UINT32_MAX) {
-    setError(error, "mesh too large for GLB (more than 4 GiB)");
-    return std::nullopt;
+    return invalid("mesh too large for GLB (more than 4 GiB)");
   }
   jsonText.resize(jsonChunk, ' ');
   std::vector<uint8_t> bytes(total, 0);
@@ -322,34 +311,27 @@ std::optional<std::vector<uint8_t>> encodeGlb(const Mesh& mesh, std::string* err
   return bytes;
 }
 
-
-bool writeObj(const Mesh& mesh, const std::string& path, std::string* error) {
-  std::string problem;
-  return writeEncoded(encodeObj(mesh, &problem), path, problem, error);
+std::expected<void, Diagnostics> writeObj(const Mesh& mesh, const std::string& path) {
+  return saveEncodedMesh(encodeObj(mesh), path);
 }
 
-bool writePly(const Mesh& mesh, const std::string& path, std::string* error) {
-  std::string problem;
-  return writeEncoded(encodePly(mesh, &problem), path, problem, error);
+std::expected<void, Diagnostics> writePly(const Mesh& mesh, const std::string& path) {
+  return saveEncodedMesh(encodePly(mesh), path);
 }
 
-bool writeGlb(const Mesh& mesh, const std::string& path, std::string* error) {
-  std::string problem;
-  return writeEncoded(encodeGlb(mesh, &problem), path, problem, error);
+std::expected<void, Diagnostics> writeGlb(const Mesh& mesh, const std::string& path) {
+  return saveEncodedMesh(encodeGlb(mesh), path);
 }
 
-bool writeMesh(const Mesh& mesh, const std::string& path, std::string* error) {
+std::expected<void, Diagnostics> writeMesh(const Mesh& mesh, const std::string& path) {
   const std::optional<MeshFormat> format = meshFormatForPath(path);
-  if (!format) {
-    setError(error, path + ": unsupported mesh file extension (supported: .obj, .ply, .glb)");
-    return false;
-  }
+  if (!format) return invalid(path + ": unsupported mesh file extension (supported: .obj, .ply, .glb)");
   switch (*format) {
-    case MeshFormat::Obj: return writeObj(mesh, path, error);
-    case MeshFormat::Ply: return writePly(mesh, path, error);
-    case MeshFormat::Glb: return writeGlb(mesh, path, error);
+    case MeshFormat::Obj: return writeObj(mesh, path);
+    case MeshFormat::Ply: return writePly(mesh, path);
+    case MeshFormat::Glb: return writeGlb(mesh, path);
   }
-  return false;
+  return invalid(path + ": unknown mesh format");
 }
 
 }  // namespace imps

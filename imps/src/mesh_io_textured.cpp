@@ -14,18 +14,16 @@
 namespace imps {
 namespace {
 
-void setError(std::string* error, std::string message) {
-  if (error) *error = std::move(message);
+std::unexpected<Diagnostics> invalid(std::string problem) {
+  return std::unexpected(singleError({}, std::move(problem)));
 }
 
-bool imagesCover(const Mesh& mesh, const std::vector<MeshImage>& images, std::string* error) {
+// "" when every image the mesh's layers name is in `images`, else which one is not.
+std::string missingImage(const Mesh& mesh, const std::vector<MeshImage>& images) {
   for (const int32_t image : mesh.layerImages)
-    if (image >= 0 && size_t(image) >= images.size()) {
-      setError(error, "the mesh names texture image " + std::to_string(image) + " of " +
-                          std::to_string(images.size()));
-      return false;
-    }
-  return true;
+    if (image >= 0 && size_t(image) >= images.size())
+      return "the mesh names texture image " + std::to_string(image) + " of " + std::to_string(images.size());
+  return {};
 }
 
 // The BIN chunk under construction: 4-byte aligned views.
@@ -45,15 +43,11 @@ struct Bin {
 
 }  // namespace
 
-std::optional<std::vector<uint8_t>> encodeTexturedGlb(const Mesh& mesh, const std::vector<MeshImage>& images,
-                                                      std::string* error) {
-  if (!mesh.textured() || images.empty() || mesh.triangleCount() == 0) return encodeGlb(mesh, error);
-  if (!imagesCover(mesh, images, error)) return std::nullopt;
-  std::string problem;
-  if (!encodeGlb(mesh, &problem)) {  // the same checks of the mesh itself
-    setError(error, problem);
-    return std::nullopt;
-  }
+std::expected<std::vector<uint8_t>, Diagnostics> encodeTexturedGlb(const Mesh& mesh,
+                                                                   const std::vector<MeshImage>& images) {
+  if (!mesh.textured() || images.empty() || mesh.triangleCount() == 0) return encodeGlb(mesh);
+  if (std::string missing = missingImage(mesh, images); !missing.empty()) return invalid(std::move(missing));
+  if (auto plain = encodeGlb(mesh); !plain) return std::unexpected(plain.error());  // the same checks of the mesh
   using nlohmann::json;
   constexpr int kFloat = 5126, kUnsignedInt = 5125, kTriangles = 4, kArrayBuffer = 34962, kElements = 34963;
   constexpr int kRepeat = 10497, kLinear = 9729, kLinearMipmapLinear = 9987;
@@ -127,8 +121,7 @@ std::optional<std::vector<uint8_t>> encodeTexturedGlb(const Mesh& mesh, const st
   jsonText.resize((jsonText.size() + 3) & ~size_t{3}, ' ');
   const size_t total = 12 + 8 + jsonText.size() + 8 + bin.bytes.size();
   if (total > UINT32_MAX) {
-    setError(error, "mesh too large for GLB (more than 4 GiB)");
-    return std::nullopt;
+    return invalid("mesh too large for GLB (more than 4 GiB)");
   }
   std::vector<uint8_t> bytes;
   bytes.reserve(total);
@@ -148,25 +141,15 @@ std::optional<std::vector<uint8_t>> encodeTexturedGlb(const Mesh& mesh, const st
   return bytes;
 }
 
-bool writeTexturedGlb(const Mesh& mesh, const std::vector<MeshImage>& images, const std::string& path,
-                      std::string* error) {
-  std::string problem;
-  const auto bytes = encodeTexturedGlb(mesh, images, &problem);
-  if (!bytes) {
-    setError(error, path + ": " + problem);
-    return false;
-  }
-  return writeFileAtomically(path, *bytes, error);
+std::expected<void, Diagnostics> writeTexturedGlb(const Mesh& mesh, const std::vector<MeshImage>& images,
+                                                  const std::string& path) {
+  return saveEncodedMesh(encodeTexturedGlb(mesh, images), path);
 }
 
-std::optional<TexturedObj> encodeTexturedObj(const Mesh& mesh, const std::vector<MeshImage>& images,
-                                             const std::string& mtlName, std::string* error) {
-  std::string problem;
-  if (!encodeObj(mesh, &problem)) {
-    setError(error, problem);
-    return std::nullopt;
-  }
-  if (!imagesCover(mesh, images, error)) return std::nullopt;
+std::expected<TexturedObj, Diagnostics> encodeTexturedObj(const Mesh& mesh, const std::vector<MeshImage>& images,
+                                                          const std::string& mtlName) {
+  if (auto plain = encodeObj(mesh); !plain) return std::unexpected(plain.error());
+  if (std::string missing = missingImage(mesh, images); !missing.empty()) return invalid(std::move(missing));
   std::string obj = "# IMPS Puppeteer textured mesh\nmtllib " + mtlName + "\n", mtl = "# IMPS Puppeteer materials\n";
   auto number = [](float x) {
     char buffer[32];

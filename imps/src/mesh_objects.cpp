@@ -16,8 +16,8 @@ namespace imps {
 
 namespace {
 
-void setError(std::string* error, std::string message) {
-  if (error != nullptr) *error = std::move(message);
+std::unexpected<Diagnostics> invalid(std::string problem) {
+  return std::unexpected(singleError({}, std::move(problem)));
 }
 
 bool finite(const std::vector<float>& v) {
@@ -59,12 +59,9 @@ void appendBytes(std::vector<uint8_t>& bin, const void* data, size_t size) {
 
 }  // namespace
 
-std::optional<std::vector<uint8_t>> encodeGlbObjects(std::span<const NamedMesh> objects, std::string* error) {
+std::expected<std::vector<uint8_t>, Diagnostics> encodeGlbObjects(std::span<const NamedMesh> objects) {
   for (const NamedMesh& o : objects)
-    if (std::string problem = objectProblem(o); !problem.empty()) {
-      setError(error, std::move(problem));
-      return std::nullopt;
-    }
+    if (std::string problem = objectProblem(o); !problem.empty()) return invalid(std::move(problem));
   using nlohmann::json;
   constexpr int kFloat = 5126, kUnsignedInt = 5125, kTriangles = 4;
   constexpr int kArrayBuffer = 34962, kElementArrayBuffer = 34963;
@@ -126,8 +123,7 @@ std::optional<std::vector<uint8_t>> encodeGlbObjects(std::span<const NamedMesh> 
   const bool hasBin = !gltf["bufferViews"].is_null() && !bin.empty();
   const size_t total = 12 + 8 + text.size() + (hasBin ? 8 + bin.size() : 0);
   if (total > UINT32_MAX) {
-    setError(error, "objects too large for GLB (more than 4 GiB)");
-    return std::nullopt;
+    return invalid("objects too large for GLB (more than 4 GiB)");
   }
   std::vector<uint8_t> out;
   out.reserve(total);
@@ -146,12 +142,9 @@ std::optional<std::vector<uint8_t>> encodeGlbObjects(std::span<const NamedMesh> 
   return out;
 }
 
-std::optional<std::vector<uint8_t>> encodeObjObjects(std::span<const NamedMesh> objects, std::string* error) {
+std::expected<std::vector<uint8_t>, Diagnostics> encodeObjObjects(std::span<const NamedMesh> objects) {
   for (const NamedMesh& o : objects)
-    if (std::string problem = objectProblem(o); !problem.empty()) {
-      setError(error, std::move(problem));
-      return std::nullopt;
-    }
+    if (std::string problem = objectProblem(o); !problem.empty()) return invalid(std::move(problem));
   std::string out = "# IMPS Puppeteer: " + std::to_string(objects.size()) + " objects\n";
   uint64_t base = 0;
   for (const NamedMesh& o : objects) {
@@ -187,30 +180,18 @@ std::optional<std::vector<uint8_t>> encodeObjObjects(std::span<const NamedMesh> 
   return std::vector<uint8_t>(out.begin(), out.end());
 }
 
-bool writeMeshObjects(std::span<const NamedMesh> objects, const std::string& path, std::string* error) {
+std::expected<void, Diagnostics> writeMeshObjects(std::span<const NamedMesh> objects, const std::string& path) {
   const std::optional<MeshFormat> format = meshFormatForPath(path);
-  if (!format) {
-    setError(error, path + ": unsupported mesh file extension (supported: .obj, .ply, .glb)");
-    return false;
-  }
+  if (!format) return invalid(path + ": unsupported mesh file extension (supported: .obj, .ply, .glb)");
   if (*format == MeshFormat::Ply) {
     Mesh merged;
     for (const NamedMesh& o : objects) {
-      if (std::string problem = objectProblem(o); !problem.empty()) {
-        setError(error, path + ": " + problem);
-        return false;
-      }
+      if (std::string problem = objectProblem(o); !problem.empty()) return invalid(path + ": " + problem);
       appendMesh(merged, *o.mesh);
     }
-    return writePly(merged, path, error);
+    return writePly(merged, path);
   }
-  std::string problem;
-  auto bytes = *format == MeshFormat::Glb ? encodeGlbObjects(objects, &problem) : encodeObjObjects(objects, &problem);
-  if (!bytes) {
-    setError(error, path + ": " + problem);
-    return false;
-  }
-  return writeFileAtomically(path, *bytes, error);
+  return saveEncodedMesh(*format == MeshFormat::Glb ? encodeGlbObjects(objects) : encodeObjObjects(objects), path);
 }
 
 }  // namespace imps

@@ -50,7 +50,7 @@ std::expected<Scene, Diagnostics> readSceneFile(const std::string& path, Diagnos
     return std::unexpected(std::move(d));
   };
   auto text = readFileText(path, kMaxFileBytes);
-  if (!text) return fail(text.error());
+  if (!text) return fail(text.error().message);
   return readScene(*text, path, warnings);
 }
 

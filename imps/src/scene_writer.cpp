@@ -266,8 +266,8 @@ std::string writeScene(const Scene& scene) {
   return writer.take();
 }
 
-bool saveSceneFile(const Scene& scene, const std::string& path, std::string* error) {
-  return writeFileAtomically(path, writeScene(scene), error);
+IoResult<void> saveSceneFile(const Scene& scene, const std::string& path) {
+  return writeFileAtomically(path, writeScene(scene));
 }
 
 }  // namespace imps

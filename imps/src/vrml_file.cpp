@@ -579,12 +579,12 @@ std::expected<VrmlFile, Diagnostics> readVrml(std::string_view bytes, const std:
   if (isGzip(bytes)) {
     auto limit = inputLimitBytes(kMaxFileBytes);
     if (!limit) {
-      diagnostics.error({fileName, 0, 0}, "cannot decompress: " + limit.error());
+      diagnostics.error({fileName, 0, 0}, "cannot decompress: " + limit.error().all().front().message);
       return std::unexpected(std::move(diagnostics));
     }
     auto text = gunzip(bytes, *limit);
     if (!text) {
-      diagnostics.error({fileName, 0, 0}, "cannot decompress: " + text.error());
+      diagnostics.error({fileName, 0, 0}, "cannot decompress: " + text.error().all().front().message);
       return std::unexpected(std::move(diagnostics));
     }
     inflated = std::move(*text);
@@ -615,7 +615,7 @@ std::expected<VrmlFile, Diagnostics> readVrmlFile(const std::string& path, Diagn
   auto bytes = readFileText(path, kMaxFileBytes);
   if (!bytes) {
     Diagnostics diagnostics;
-    diagnostics.error({path, 0, 0}, "cannot read VRML file: " + bytes.error());
+    diagnostics.error({path, 0, 0}, "cannot read VRML file: " + bytes.error().message);
     return std::unexpected(std::move(diagnostics));
   }
   return readVrml(*bytes, path, warnings);

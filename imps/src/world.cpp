@@ -187,7 +187,7 @@ class WorldReader {
       }
       auto bytes = readFileText(path, kMaxInputBytes);
       if (!bytes) {
-        d_.error(at, "Inline: cannot read '" + path.string() + "': " + bytes.error());
+        d_.error(at, "Inline: cannot read '" + path.string() + "': " + bytes.error().message);
         return std::nullopt;
       }
       std::string text = std::move(*bytes);

@@ -89,7 +89,7 @@ std::string CalibrationFlow::progress(int64_t nowNs) const {
   return buf;
 }
 
-std::expected<CalibrationResult, std::vector<std::string>> calibrateWindow(
+std::expected<CalibrationResult, Diagnostics> calibrateWindow(
     const calibration::RigMap& rig, std::span<const drivers::Sample> window, const drivers::DeviceInfo& device,
     const Character& character, double maxNoiseDeg, std::string infoJson) {
   calibration::WindowOptions wo;
@@ -101,11 +101,7 @@ std::expected<CalibrationResult, std::vector<std::string>> calibrateWindow(
   calibrated->info = std::move(infoJson);
   calibrated->device = device.name;
   auto cal = calibration::Calibration::create(std::move(*calibrated), &character, &device);
-  if (!cal) {
-    std::vector<std::string> problems;
-    for (const auto& d : cal.error().all()) problems.push_back(d.message);
-    return std::unexpected(std::move(problems));
-  }
+  if (!cal) return std::unexpected(cal.error());
   CalibrationResult result{std::move(*cal), 0.0, {}};
   for (const calibration::ChannelAverage& c : average.channels) {
     if (c.stdDevRadians / kDegree >= result.maxNoiseDeg) {

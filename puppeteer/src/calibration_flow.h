@@ -61,13 +61,14 @@ class CalibrationFlow {
 };
 
 // The outcome of a window: the new calibration (offsets from the window's means, checked against the character and
-// the device) and the largest channel noise; or the reasons the window was rejected, one line each.
+// the device) and the largest channel noise; or the reasons the window was rejected, one diagnostic each (the
+// window's problems without a location, or Calibration::create's diagnostics).
 struct CalibrationResult {
   calibration::Calibration calibration;
   double maxNoiseDeg = 0;
   std::string noisiestChannel;
 };
-std::expected<CalibrationResult, std::vector<std::string>> calibrateWindow(
+std::expected<CalibrationResult, Diagnostics> calibrateWindow(
     const calibration::RigMap& rig, std::span<const drivers::Sample> window, const drivers::DeviceInfo& device,
     const Character& character, double maxNoiseDeg, std::string infoJson);
 

@@ -158,7 +158,7 @@ int runCalibrate(const CalibrateArgs& a) {
   if (!a.session.empty()) {
     auto read = sim::readSession(a.session);
     if (!read) {
-      std::fprintf(stderr, "%s\n", read.error().c_str());
+      std::fputs(read.error().str().c_str(), stderr);
       return kExitInvalidInput;
     }
     if (!read->recovery.message.empty()) std::fprintf(stderr, "%s\n", read->recovery.message.c_str());
@@ -212,7 +212,7 @@ int runCalibrate(const CalibrateArgs& a) {
   auto calibrated = calibration::calibrateOffsets(*rig, window, wo, &average);
   if (!calibrated) {
     std::fprintf(stderr, "puppeteer calibrate: error: the calibration-pose window was rejected:\n");
-    for (const std::string& p : calibrated.error()) std::fprintf(stderr, "  %s\n", p.c_str());
+    for (const Diagnostic& p : calibrated.error().all()) std::fprintf(stderr, "  %s\n", p.message.c_str());
     std::fprintf(stderr, "Nothing was written. Hold the armature still in the calibration pose and try again.\n");
     return kExitInvalidInput;
   }
@@ -260,7 +260,7 @@ int runCalibrate(const CalibrateArgs& a) {
   }
 
   if (auto saved = cal->save(a.output); !saved) {
-    std::fprintf(stderr, "%s\n", saved.error().c_str());
+    std::fprintf(stderr, "%s\n", saved.error().message.c_str());
     return kExitIoError;
   }
   std::fprintf(talk, "Wrote %s (%zu channels, %zu joints)\n", a.output.c_str(), cal->rigMap().channels.size(),

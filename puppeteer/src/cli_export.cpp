@@ -95,16 +95,16 @@ int writeRawChannels(const ExportArgs& a) {
   if (int rc = checkOutputPath("export", "-o", a.output); rc != kExitOk) return rc;
   auto session = sim::readSession(a.input);
   if (!session) {
-    std::fprintf(stderr, "%s\n", session.error().c_str());
+    std::fputs(session.error().str().c_str(), stderr);
     return kExitInvalidInput;
   }
   auto clip = sim::sessionToBvh(*session);
   if (!clip) {
-    std::fprintf(stderr, "%s\n", clip.error().c_str());
+    std::fputs(clip.error().str().c_str(), stderr);
     return kExitInvalidInput;
   }
   if (auto saved = sim::saveBvh(a.output, *clip); !saved) {
-    std::fprintf(stderr, "puppeteer export: error: %s\n", saved.error().c_str());
+    std::fprintf(stderr, "puppeteer export: error: %s\n", saved.error().firstError().c_str());
     return kExitIoError;
   }
   std::printf("%s: raw channels (encoder counts as angles, no calibration, not the character's skeleton) -> %s: "
@@ -120,13 +120,13 @@ std::optional<Take> clipTake(const sim::BvhClip& clip, const ExportArgs& a, cons
   if (!options) return *code = kExitInvalidInput, std::nullopt;
   auto r = Retargeter::create(clip, character, *options);
   if (!r) {
-    std::fprintf(stderr, "puppeteer export: error: %s: %s\n", a.input.c_str(), r.error().c_str());
+    std::fprintf(stderr, "puppeteer export: error: %s: %s\n", a.input.c_str(), r.error().all().front().message.c_str());
     return *code = kExitInvalidInput, std::nullopt;
   }
   printRetargetReport(std::filesystem::path(a.input).filename().string(), a.map, r->report());
   auto take = takeFromClip(clip, *r, character, selection);
   if (!take) {
-    std::fprintf(stderr, "puppeteer export: error: %s\n", take.error().c_str());
+    std::fprintf(stderr, "puppeteer export: error: %s\n", take.error().all().front().message.c_str());
     return *code = kExitUsage, std::nullopt;
   }
   return std::move(*take);
@@ -153,14 +153,14 @@ std::optional<Take> loadTake(const ExportArgs& a, const Character& character, in
   }
   auto session = sim::readSession(a.input);
   if (!session) {
-    std::fprintf(stderr, "%s\n", session.error().c_str());
+    std::fputs(session.error().str().c_str(), stderr);
     return *code = kExitInvalidInput, std::nullopt;
   }
   if (!session->recovery.message.empty()) std::fprintf(stderr, "%s\n", session->recovery.message.c_str());
   if (a.calibration.empty() && session->skeleton) {
     auto clip = sim::sessionToBvh(*session);
     if (!clip) {
-      std::fprintf(stderr, "%s\n", clip.error().c_str());
+      std::fputs(clip.error().str().c_str(), stderr);
       return *code = kExitInvalidInput, std::nullopt;
     }
     return clipTake(*clip, a, character, selection, code);
@@ -189,7 +189,7 @@ std::optional<Take> loadTake(const ExportArgs& a, const Character& character, in
   }
   auto take = takeFromSession(*session, *cal, character, selection);
   if (!take) {
-    std::fprintf(stderr, "puppeteer export: error: %s\n", take.error().c_str());
+    std::fprintf(stderr, "puppeteer export: error: %s\n", take.error().all().front().message.c_str());
     return *code = kExitUsage, std::nullopt;
   }
   return std::move(*take);
@@ -216,17 +216,16 @@ int runExport(const ExportArgs& a) {
   const std::optional<Take> take = loadTake(a, character, &code);
   if (!take) return code;
   Progress progress(take->frames());
-  std::string error;
   if (ext == ".bvh") {
     if (auto saved = sim::saveBvh(a.output, characterClip(character, *take)); !saved) {
-      std::fprintf(stderr, "puppeteer export: error: %s\n", saved.error().c_str());
+      std::fprintf(stderr, "puppeteer export: error: %s\n", saved.error().firstError().c_str());
       return kExitIoError;
     }
   } else if (ext == ".glb") {
     GltfExportOptions o;
     o.cellSize = a.cell;
-    if (!writeSkinnedGlb(character, *take, o, a.output, &error)) {
-      std::fprintf(stderr, "puppeteer export: error: %s\n", error.c_str());
+    if (auto written = writeSkinnedGlb(character, *take, o, a.output); !written) {
+      std::fprintf(stderr, "puppeteer export: error: %s\n", written.error().all().front().message.c_str());
       return kExitIoError;
     }
   } else {
@@ -234,8 +233,8 @@ int runExport(const ExportArgs& a) {
     o.cellSize = a.cell;
     o.particles = a.polygonizer == "particles";
     o.progress = [&](size_t done) { progress(done); };
-    if (!writeSurfaceSequence(loaded->scene, character, *take, o, a.output, &error)) {
-      std::fprintf(stderr, "puppeteer export: error: %s\n", error.c_str());
+    if (auto written = writeSurfaceSequence(loaded->scene, character, *take, o, a.output); !written) {
+      std::fprintf(stderr, "puppeteer export: error: %s\n", written.error().all().front().message.c_str());
       return kExitIoError;
     }
   }

@@ -180,7 +180,7 @@ std::unique_ptr<ViewerPipeline> makePipeline(const LiveArgs& a, int* exitCode) {
   if (auto plan = planGrid(pipeline->skeleton().field(), pipeline->marchingCubesOptions()); !plan) {
     std::fprintf(stderr,
                  "%s: error: %s; give the scene's MarchingCubes node a larger cellSize or smaller resolutions\n",
-                 a.scene.c_str(), plan.error().c_str());
+                 a.scene.c_str(), plan.error().all().front().message.c_str());
     *exitCode = kExitInvalidInput;
     return nullptr;
   }
@@ -316,7 +316,7 @@ bool driveActor(const LiveArgs& a, const WorldCharacter& c, const std::string& s
     const auto [file, clipName] = splitClipSource(source);
     auto driver = ClipDriver::load(file, clipName, "names", character);
     if (!driver) {
-      std::fputs(driver.error().c_str(), stderr);
+      std::fputs(driver.error().str().c_str(), stderr);
       *code = kExitInvalidInput;
       return false;
     }
@@ -409,7 +409,7 @@ int runWorldView(const LiveArgs& a) {
     actor.pipeline->setTextures(std::move(*textures));
     actor.pipeline->setPlacement(c.placement);
     if (auto plan = planGrid(actor.pipeline->skeleton().field(), actor.pipeline->marchingCubesOptions()); !plan) {
-      std::fprintf(stderr, "%s: error: %s\n", c.scenePath.c_str(), plan.error().c_str());
+      std::fprintf(stderr, "%s: error: %s\n", c.scenePath.c_str(), plan.error().all().front().message.c_str());
       return kExitInvalidInput;
     }
     if (!driveActor(a, c, (*sources)[k], actor, clock, &code)) return code;
@@ -483,14 +483,14 @@ std::optional<sim::Session> loadSession(const std::string& path) {
     }
     auto session = sim::bvhToSession(*clip, std::filesystem::path(path).filename().string());
     if (!session) {
-      std::fprintf(stderr, "%s\n", session.error().c_str());
+      std::fputs(session.error().str().c_str(), stderr);
       return std::nullopt;
     }
     return std::move(*session);
   }
   auto session = sim::readSession(path);
   if (!session) {
-    std::fprintf(stderr, "%s\n", session.error().c_str());
+    std::fputs(session.error().str().c_str(), stderr);
     return std::nullopt;
   }
   if (!session->recovery.message.empty()) std::fprintf(stderr, "%s\n", session->recovery.message.c_str());
@@ -571,7 +571,7 @@ int runClip(const LiveArgs& a, const std::string& command) {
   if (!pipeline) return code;
   auto driver = ClipDriver::load(a.clip, a.clipName, a.map, pipeline->character());
   if (!driver) {
-    std::fputs(driver.error().c_str(), stderr);
+    std::fputs(driver.error().str().c_str(), stderr);
     return kExitInvalidInput;
   }
   const std::string name = std::filesystem::path(a.clip).filename().string();
@@ -676,7 +676,7 @@ int runReplay(const LiveArgs& given) {
   if (!session) return kExitInvalidInput;
   if (!a.exportSession.empty()) {
     if (auto saved = sim::saveSession(a.exportSession, *session); !saved) {
-      std::fprintf(stderr, "%s\n", saved.error().c_str());
+      std::fputs(saved.error().str().c_str(), stderr);
       return kExitIoError;
     }
     std::printf("puppeteer: wrote %s\n", a.exportSession.c_str());

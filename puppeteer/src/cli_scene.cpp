@@ -52,9 +52,8 @@ struct MeshArgs {
 // The objects of `objects` written to `output` (each its own glTF node / OBJ object; PLY merged). Prints the result.
 int writeObjects(const char* command, const std::string& input, const std::vector<NamedMesh>& objects,
                  const std::string& output, bool json) {
-  std::string error;
-  if (!writeMeshObjects(objects, output, &error)) {
-    std::fprintf(stderr, "puppeteer %s: error: %s\n", command, error.c_str());
+  if (auto written = writeMeshObjects(objects, output); !written) {
+    std::fprintf(stderr, "puppeteer %s: error: %s\n", command, written.error().all().front().message.c_str());
     return kExitIoError;
   }
   size_t triangles = 0;
@@ -139,7 +138,7 @@ bool gridRefused(const char* command, const Field& field, const MarchingCubesOpt
   auto plan = planGrid(field, options);
   if (plan) return false;
   std::fprintf(stderr, "puppeteer %s: error: %s: %s; use larger cells, or raise the limit with --max-cells N\n",
-               command, source.c_str(), plan.error().c_str());
+               command, source.c_str(), plan.error().all().front().message.c_str());
   return true;
 }
 
@@ -209,10 +208,9 @@ int runParticleMesh(const MeshArgs& a, const Scene& scene, const SkeletonCache& 
   progress.phase("writing " + a.output);
   textureMesh(mesh, skeleton, options.threads);
   tess.carryTexcoords(mesh);
-  std::string error;
-  if (!writeTexturedMesh(mesh, skeleton.character(), images, a.output, &error)) {
+  if (auto written = writeTexturedMesh(mesh, skeleton.character(), images, a.output); !written) {
     progress.done();
-    std::fprintf(stderr, "puppeteer mesh: error: %s\n", error.c_str());
+    std::fprintf(stderr, "puppeteer mesh: error: %s\n", written.error().all().front().message.c_str());
     return kExitIoError;
   }
   progress.done();
@@ -319,11 +317,10 @@ int runMesh(const MeshArgs& a) {
     return writeObjects("mesh", a.scene, named, a.output, a.json);
   }
   progress.phase("writing " + std::to_string(mesh.triangleCount()) + " triangles to " + a.output);
-  std::string error;
   const auto writeStart = std::chrono::steady_clock::now();
-  if (!writeTexturedMesh(mesh, character, *images, a.output, &error)) {
+  if (auto written = writeTexturedMesh(mesh, character, *images, a.output); !written) {
     progress.done();
-    std::fprintf(stderr, "puppeteer mesh: error: %s\n", error.c_str());
+    std::fprintf(stderr, "puppeteer mesh: error: %s\n", written.error().all().front().message.c_str());
     return kExitIoError;
   }
   const double writeMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - writeStart).count();
@@ -453,7 +450,7 @@ bool addGrabbedProps(const RenderArgs& a, const Character& character, Mesh& mesh
   if (a.grabs.empty()) return true;
   auto driver = ClipDriver::load(a.clip, a.clipName, a.map, character);
   if (!driver) {
-    std::fputs(driver.error().c_str(), stderr);
+    std::fputs(driver.error().str().c_str(), stderr);
     return false;
   }
   for (const std::string& spec : a.grabs) {
@@ -512,9 +509,8 @@ int runWorldRender(const RenderArgs& a) {
   snap.width = a.width;
   snap.height = a.height;
   snap.camera = frameMesh(mesh, viewDirection(a.view), float(a.width) / float(a.height));
-  std::string error;
-  if (!renderMeshToPng(mesh, snap, a.output, &error)) {
-    std::fprintf(stderr, "puppeteer render: error: %s\n", error.c_str());
+  if (auto rendered = renderMeshToPng(mesh, snap, a.output); !rendered) {
+    std::fprintf(stderr, "puppeteer render: error: %s\n", rendered.error().all().front().message.c_str());
     return kExitIoError;
   }
   if (a.json) {
@@ -553,7 +549,7 @@ int runRender(const RenderArgs& a) {
   if (!a.clip.empty()) {
     auto driver = ClipDriver::load(a.clip, a.clipName, a.map, character);
     if (!driver) {
-      std::fputs(driver.error().c_str(), stderr);
+      std::fputs(driver.error().str().c_str(), stderr);
       return kExitInvalidInput;
     }
     driver->apply(a.at, skeleton);
@@ -588,11 +584,10 @@ int runRender(const RenderArgs& a) {
   snap.width = a.width;
   snap.height = a.height;
   snap.camera = frameMesh(mesh, viewDirection(a.view), float(a.width) / float(a.height));
-  std::string error;
-  const bool rendered = renderMeshToPng(mesh, snap, a.output, &error);
+  const auto rendered = renderMeshToPng(mesh, snap, a.output);
   progress.done();
   if (!rendered) {
-    std::fprintf(stderr, "puppeteer render: error: %s\n", error.c_str());
+    std::fprintf(stderr, "puppeteer render: error: %s\n", rendered.error().all().front().message.c_str());
     return kExitIoError;
   }
   if (a.json) {

@@ -100,7 +100,7 @@ int runInfo(const std::string& path, bool json) {
   auto session = sim::readSession(path);
   progress.done();
   if (!session) {
-    std::fprintf(stderr, "%s\n", session.error().c_str());
+    std::fputs(session.error().str().c_str(), stderr);
     return kExitInvalidInput;
   }
   const sim::Session& s = *session;
@@ -168,14 +168,14 @@ int runConvert(const ConvertArgs& a) {
     progress.phase("converting " + std::to_string(clip->frames.size()) + " frames");
     auto session = sim::bvhToSession(*clip, std::filesystem::path(a.input).filename().string(), options);
     progress.phase("writing " + a.output);
-    auto saved = session ? sim::saveSession(a.output, *session) : std::expected<void, std::string>();
+    auto saved = session ? sim::saveSession(a.output, *session) : std::expected<void, Diagnostics>();
     progress.done();
     if (!session) {
-      std::fprintf(stderr, "%s\n", session.error().c_str());
+      std::fputs(session.error().str().c_str(), stderr);
       return kExitInvalidInput;
     }
     if (!saved) {
-      std::fprintf(stderr, "puppeteer convert: error: %s\n", saved.error().c_str());
+      std::fprintf(stderr, "puppeteer convert: error: %s\n", saved.error().firstError().c_str());
       return kExitIoError;
     }
     if (a.json) {
@@ -194,21 +194,21 @@ int runConvert(const ConvertArgs& a) {
     auto session = sim::readSession(a.input);
     progress.done();
     if (!session) {
-      std::fprintf(stderr, "%s\n", session.error().c_str());
+      std::fputs(session.error().str().c_str(), stderr);
       return kExitInvalidInput;
     }
     if (!session->recovery.message.empty()) std::fprintf(stderr, "%s\n", session->recovery.message.c_str());
     progress.phase("converting " + std::to_string(session->samples.size()) + " samples");
     auto clip = sim::sessionToBvh(*session);
     progress.phase("writing " + a.output);
-    auto saved = clip ? sim::saveBvh(a.output, *clip) : std::expected<void, std::string>();
+    auto saved = clip ? sim::saveBvh(a.output, *clip) : std::expected<void, Diagnostics>();
     progress.done();
     if (!clip) {
-      std::fprintf(stderr, "%s\n", clip.error().c_str());
+      std::fputs(clip.error().str().c_str(), stderr);
       return kExitInvalidInput;
     }
     if (!saved) {
-      std::fprintf(stderr, "puppeteer convert: error: %s\n", saved.error().c_str());
+      std::fprintf(stderr, "puppeteer convert: error: %s\n", saved.error().firstError().c_str());
       return kExitIoError;
     }
     if (a.json) {

@@ -47,7 +47,8 @@ int runStretch(StretchArgs& a) {
   for (TextureMode m : modes) {
     auto r = measureStretch(loaded->character, o, m, a.options);
     if (!r) {
-      std::fprintf(stderr, "puppeteer stretch: error: %s: %s\n", a.scene.c_str(), r.error().c_str());
+      std::fprintf(stderr, "puppeteer stretch: error: %s: %s\n", a.scene.c_str(),
+                   r.error().all().front().message.c_str());
       return kExitInvalidInput;
     }
     results.push_back(*r);

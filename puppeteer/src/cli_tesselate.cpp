@@ -153,22 +153,24 @@ std::optional<Take> loadTake(const std::string& path, const std::string& map, co
     clip = std::move(*c);
   } else {
     auto s = sim::readSession(path);
-    if (!s) return std::fprintf(stderr, "%s\n", s.error().c_str()), std::nullopt;
+    if (!s) return std::fputs(s.error().str().c_str(), stderr), std::nullopt;
     if (s->skeleton) {
       auto c = sim::sessionToBvh(*s);
-      if (!c) return std::fprintf(stderr, "%s\n", c.error().c_str()), std::nullopt;
+      if (!c) return std::fputs(c.error().str().c_str(), stderr), std::nullopt;
       clip = std::move(*c);
     } else {
       session = std::move(*s);
     }
   }
-  std::expected<Take, std::string> take = std::unexpected(std::string());
+  std::expected<Take, Diagnostics> take = std::unexpected(Diagnostics());
   if (clip) {
     const auto options = retargetOptionsFor(map, *clip, character);
     if (!options) return std::nullopt;
     auto r = Retargeter::create(*clip, character, *options);
     if (!r)
-      return std::fprintf(stderr, "puppeteer bench: error: %s: %s\n", path.c_str(), r.error().c_str()), std::nullopt;
+      return std::fprintf(stderr, "puppeteer bench: error: %s: %s\n", path.c_str(),
+                          r.error().all().front().message.c_str()),
+             std::nullopt;
     take = takeFromClip(*clip, *r, character, selection);
   } else {
     auto c = calibrationForSample(*session, session->samples.size(), &character, path);
@@ -180,7 +182,9 @@ std::optional<Take> loadTake(const std::string& path, const std::string& map, co
     take = takeFromSession(*session, **c, character, selection);
   }
   if (!take)
-    return std::fprintf(stderr, "puppeteer bench: error: %s: %s\n", path.c_str(), take.error().c_str()), std::nullopt;
+    return std::fprintf(stderr, "puppeteer bench: error: %s: %s\n", path.c_str(),
+                        take.error().all().front().message.c_str()),
+           std::nullopt;
   return std::move(*take);
 }
 
@@ -479,9 +483,8 @@ int runBench(const BenchArgs& a) {
     }
   }
   if (!a.csv.empty()) {
-    std::string error;
-    if (!writeFileAtomically(a.csv, csvText(reports), &error)) {
-      std::fprintf(stderr, "puppeteer bench: error: %s\n", error.c_str());
+    if (auto saved = writeFileAtomically(a.csv, csvText(reports)); !saved) {
+      std::fprintf(stderr, "puppeteer bench: error: %s\n", saved.error().message.c_str());
       return kExitIoError;
     }
   }

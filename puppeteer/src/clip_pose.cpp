@@ -29,21 +29,21 @@ ClipDriver::ClipDriver(Clip clip, const Character& character) : clip_(std::move(
   }
 }
 
-std::expected<ClipDriver, std::string> ClipDriver::load(const std::string& path, const std::string& clipName,
+std::expected<ClipDriver, Diagnostics> ClipDriver::load(const std::string& path, const std::string& clipName,
                                                         const std::string& map, const Character& character) {
   auto file = readVrmlFile(path);
-  if (!file) return std::unexpected(file.error().str());
+  if (!file) return std::unexpected(file.error());
   auto clips = readClips(*file);
-  if (!clips) return std::unexpected(clips.error().str());
+  if (!clips) return std::unexpected(clips.error());
   if (clips->clips.empty())
-    return std::unexpected(path + ": error: no clip: no TimeSensor drives an interpolator routed to a Transform\n");
+    return std::unexpected(singleError({path}, "no clip: no TimeSensor drives an interpolator routed to a Transform"));
   auto chosen = clips->clips.begin();
   if (!clipName.empty()) {
     chosen = std::find_if(clips->clips.begin(), clips->clips.end(), [&](const Clip& c) { return c.name == clipName; });
     if (chosen == clips->clips.end()) {
       std::string names;
       for (const Clip& c : clips->clips) names += (names.empty() ? "" : ", ") + c.name;
-      return std::unexpected(path + ": error: no clip named '" + clipName + "' (the clips: " + names + ")\n");
+      return std::unexpected(singleError({path}, "no clip named '" + clipName + "' (the clips: " + names + ")"));
     }
   }
   ClipDriver driver;
@@ -53,7 +53,7 @@ std::expected<ClipDriver, std::string> ClipDriver::load(const std::string& path,
     driver = ClipDriver(std::move(driver.clip_), character);
   } else {
     auto matches = calibration::readJointMapFile(map, targets, &character);
-    if (!matches) return std::unexpected(matches.error().str());
+    if (!matches) return std::unexpected(matches.error());
     for (const std::string& target : targets) {
       const auto m = std::find_if(matches->begin(), matches->end(),
                                   [&](const calibration::JointMatch& jm) { return jm.source == target; });
@@ -64,8 +64,9 @@ std::expected<ClipDriver, std::string> ClipDriver::load(const std::string& path,
   if (driver.bound_.empty()) {
     std::string names;
     for (const std::string& t : targets) names += (names.empty() ? "" : ", ") + t;
-    return std::unexpected(path + ": error: clip " + driver.clip_.name + " drives no joint of the character (its " +
-                           "targets: " + names + "; pass --map FILE.json, docs/calibration.md#joint-maps)\n");
+    return std::unexpected(singleError({path}, "clip " + driver.clip_.name + " drives no joint of the character (its " +
+                                                   "targets: " + names +
+                                                   "; pass --map FILE.json, docs/calibration.md#joint-maps)"));
   }
   return driver;
 }

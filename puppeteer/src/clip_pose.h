@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "imps/character.h"
+#include "imps/diagnostic.h"
 #include "imps/skeleton_cache.h"
 #include "imps/vrml_clip.h"
 #include "viewer.h"
@@ -21,9 +22,9 @@ class ClipDriver {
   // Reads `path` (a VRML 97 file, possibly gzipped) and picks its clip named `clipName` (a TimeSensor's DEF name), or
   // its only/first clip when `clipName` is empty. `map` is "auto" or "names" (a target drives the joint of the same
   // name) or a joint-map JSON file (docs/calibration.md#joint-maps) from target names to joint names. Errors are
-  // whole messages (`file:line:column: error: ...` lines): the file does not read, has no clips, no clip of that
-  // name, a bad map, or no target drives a joint.
-  static std::expected<ClipDriver, std::string> load(const std::string& path, const std::string& clipName,
+  // the readers' diagnostics (`file:line:column: error: ...`), or one at `path`: the file does not read, has no
+  // clips, no clip of that name, a bad map, or no target drives a joint.
+  static std::expected<ClipDriver, Diagnostics> load(const std::string& path, const std::string& clipName,
                                                      const std::string& map, const Character& character);
   // Binds an already read clip by equal names.
   ClipDriver(Clip clip, const Character& character);

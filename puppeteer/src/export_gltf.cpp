@@ -114,23 +114,18 @@ SkinWeights skinWeights(const Character& character, const Mesh& mesh) {
   return out;
 }
 
-std::vector<uint8_t> encodeSkinnedGlb(const Character& character, const Take& take, const GltfExportOptions& options,
-                                      std::string* error) {
+std::expected<std::vector<uint8_t>, Diagnostics> encodeSkinnedGlb(const Character& character, const Take& take,
+                                                                  const GltfExportOptions& options) {
   const auto& joints = character.joints();
   const size_t n = joints.size();
-  if (n == 0 || n > 65535) {
-    *error = "the character needs 1 to 65535 joints for a skin (a flat scene has none)";
-    return {};
-  }
+  if (n == 0 || n > 65535)
+    return std::unexpected(singleError({}, "the character needs 1 to 65535 joints for a skin (a flat scene has none)"));
   // 1. The rest mesh and its weights.
   SkeletonCache rest(character);
   MarchingCubesOptions mc;
   mc.cellSize = options.cellSize;
   const Mesh mesh = polygonize(rest.field(), mc);
-  if (mesh.triangleCount() == 0) {
-    *error = "the rest mesh is empty";
-    return {};
-  }
+  if (mesh.triangleCount() == 0) return std::unexpected(singleError({}, "the rest mesh is empty"));
   const SkinWeights weights = skinWeights(character, mesh);
 
   BinaryBuilder b;
@@ -224,11 +219,13 @@ std::vector<uint8_t> encodeSkinnedGlb(const Character& character, const Take& ta
   return glbContainer(gltf.dump(), b.bin);
 }
 
-bool writeSkinnedGlb(const Character& character, const Take& take, const GltfExportOptions& options,
-                     const std::string& path, std::string* error) {
-  const std::vector<uint8_t> bytes = encodeSkinnedGlb(character, take, options, error);
-  if (bytes.empty()) return false;
-  return writeFileAtomically(path, bytes, error);
+std::expected<void, Diagnostics> writeSkinnedGlb(const Character& character, const Take& take,
+                                                 const GltfExportOptions& options, const std::string& path) {
+  const auto bytes = encodeSkinnedGlb(character, take, options);
+  if (!bytes) return std::unexpected(bytes.error());
+  if (auto saved = writeFileAtomically(path, *bytes); !saved)
+    return std::unexpected(singleError({}, saved.error().message));
+  return {};
 }
 
 }  // namespace imps::app

@@ -9,10 +9,12 @@
 
 #include <array>
 #include <cstdint>
+#include <expected>
 #include <string>
 #include <vector>
 
 #include "export_take.h"
+#include "imps/diagnostic.h"
 #include "imps/mesh.h"
 
 namespace imps::app {
@@ -33,11 +35,12 @@ struct SkinWeights {
 // normalised distance. The character must have at least one joint.
 SkinWeights skinWeights(const Character& character, const Mesh& mesh);
 
-// The .glb bytes; empty with *error set when the character has no joints or the rest mesh is empty.
-std::vector<uint8_t> encodeSkinnedGlb(const Character& character, const Take& take, const GltfExportOptions& options,
-                                      std::string* error);
-// encodeSkinnedGlb written atomically to `path`.
-bool writeSkinnedGlb(const Character& character, const Take& take, const GltfExportOptions& options,
-                     const std::string& path, std::string* error);
+// The .glb bytes, or one error without a location when the character has no joints (or more than a skin holds) or
+// the rest mesh is empty.
+std::expected<std::vector<uint8_t>, Diagnostics> encodeSkinnedGlb(const Character& character, const Take& take,
+                                                                  const GltfExportOptions& options);
+// encodeSkinnedGlb written atomically to `path`: fails with its error, or the save's "cannot save 'path': ...".
+std::expected<void, Diagnostics> writeSkinnedGlb(const Character& character, const Take& take,
+                                                 const GltfExportOptions& options, const std::string& path);
 
 }  // namespace imps::app

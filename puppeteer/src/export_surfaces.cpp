@@ -22,8 +22,9 @@ std::string sequenceFileName(const std::string& pattern, size_t frame) {
   return pattern.substr(0, first) + number + pattern.substr(last);
 }
 
-bool writeSurfaceSequence(const Scene& scene, const Character& character, const Take& take,
-                          const SurfaceSequenceOptions& options, const std::string& pattern, std::string* error) {
+std::expected<void, Diagnostics> writeSurfaceSequence(const Scene& scene, const Character& character, const Take& take,
+                                                      const SurfaceSequenceOptions& options,
+                                                      const std::string& pattern) {
   SkeletonCache skeleton(character);
   std::optional<Tesselator> tesselator;
   if (options.particles) {
@@ -34,10 +35,7 @@ bool writeSurfaceSequence(const Scene& scene, const Character& character, const 
   const std::filesystem::path folder = std::filesystem::path(pattern).parent_path();
   std::error_code ec;
   if (!folder.empty()) std::filesystem::create_directories(folder, ec);
-  if (ec) {
-    *error = folder.string() + ": cannot create the folder: " + ec.message();
-    return false;
-  }
+  if (ec) return std::unexpected(singleError({}, folder.string() + ": cannot create the folder: " + ec.message()));
   MarchingCubesOptions mc;
   mc.cellSize = options.cellSize;
   Mesh mesh;
@@ -53,10 +51,10 @@ bool writeSurfaceSequence(const Scene& scene, const Character& character, const 
     } else {
       mesh = polygonize(skeleton.field(), mc);
     }
-    if (!writeMesh(mesh, sequenceFileName(pattern, f), error)) return false;
+    if (auto written = writeMesh(mesh, sequenceFileName(pattern, f)); !written) return written;
     if (options.progress) options.progress(f + 1);
   }
-  return true;
+  return {};
 }
 
 }  // namespace imps::app

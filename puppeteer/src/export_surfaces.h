@@ -5,10 +5,12 @@
 // every frame, which glTF morph targets and point caches cannot hold.
 #pragma once
 
+#include <expected>
 #include <functional>
 #include <string>
 
 #include "export_take.h"
+#include "imps/diagnostic.h"
 #include "imps/scene.h"
 
 namespace imps::app {
@@ -24,9 +26,11 @@ std::string sequenceFileName(const std::string& pattern, size_t frame);
 
 // Writes one mesh per frame of `take` (files named by sequenceFileName, each written atomically; the pattern's
 // folder is created when missing). With particles the
-// tesselator settles on the first frame, then runs the scene's updates per render between frames. Returns false
-// with *error set on an I/O failure (files already written stay).
-bool writeSurfaceSequence(const Scene& scene, const Character& character, const Take& take,
-                          const SurfaceSequenceOptions& options, const std::string& pattern, std::string* error);
+// tesselator settles on the first frame, then runs the scene's updates per render between frames. Fails (files
+// already written stay) as imps::writeMesh does, one error without a location naming the file, or
+// "FOLDER: cannot create the folder: REASON".
+std::expected<void, Diagnostics> writeSurfaceSequence(const Scene& scene, const Character& character, const Take& take,
+                                                      const SurfaceSequenceOptions& options,
+                                                      const std::string& pattern);
 
 }  // namespace imps::app

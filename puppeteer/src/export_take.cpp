@@ -19,10 +19,11 @@ std::vector<Rigid> localsFor(SkeletonCache& skeleton, const std::vector<JointPos
 
 }  // namespace
 
-std::expected<std::vector<size_t>, std::string> selectFrames(std::span<const double> times, double sourceFrameTime,
+std::expected<std::vector<size_t>, Diagnostics> selectFrames(std::span<const double> times, double sourceFrameTime,
                                                              const FrameSelection& selection, double* frameTime) {
-  if (times.empty()) return std::unexpected("the input has no frames");
-  if (selection.fps < 0 || !std::isfinite(selection.fps)) return std::unexpected("--fps must be positive");
+  const auto fail = [](std::string why) { return std::unexpected(singleError({}, std::move(why))); };
+  if (times.empty()) return fail("the input has no frames");
+  if (selection.fps < 0 || !std::isfinite(selection.fps)) return fail("--fps must be positive");
   std::vector<size_t> frames;
   if (selection.fps == 0) {
     for (size_t i = 0; i < times.size(); ++i) frames.push_back(i);
@@ -40,13 +41,12 @@ std::expected<std::vector<size_t>, std::string> selectFrames(std::span<const dou
   const long count = static_cast<long>(frames.size());
   const long last = selection.last < 0 ? count - 1 : selection.last;
   if (selection.first < 0 || selection.first > last || last >= count)
-    return std::unexpected("--frames " + std::to_string(selection.first) + ":" + std::to_string(selection.last) +
-                           " is outside the " + std::to_string(count) + " output frames (0:" +
-                           std::to_string(count - 1) + ")");
+    return fail("--frames " + std::to_string(selection.first) + ":" + std::to_string(selection.last) +
+                " is outside the " + std::to_string(count) + " output frames (0:" + std::to_string(count - 1) + ")");
   return std::vector<size_t>(frames.begin() + selection.first, frames.begin() + last + 1);
 }
 
-std::expected<Take, std::string> takeFromClip(const sim::BvhClip& clip, const Retargeter& retargeter,
+std::expected<Take, Diagnostics> takeFromClip(const sim::BvhClip& clip, const Retargeter& retargeter,
                                               const Character& character, const FrameSelection& selection) {
   std::vector<double> times(clip.frames.size());
   for (size_t f = 0; f < times.size(); ++f) times[f] = static_cast<double>(f) * clip.frameTime;
@@ -62,9 +62,10 @@ std::expected<Take, std::string> takeFromClip(const sim::BvhClip& clip, const Re
   return take;
 }
 
-std::expected<Take, std::string> takeFromSession(const sim::Session& session, const calibration::Calibration& calibration,
+std::expected<Take, Diagnostics> takeFromSession(const sim::Session& session,
+                                                 const calibration::Calibration& calibration,
                                                  const Character& character, const FrameSelection& selection) {
-  if (session.devices.empty()) return std::unexpected("the session has no devices");
+  if (session.devices.empty()) return std::unexpected(singleError({}, "the session has no devices"));
   calibration::Calibrator calibrator(calibration);
   SkeletonCache skeleton(character);
   std::vector<double> times;

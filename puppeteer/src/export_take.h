@@ -37,16 +37,19 @@ struct Take {
 };
 
 // Source frames at times `times` (seconds, non-decreasing) → output frame indices: sample-and-hold at each output
-// time, then the range. Errors: an empty input, a range outside the frames, a non-positive fps.
-std::expected<std::vector<size_t>, std::string> selectFrames(std::span<const double> times, double sourceFrameTime,
+// time, then the range. Errors (one, without a location: the values come from the command line): an empty input, a
+// range outside the frames, a non-positive fps.
+std::expected<std::vector<size_t>, Diagnostics> selectFrames(std::span<const double> times, double sourceFrameTime,
                                                              const FrameSelection& selection, double* frameTime);
 
-// A clip retargeted onto the character (every frame through `retargeter`).
-std::expected<Take, std::string> takeFromClip(const sim::BvhClip& clip, const Retargeter& retargeter,
+// A clip retargeted onto the character (every frame through `retargeter`). Fails as selectFrames does.
+std::expected<Take, Diagnostics> takeFromClip(const sim::BvhClip& clip, const Retargeter& retargeter,
                                               const Character& character, const FrameSelection& selection);
 // A session through a calibration: the stateful Calibrator over every sample of every device in order (so smoothing
 // and hold-last-good behave as in the app), one frame per device-0 sample (with the other devices' samples of it).
-std::expected<Take, std::string> takeFromSession(const sim::Session& session, const calibration::Calibration& calibration,
+// Fails as selectFrames does, and for a session without devices.
+std::expected<Take, Diagnostics> takeFromSession(const sim::Session& session,
+                                                 const calibration::Calibration& calibration,
                                                  const Character& character, const FrameSelection& selection);
 
 // Angles (degrees) a, b, c with q = Rz(a) · Rx(b) · Ry(c) (BVH's "Zrotation Xrotation Yrotation"); `near` (degrees)

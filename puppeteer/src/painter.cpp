@@ -127,8 +127,9 @@ void retarget(SceneNode& node, const fs::path& sceneDir, const std::string& from
 
 }  // namespace
 
-bool savePaintedScene(Scene scene, const Character& character, const std::vector<RgbaImage>& images,
-                      const std::vector<bool>& painted, const std::string& scenePath, std::string* error) {
+std::expected<void, Diagnostics> savePaintedScene(Scene scene, const Character& character,
+                                                  const std::vector<RgbaImage>& images,
+                                                  const std::vector<bool>& painted, const std::string& scenePath) {
   const std::vector<std::string> names = paintedTextureNames(character, painted, scenePath);
   const fs::path originalDir = fs::path(scene.fileName).parent_path();
   const fs::path savedDir = fs::absolute(fs::path(scenePath).parent_path()).lexically_normal();
@@ -138,7 +139,7 @@ bool savePaintedScene(Scene scene, const Character& character, const std::vector
     std::string url;
     if (!names[k].empty()) {
       const RgbaImage& image = images[k];
-      if (!savePng(image.rgba, image.width, image.height, names[k], error)) return false;
+      if (auto saved = savePng(image.rgba, image.width, image.height, names[k]); !saved) return saved;
       url = fs::path(names[k]).filename().string();
     } else if (fs::path(t.url).is_absolute() ||
                fs::absolute(originalDir).lexically_normal() == savedDir) {
@@ -148,7 +149,9 @@ bool savePaintedScene(Scene scene, const Character& character, const std::vector
     }
     if (graph) retarget(*graph, originalDir, t.path, url);
   }
-  return saveSceneFile(scene, scenePath, error);
+  if (auto saved = saveSceneFile(scene, scenePath); !saved)
+    return std::unexpected(singleError({}, saved.error().message));
+  return {};
 }
 
 }  // namespace imps::app

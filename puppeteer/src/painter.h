@@ -6,6 +6,7 @@
 //           "Fast, Minimum Storage Ray/Triangle Intersection", 1997.
 #pragma once
 
+#include <expected>
 #include <optional>
 #include <string>
 #include <vector>
@@ -57,9 +58,11 @@ std::vector<std::string> paintedTextureNames(const Character& character, const s
 // ImageTexture url naming a painted texture's file pointed at the new file (relative to the saved scene), then
 // the scene (atomically) to `scenePath`. Unpainted textures keep their urls (absolute ones, or when the scene is
 // saved in its own directory), else get their file's path relative to the saved scene's directory. With nothing
-// painted this is the app's plain save: the saved scene still finds its images wherever it is saved. On failure returns false with *error "path: reason" and the
-// scene is not written.
-bool savePaintedScene(Scene scene, const Character& character, const std::vector<RgbaImage>& images,
-                      const std::vector<bool>& painted, const std::string& scenePath, std::string* error);
+// painted this is the app's plain save: the saved scene still finds its images wherever it is saved. On failure the
+// scene is not written and the error is savePng's for an image, or the scene save's "cannot save 'PATH': ..."
+// (one error without a location whose message names the file).
+std::expected<void, Diagnostics> savePaintedScene(Scene scene, const Character& character,
+                                                  const std::vector<RgbaImage>& images,
+                                                  const std::vector<bool>& painted, const std::string& scenePath);
 
 }  // namespace imps::app

@@ -59,34 +59,24 @@ const Plugin& plugin() {
 
 }  // namespace
 
-std::optional<std::vector<uint8_t>> encodePng(const std::vector<uint8_t>& rgba, int width, int height,
-                                              std::string* error) {
+std::expected<std::vector<uint8_t>, Diagnostics> encodePng(const std::vector<uint8_t>& rgba, int width, int height) {
+  const auto fail = [](std::string reason) { return std::unexpected(singleError({}, std::move(reason))); };
   const Plugin& p = plugin();
-  if (!p.encode) {
-    if (error) *error = p.error;
-    return std::nullopt;
-  }
-  if (width <= 0 || height <= 0 || rgba.size() != size_t(width) * size_t(height) * 4) {
-    if (error) *error = "no pixels to encode";
-    return std::nullopt;
-  }
+  if (!p.encode) return fail(p.error);
+  if (width <= 0 || height <= 0 || rgba.size() != size_t(width) * size_t(height) * 4)
+    return fail("no pixels to encode");
   uint8_t* png = nullptr;
   size_t size = 0;
   char message[512] = "";
-  if (p.encode(width, height, rgba.data(), &png, &size, message, sizeof message) != 0) {
-    if (error) *error = message;
-    return std::nullopt;
-  }
+  if (p.encode(width, height, rgba.data(), &png, &size, message, sizeof message) != 0) return fail(message);
   std::vector<uint8_t> bytes(png, png + size);
   p.release(png);
   return bytes;
 }
 
-bool savePng(const std::vector<uint8_t>& rgba, int width, int height, const std::string& path, std::string* error) {
-  auto fail = [&](const std::string& reason) {
-    if (error) *error = path + ": " + reason;
-    return false;
-  };
+std::expected<void, Diagnostics> savePng(const std::vector<uint8_t>& rgba, int width, int height,
+                                         const std::string& path) {
+  auto fail = [&](const std::string& reason) { return std::unexpected(singleError({}, path + ": " + reason)); };
   std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
   if (ext != ".png") return fail("image files must end in .png");
@@ -99,27 +89,25 @@ bool savePng(const std::vector<uint8_t>& rgba, int width, int height, const std:
   if (p.encode(width, height, rgba.data(), &png, &size, message, sizeof message) != 0) return fail(message);
   std::vector<uint8_t> bytes(png, png + size);
   p.release(png);
-  return writeFileAtomically(path, bytes, error);
+  if (auto saved = writeFileAtomically(path, bytes); !saved)
+    return std::unexpected(singleError({}, saved.error().message));
+  return {};
 }
 
-bool readImage(const std::string& path, RgbaImage& image, std::string* error) {
+std::expected<RgbaImage, Diagnostics> readImage(const std::string& path) {
+  const auto fail = [&](std::string reason) { return std::unexpected(singleError({path}, std::move(reason))); };
   const Plugin& p = plugin();
-  if (!p.encode) {
-    if (error) *error = p.error;
-    return false;
-  }
+  if (!p.encode) return fail(p.error);
   uint8_t* rgba = nullptr;
   int width = 0, height = 0;
   char message[512] = "";
-  if (p.read(path.c_str(), &width, &height, &rgba, message, sizeof message) != 0) {
-    if (error) *error = message;
-    return false;
-  }
+  if (p.read(path.c_str(), &width, &height, &rgba, message, sizeof message) != 0) return fail(message);
+  RgbaImage image;
   image.width = width;
   image.height = height;
   image.rgba.assign(rgba, rgba + size_t(width) * size_t(height) * 4);
   p.release(rgba);
-  return true;
+  return image;
 }
 
 }  // namespace imps::app

@@ -297,12 +297,13 @@ double characterChainLength(const Character& character, int from, int to) {
 
 }  // namespace
 
-std::expected<Retargeter, std::string> Retargeter::create(const sim::BvhClip& clip, const Character& character,
+std::expected<Retargeter, Diagnostics> Retargeter::create(const sim::BvhClip& clip, const Character& character,
                                                           const RetargetOptions& options) {
-  if (clip.joints.empty()) return std::unexpected("the clip has no joints");
+  const auto fail = [](std::string why) { return std::unexpected(singleError({}, std::move(why))); };
+  if (clip.joints.empty()) return fail("the clip has no joints");
   if (options.restFrame >= 0 && static_cast<size_t>(options.restFrame) >= clip.frames.size())
-    return std::unexpected("rest frame " + std::to_string(options.restFrame) + " is beyond the clip's " +
-                           std::to_string(clip.frames.size()) + " frames");
+    return fail("rest frame " + std::to_string(options.restFrame) + " is beyond the clip's " +
+                std::to_string(clip.frames.size()) + " frames");
   Retargeter r;
   r.clip_ = clip;
   r.clip_.frames.clear();
@@ -323,7 +324,7 @@ std::expected<Retargeter, std::string> Retargeter::create(const sim::BvhClip& cl
       const int target = character.findJoint(m.character);
       auto it = std::find_if(clip.joints.begin(), clip.joints.end(), [&](const sim::BvhJoint& j) { return j.name == m.source; });
       if (target < 0 || it == clip.joints.end())
-        return std::unexpected("joint map: '" + m.source + "' -> '" + m.character + "' names a joint that is not there");
+        return fail("joint map: '" + m.source + "' -> '" + m.character + "' names a joint that is not there");
       const auto c = static_cast<size_t>(it - clip.joints.begin());
       r.source_[static_cast<size_t>(target)] = static_cast<int>(c);
       why[c] = options.map == RetargetOptions::Map::Names ? "same name"

@@ -16,6 +16,7 @@
 
 #include "calibration/joint_map.h"
 #include "imps/character.h"
+#include "imps/diagnostic.h"
 #include "imps/skeleton_cache.h"
 #include "sim/bvh.h"
 
@@ -81,8 +82,9 @@ struct RetargetOptions {
 // character's root also takes the clip root's position channels when its own clip joint has none (Bip01 → Pelvis).
 class Retargeter {
  public:
-  // Errors: an explicit match naming a joint neither skeleton has, a rest frame out of range, a clip without joints.
-  static std::expected<Retargeter, std::string> create(const sim::BvhClip& clip, const Character& character,
+  // Errors (one, without a location; the caller names the clip): an explicit match naming a joint neither skeleton
+  // has, a rest frame out of range, a clip without joints.
+  static std::expected<Retargeter, Diagnostics> create(const sim::BvhClip& clip, const Character& character,
                                                        const RetargetOptions& options = {});
 
   const RetargetReport& report() const { return report_; }

@@ -209,13 +209,11 @@ std::vector<uint8_t> renderMesh(const Mesh& mesh, const SnapshotOptions& options
   return pixels;
 }
 
-bool renderMeshToPng(const Mesh& mesh, const SnapshotOptions& options, const std::string& path, std::string* error) {
+std::expected<void, Diagnostics> renderMeshToPng(const Mesh& mesh, const SnapshotOptions& options,
+                                                 const std::string& path) {
   const std::vector<uint8_t> pixels = renderMesh(mesh, options);
-  if (pixels.empty()) {
-    if (error) *error = path + ": image size and supersampling must be positive";
-    return false;
-  }
-  return savePng(pixels, options.width, options.height, path, error);
+  if (pixels.empty()) return std::unexpected(singleError({}, path + ": image size and supersampling must be positive"));
+  return savePng(pixels, options.width, options.height, path);
 }
 
 }  // namespace imps::app

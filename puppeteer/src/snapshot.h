@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <expected>
 #include <optional>
 #include <string>
 #include <vector>
@@ -49,8 +50,9 @@ struct SnapshotOptions {
 std::vector<uint8_t> renderMesh(const Mesh& mesh, const SnapshotOptions& options);
 
 // Renders as renderMesh() and saves an RGBA8 PNG (OpenImageIO) to `path`, which must end in ".png", atomically
-// (temporary file, fsync, rename). On failure returns false, leaves `path` untouched and sets *error (if non-null)
-// to "path: reason".
-bool renderMeshToPng(const Mesh& mesh, const SnapshotOptions& options, const std::string& path, std::string* error);
+// (temporary file, fsync, rename). On failure leaves `path` untouched and fails as savePng (png.h) does: one error
+// without a location, "path: reason" or "cannot save 'path': ...".
+std::expected<void, Diagnostics> renderMeshToPng(const Mesh& mesh, const SnapshotOptions& options,
+                                                 const std::string& path);
 
 }  // namespace imps::app

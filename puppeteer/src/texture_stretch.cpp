@@ -84,13 +84,14 @@ std::optional<glm::vec3> surfacePointOfUv(const Mesh& mesh, int32_t layer, glm::
   return best;
 }
 
-std::expected<StretchResult, std::string> measureStretch(const Character& character, TesselatorOptions tesselator,
+std::expected<StretchResult, Diagnostics> measureStretch(const Character& character, TesselatorOptions tesselator,
                                                          TextureMode mode, const StretchOptions& options) {
+  const auto fail = [](std::string why) { return std::unexpected(singleError({}, std::move(why))); };
   const int joint = character.findJoint(options.joint);
-  if (joint < 0) return std::unexpected("no joint named '" + options.joint + "'");
-  if (!character.textured()) return std::unexpected(std::string("no primitive has a texture generator"));
+  if (joint < 0) return fail("no joint named '" + options.joint + "'");
+  if (!character.textured()) return fail("no primitive has a texture generator");
   if (!(glm::length(options.axis) > 0.0f) || !(glm::length(options.dotDirection) > 0.0f))
-    return std::unexpected(std::string("the bend's axis and the dot's direction must not be zero"));
+    return fail("the bend's axis and the dot's direction must not be zero");
   tesselator.textureMode = mode;
   tesselator.cancel = nullptr;
   tesselator.progress = nullptr;
@@ -102,7 +103,7 @@ std::expected<StretchResult, std::string> measureStretch(const Character& charac
   textureMesh(mesh, cache, tess.options().threads);
   tess.carryTexcoords(mesh);
   for (int f = 0; f < options.restFrames; ++f) drawFrame(tess, cache, mesh);
-  if (!mesh.textured()) return std::unexpected(std::string("the mesh has no texture layers"));
+  if (!mesh.textured()) return fail("the mesh has no texture layers");
 
   // Paint: the dot's centre where the ray from the joint leaves the surface, in the layer weighing most there.
   StretchResult r;
@@ -112,7 +113,7 @@ std::expected<StretchResult, std::string> measureStretch(const Character& charac
   const glm::vec3 dir = glm::normalize(options.dotDirection);
   // The joint's origin is inside the limb: the first hit on the way out is the limb's surface.
   const auto hit = intersectMesh(mesh, PickRay{origin, dir});
-  if (!hit) return std::unexpected("no surface along the dot's direction from joint '" + options.joint + "'");
+  if (!hit) return fail("no surface along the dot's direction from joint '" + options.joint + "'");
   const uint32_t* v = &mesh.indices[3 * hit->triangle];
   float bestWeight = 0.0f;
   for (int c = 0; c < 3; ++c)
@@ -128,7 +129,7 @@ std::expected<StretchResult, std::string> measureStretch(const Character& charac
         r.layer = l;
       }
     }
-  if (r.layer < 0) return std::unexpected(std::string("the surface at the dot has no texture"));
+  if (r.layer < 0) return fail("the surface at the dot has no texture");
   // The centre's coordinates: those the texture shows at the hit point.
   r.dotUv = mesh.layerUv(v[0], r.layer);
   {
@@ -141,14 +142,14 @@ std::expected<StretchResult, std::string> measureStretch(const Character& charac
     r.dotUv = uv;
   }
   const auto rest = surfacePointOfUv(mesh, r.layer, r.dotUv, hit->point);
-  if (!rest) return std::unexpected(std::string("the dot's coordinates are on no triangle blending its layer"));
+  if (!rest) return fail("the dot's coordinates are on no triangle blending its layer");
   r.dotRest = *rest;
 
   // Pictures: the dot painted into the image, the joint seen from the outside of the bend.
   std::vector<RgbaImage> images;
   if (!options.pictures.empty()) {
     auto loaded = loadTextures(character);
-    if (!loaded) return std::unexpected(loaded.error());
+    if (!loaded) return fail(loaded.error());
     images = std::move(*loaded);
     Brush brush;
     brush.size = 5;  // 7 texels
@@ -165,10 +166,10 @@ std::expected<StretchResult, std::string> measureStretch(const Character& charac
     so.camera = camera;
     const std::string path = options.pictures + "_" + (mode == TextureMode::Carried ? "carried" : "projective") +
                              "_" + stage + ".png";
-    std::string error;
-    return renderMeshToPng(mesh, so, path, &error) ? "" : path + ": " + error;
+    auto saved = renderMeshToPng(mesh, so, path);
+    return saved ? "" : path + ": " + saved.error().all().front().message;
   };
-  if (auto e = picture("rest"); !e.empty()) return std::unexpected(e);
+  if (auto e = picture("rest"); !e.empty()) return fail(e);
 
   SkinMarker marker{r.dotRest, cache.field().sample(r.dotRest).owner};
   const glm::quat restRotation = cache.local(joint).rotation;
@@ -184,15 +185,15 @@ std::expected<StretchResult, std::string> measureStretch(const Character& charac
   for (int f = 1; f <= frames; ++f) pose(float(f) / float(frames));
   r.skinBent = marker.p;
   const auto bent = surfacePointOfUv(mesh, r.layer, r.dotUv, r.skinBent);
-  if (!bent) return std::unexpected(std::string("the dot vanished at the bent pose"));
+  if (!bent) return fail("the dot vanished at the bent pose");
   r.dotBent = *bent;
-  if (auto e = picture("bent"); !e.empty()) return std::unexpected(e);
+  if (auto e = picture("bent"); !e.empty()) return fail(e);
   for (int f = frames - 1; f >= 0; --f) pose(float(f) / float(frames));
   for (int f = 0; f < options.restFrames; ++f) drawFrame(tess, cache, mesh);
   const auto back = surfacePointOfUv(mesh, r.layer, r.dotUv, r.dotRest);
-  if (!back) return std::unexpected(std::string("the dot vanished after coming back"));
+  if (!back) return fail("the dot vanished after coming back");
   r.dotBack = *back;
-  if (auto e = picture("back"); !e.empty()) return std::unexpected(e);
+  if (auto e = picture("back"); !e.empty()) return fail(e);
   r.skinBack = marker.p;
   r.roundTrip = glm::length(r.dotBack - r.dotRest);
   r.skinRoundTrip = glm::length(r.skinBack - r.dotRest);

@@ -11,6 +11,7 @@
 #include <glm/vec3.hpp>
 
 #include "imps/character.h"
+#include "imps/diagnostic.h"
 #include "imps/mesh.h"
 #include "imps/scene.h"
 #include "imps/tesselator.h"
@@ -62,8 +63,9 @@ std::optional<glm::vec3> surfacePointOfUv(const Mesh& mesh, int32_t layer, glm::
 // restFrames frames at rest, measure. The skin's own motion is a marker moved as a particle without repulsion: by
 // its owner's differential transform every frame, then projected back onto the surface, its ownership passing to
 // blend neighbours as the tesselator's particles' does. Deterministic (the tesselator's options' seed and threads).
-// An error names what is missing (joint, surface, texture at the dot), or an image that cannot be read or written.
-std::expected<StretchResult, std::string> measureStretch(const Character& character, TesselatorOptions tesselator,
+// Fails with one error without a location (the caller names the scene) saying what is missing (joint, surface,
+// texture at the dot), or which image cannot be read or written.
+std::expected<StretchResult, Diagnostics> measureStretch(const Character& character, TesselatorOptions tesselator,
                                                          TextureMode mode, const StretchOptions& options);
 
 }  // namespace imps::app

@@ -39,8 +39,10 @@ std::expected<std::vector<RgbaImage>, std::string> loadTextures(const Character&
       reason = "No such file or directory";
     } else if (std::filesystem::is_directory(t.path, ec)) {
       reason = "Is a directory";
-    } else if (!readImage(t.path, image, &reason)) {
-      // reason set by readImage
+    } else if (auto read = readImage(t.path); !read) {
+      reason = read.error().all().front().message;
+    } else {
+      image = std::move(*read);
     }
     if (!reason.empty()) {
       errors += (errors.empty() ? "" : "\n") + t.loc.file + ":" + std::to_string(t.loc.line) + ":" +

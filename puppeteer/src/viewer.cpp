@@ -612,12 +612,11 @@ void FrameLoop::drawHud() {
 void FrameLoop::saveIfRequested() {
   if (!s_.saveRequested) return;
   s_.saveRequested = false;
-  std::string error;
   const bool anyPainted = std::find(s_.painted.begin(), s_.painted.end(), true) != s_.painted.end();
-  const bool saved = savePaintedScene(pipeline_.posedScene(), pipeline_.character(), pipeline_.textures(), s_.painted,
-                                      options_.savePath, &error);
+  const auto saved = savePaintedScene(pipeline_.posedScene(), pipeline_.character(), pipeline_.textures(), s_.painted,
+                                      options_.savePath);
   report(s_, saved ? "saved " + options_.savePath + (anyPainted ? " with its painted textures" : "")
-                   : "save failed: " + error);
+                   : "save failed: " + saved.error().all().front().message);
 }
 
 // Key `c` / F12: a numbered screenshot; the last headless frame: options.screenshot (a failure there fails the run).
@@ -628,10 +627,10 @@ void FrameLoop::screenshotIfDue(bool lastFrame) {
                                ? "puppeteer-screenshot-" + std::to_string(++screenshotCount_) + ".png"
                                : options_.screenshot;
   s_.screenshotRequested = false;
-  std::string error;
-  if (savePng(Renderer::readPixels(s_.width, s_.height), s_.width, s_.height, path, &error)) {
+  if (auto saved = savePng(Renderer::readPixels(s_.width, s_.height), s_.width, s_.height, path); saved) {
     s_.message = "screenshot " + path;
   } else {
+    const std::string& error = saved.error().all().front().message;
     s_.message = "screenshot failed: " + error;
     std::fprintf(stderr, "puppeteer: error: %s\n", error.c_str());
     if (lastFrame) exitCode_ = kExitIoError;

@@ -189,15 +189,16 @@ void LivePoseSource::finishCalibration() {
   flow_.reset();
   if (!result) {
     std::string message = "calibration rejected (" + std::to_string(samples) + " samples): ";
-    message += result.error().empty() ? "unknown reason" : result.error().front();
-    if (result.error().size() > 1) message += " (+" + std::to_string(result.error().size() - 1) + " more)";
+    const std::vector<Diagnostic>& problems = result.error().all();
+    message += problems.empty() ? "unknown reason" : problems.front().message;
+    if (problems.size() > 1) message += " (+" + std::to_string(problems.size() - 1) + " more)";
     say(message + "; hold still and press k again");
-    for (size_t i = 1; i < result.error().size(); ++i) std::printf("  %s\n", result.error()[i].c_str());
+    for (size_t i = 1; i < problems.size(); ++i) std::printf("  %s\n", problems[i].message.c_str());
     return;
   }
   const std::string out = live_.calibrationOut.empty() ? live_.calibrationPath : live_.calibrationOut;
   if (auto saved = result->calibration.save(out); !saved) {
-    say("calibration not saved: " + saved.error() + " (not applied)");
+    say("calibration not saved: " + saved.error().message + " (not applied)");
     return;
   }
   char buf[160];

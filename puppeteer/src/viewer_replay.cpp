@@ -142,7 +142,7 @@ std::expected<ClipPoseMap, Diagnostics> ClipPoseMap::create(const sim::Session& 
     m.read(d, session.samples[i]);
   }
   auto r = Retargeter::create(m.clip_, character, options);
-  if (!r) return fail(r.error());
+  if (!r) return std::unexpected(r.error());
   r->setReferenceFrame(m.values_);
   m.retargeter_.emplace(std::move(*r));
   return m;

@@ -91,7 +91,7 @@ std::optional<std::vector<WorldObject>> poseWorld(const World& world, const std:
       const auto [file, clipName] = splitClipSource(source);
       auto loaded = ClipDriver::load(file, clipName, "names", c.character);
       if (!loaded) {
-        std::fputs(loaded.error().c_str(), stderr);
+        std::fputs(loaded.error().str().c_str(), stderr);
         return std::nullopt;
       }
       driver = std::move(*loaded);
@@ -102,8 +102,8 @@ std::optional<std::vector<WorldObject>> poseWorld(const World& world, const std:
     skeleton.update();
     MarchingCubesOptions mc = options;  // each character its own grid around its own surface
     if (auto plan = planGrid(skeleton.field(), mc); !plan) {
-      std::fprintf(stderr, "%s: error: character %s: %s; use larger cells or raise --max-cells\n",
-                   c.scenePath.c_str(), c.name.c_str(), plan.error().c_str());
+      std::fprintf(stderr, "%s: error: character %s: %s; use larger cells or raise --max-cells\n", c.scenePath.c_str(),
+                   c.name.c_str(), plan.error().all().front().message.c_str());
       return std::nullopt;
     }
     Mesh mesh = polygonize(skeleton.field(), mc);

@@ -12,7 +12,6 @@
 #include <fstream>
 #include <iterator>
 #include <optional>
-#include <stdexcept>
 #include <vector>
 
 #include "imps/atomic_file.h"
@@ -401,14 +400,15 @@ std::expected<BvhClip, Diagnostics> readBvh(const std::filesystem::path& path, D
   auto text = readFileText(path, kMaxBvhFileBytes);
   if (!text) {
     Diagnostics errors;
-    const char* what = text.error().starts_with("larger") ? "cannot read BVH file: " : "cannot open BVH file: ";
-    errors.error({path.string()}, what + text.error());
+    const char* what = text.error().message.starts_with("larger") ? "cannot read BVH file: " : "cannot open BVH file: ";
+    errors.error({path.string()}, what + text.error().message);
     return std::unexpected(std::move(errors));
   }
   return readBvhText(*text, path.string(), warnings);
 }
 
-std::string writeBvh(const BvhClip& clip) {
+std::expected<std::string, Diagnostics> writeBvh(const BvhClip& clip) {
+  const auto unwritable = [](std::string why) { return std::unexpected(singleError({}, std::move(why))); };
   std::string out = "HIERARCHY\n";
   std::vector<size_t> open;  // joints whose '}' is not written yet
   auto indent = [&](size_t depth) { out.append(depth, '\t'); };
@@ -427,12 +427,12 @@ std::string writeBvh(const BvhClip& clip) {
   for (size_t i = 0; i < clip.joints.size(); ++i) {
     const BvhJoint& j = clip.joints[i];
     if (j.parent < -1 || j.parent >= static_cast<int>(i))
-      throw std::invalid_argument("writeBvh: joint '" + j.name + "' has a bad parent index");
+      return unwritable("cannot write BVH: joint '" + j.name + "' has a bad parent index");
     while (!open.empty() && static_cast<int>(open.back()) != j.parent) closeJoint();
     if (j.parent >= 0 && open.empty())
-      throw std::invalid_argument("writeBvh: joints are not in depth-first order at '" + j.name + "'");
+      return unwritable("cannot write BVH: joints are not in depth-first order at '" + j.name + "'");
     if (j.name.empty() || j.name.find_first_of("{}\r\n") != std::string::npos)
-      throw std::invalid_argument("writeBvh: joint name '" + j.name + "' cannot be written");
+      return unwritable("cannot write BVH: joint name '" + j.name + "' cannot be written");
     const size_t d = open.size();
     indent(d), out += (j.parent < 0 ? "ROOT " : "JOINT "), out += j.name, out += '\n';
     indent(d), out += "{\n";
@@ -448,8 +448,11 @@ std::string writeBvh(const BvhClip& clip) {
   out += "MOTION\nFrames: " + std::to_string(clip.frames.size()) + "\nFrame Time: ";
   appendNumber(out, clip.frameTime);
   out += '\n';
-  for (const auto& frame : clip.frames) {
-    if (frame.size() != channels) throw std::invalid_argument("writeBvh: a frame's length differs from the channel count");
+  for (size_t f = 0; f < clip.frames.size(); ++f) {
+    const std::vector<float>& frame = clip.frames[f];
+    if (frame.size() != channels)
+      return unwritable("cannot write BVH: frame " + std::to_string(f) + " has " + std::to_string(frame.size()) +
+                        " values for " + std::to_string(channels) + " channels");
     for (size_t i = 0; i < frame.size(); ++i) {
       if (i) out += ' ';
       appendNumber(out, frame[i]);
@@ -459,10 +462,11 @@ std::string writeBvh(const BvhClip& clip) {
   return out;
 }
 
-std::expected<void, std::string> saveBvh(const std::filesystem::path& path, const BvhClip& clip) {
-  std::string error;
-  if (!writeFileAtomically(path.string(), writeBvh(clip), &error))
-    return std::unexpected(path.string() + ": error: " + error);
+std::expected<void, Diagnostics> saveBvh(const std::filesystem::path& path, const BvhClip& clip) {
+  auto text = writeBvh(clip);
+  if (!text) return std::unexpected(singleError({path.string()}, text.error().all().front().message));
+  if (auto saved = writeFileAtomically(path.string(), *text); !saved)
+    return std::unexpected(singleError({path.string()}, saved.error().message));
   return {};
 }
 

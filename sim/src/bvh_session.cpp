@@ -82,10 +82,10 @@ std::string recordTooLarge(const std::string& what, size_t bytes) {
 
 }  // namespace
 
-std::expected<Session, std::string> bvhToSession(const BvhClip& clip, std::string_view sourceName,
+std::expected<Session, Diagnostics> bvhToSession(const BvhClip& clip, std::string_view sourceName,
                                                  BvhToSessionOptions options) {
   const std::string name(sourceName);
-  auto fail = [&](const std::string& what) { return std::unexpected(name + ": error: " + what); };
+  auto fail = [&](std::string what) { return std::unexpected(singleError({name}, std::move(what))); };
   const int bits = options.bitsPerChannel;
   if (bits < kMinBits || bits > kMaxBits)
     return fail("bits per channel " + std::to_string(bits) + " outside " + std::to_string(kMinBits) + ".." +
@@ -152,7 +152,9 @@ std::expected<Session, std::string> bvhToSession(const BvhClip& clip, std::strin
 
   BvhClip hierarchy = clip;
   hierarchy.frames.clear();
-  s.skeleton = SessionSkeleton{writeBvh(hierarchy), unitsPerCount};
+  auto hierarchyText = writeBvh(hierarchy);
+  if (!hierarchyText) return fail(hierarchyText.error().all().front().message);
+  s.skeleton = SessionSkeleton{std::move(*hierarchyText), unitsPerCount};
   if (s.skeleton->bvh.size() + 8 > kMaxRecordPayloadBytes)  // the SKELETON record: scale, then the text
     return fail(recordTooLarge("hierarchy (joint names and offsets)", s.skeleton->bvh.size() + 8));
 
@@ -187,8 +189,8 @@ std::expected<Session, std::string> bvhToSession(const BvhClip& clip, std::strin
   return s;
 }
 
-std::expected<BvhClip, std::string> sessionToBvh(const Session& session, SessionToBvhOptions options) {
-  auto fail = [](const std::string& what) { return std::unexpected("session: error: " + what); };
+std::expected<BvhClip, Diagnostics> sessionToBvh(const Session& session, SessionToBvhOptions options) {
+  auto fail = [](std::string what) { return std::unexpected(singleError({"session"}, std::move(what))); };
   if (session.devices.empty()) return fail("the session has no devices");
   if (session.samples.size() != session.sampleDevice.size()) return fail("samples and sampleDevice differ in length");
 
@@ -208,7 +210,10 @@ std::expected<BvhClip, std::string> sessionToBvh(const Session& session, Session
   double unitsPerCount = options.positionUnitsPerCount;
   if (session.skeleton) {
     auto parsed = readBvhText(session.skeleton->bvh, "session skeleton");
-    if (!parsed) return std::unexpected(parsed.error().all().front().str());  // the reader's one error
+    if (!parsed) {  // the reader's first error, where it is in the skeleton's text
+      const Diagnostic& first = parsed.error().all().front();
+      return std::unexpected(singleError(first.loc, first.message));
+    }
     clip = std::move(*parsed);
     clip.frames.clear();
     unitsPerCount = session.skeleton->positionUnitsPerCount;

@@ -180,20 +180,20 @@ uint32_t crc32c(std::span<const uint8_t> bytes, uint32_t crc) {
 // ---------------------------------------------------------------------------------------------------------------
 // Writer
 
-std::expected<SessionWriter, std::string> SessionWriter::create(const std::filesystem::path& path,
+std::expected<SessionWriter, Diagnostics> SessionWriter::create(const std::filesystem::path& path,
                                                                 const DeviceInfo& device,
                                                                 SessionWriterOptions options) {
   return create(path, std::span<const DeviceInfo>(&device, 1), options);
 }
 
-std::expected<SessionWriter, std::string> SessionWriter::create(const std::filesystem::path& path,
+std::expected<SessionWriter, Diagnostics> SessionWriter::create(const std::filesystem::path& path,
                                                                 std::span<const DeviceInfo> devices,
                                                                 SessionWriterOptions options) {
   const std::string name = path.string();
-  if (devices.empty()) return std::unexpected(name + ": error: a session needs at least one device");
-  if (devices.size() > 0xFFFF) return std::unexpected(name + ": error: too many devices");
+  if (devices.empty()) return std::unexpected(singleError({name}, "a session needs at least one device"));
+  if (devices.size() > 0xFFFF) return std::unexpected(singleError({name}, "too many devices"));
   for (const auto& d : devices)
-    if (auto problem = checkDevice(d); !problem.empty()) return std::unexpected(name + ": error: " + problem);
+    if (auto problem = checkDevice(d); !problem.empty()) return std::unexpected(singleError({name}, problem));
 
   SessionWriter w;
   w.path_ = path;
@@ -201,7 +201,7 @@ std::expected<SessionWriter, std::string> SessionWriter::create(const std::files
   w.devices_.assign(devices.begin(), devices.end());
   // O_EXCL: a recording never clobbers an earlier one.
   w.fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);  // less the umask, as fopen
-  if (w.fd_ < 0) return std::unexpected(name + ": error: cannot create session file: " + errnoText(errno));
+  if (w.fd_ < 0) return std::unexpected(singleError({name}, "cannot create session file: " + errnoText(errno)));
 
   w.buffer_.insert(w.buffer_.end(), kMagic.begin(), kMagic.end());
   putU16(w.buffer_, kFormatVersion);
@@ -245,15 +245,16 @@ Clock& SessionWriter::clock() const {
   return options_.clock ? *options_.clock : steady;
 }
 
-std::expected<void, std::string> SessionWriter::usable() const {
-  if (fd_ < 0 || closed_) return std::unexpected(path_.string() + ": error: session writer is closed");
+std::expected<void, Diagnostics> SessionWriter::usable() const {
+  if (fd_ < 0 || closed_) return std::unexpected(singleError({path_.string()}, "session writer is closed"));
   return {};
 }
 
-std::expected<void, std::string> SessionWriter::appendRecord(uint16_t type, std::span<const uint8_t> payload) {
+std::expected<void, Diagnostics> SessionWriter::appendRecord(uint16_t type, std::span<const uint8_t> payload) {
   if (payload.size() > kMaxPayloadBytes)
-    return std::unexpected(path_.string() + ": error: record of " + std::to_string(payload.size()) +
-                           " bytes exceeds the format's limit of " + std::to_string(kMaxPayloadBytes));
+    return std::unexpected(singleError({path_.string()}, "record of " + std::to_string(payload.size()) +
+                                                             " bytes exceeds the format's limit of " +
+                                                             std::to_string(kMaxPayloadBytes)));
   const size_t start = buffer_.size();
   putU16(buffer_, type);
   putU16(buffer_, 0);
@@ -265,15 +266,15 @@ std::expected<void, std::string> SessionWriter::appendRecord(uint16_t type, std:
   return {};
 }
 
-std::expected<void, std::string> SessionWriter::append(const Sample& sample, uint16_t device) {
+std::expected<void, Diagnostics> SessionWriter::append(const Sample& sample, uint16_t device) {
   if (auto r = usable(); !r) return r;
   if (device >= devices_.size())
-    return std::unexpected(path_.string() + ": error: sample for device " + std::to_string(device) + " but only " +
-                           std::to_string(devices_.size()) + " devices");
+    return std::unexpected(singleError({path_.string()}, "sample for device " + std::to_string(device) + " but only " +
+                                                             std::to_string(devices_.size()) + " devices"));
   if (sample.channelCount != devices_[device].channelCount)
-    return std::unexpected(path_.string() + ": error: sample has " + std::to_string(sample.channelCount) +
-                           " channels but device " + std::to_string(device) + " has " +
-                           std::to_string(devices_[device].channelCount));
+    return std::unexpected(singleError({path_.string()}, "sample has " + std::to_string(sample.channelCount) +
+                                                             " channels but device " + std::to_string(device) +
+                                                             " has " + std::to_string(devices_[device].channelCount)));
   scratch_.clear();
   encodeSample(scratch_, device, sample);
   if (auto r = appendRecord(kSample, scratch_); !r) return r;
@@ -285,12 +286,12 @@ std::expected<void, std::string> SessionWriter::append(const Sample& sample, uin
   return {};
 }
 
-std::expected<void, std::string> SessionWriter::appendCalibration(std::string_view json) {
+std::expected<void, Diagnostics> SessionWriter::appendCalibration(std::string_view json) {
   if (auto r = usable(); !r) return r;
   return appendRecord(kCalibration, std::span(reinterpret_cast<const uint8_t*>(json.data()), json.size()));
 }
 
-std::expected<void, std::string> SessionWriter::appendMarker(int64_t timeNs, std::string_view label) {
+std::expected<void, Diagnostics> SessionWriter::appendMarker(int64_t timeNs, std::string_view label) {
   if (auto r = usable(); !r) return r;
   scratch_.clear();
   putI64(scratch_, timeNs);
@@ -298,18 +299,19 @@ std::expected<void, std::string> SessionWriter::appendMarker(int64_t timeNs, std
   return appendRecord(kMarker, scratch_);
 }
 
-std::expected<void, std::string> SessionWriter::appendNote(std::string_view text) {
+std::expected<void, Diagnostics> SessionWriter::appendNote(std::string_view text) {
   if (auto r = usable(); !r) return r;
   return appendRecord(kNote, std::span(reinterpret_cast<const uint8_t*>(text.data()), text.size()));
 }
 
-std::expected<uint16_t, std::string> SessionWriter::appendLayoutChange(const DeviceInfo& device, uint16_t previous) {
+std::expected<uint16_t, Diagnostics> SessionWriter::appendLayoutChange(const DeviceInfo& device, uint16_t previous) {
   if (auto r = usable(); !r) return std::unexpected(r.error());
   if (auto problem = checkDevice(device); !problem.empty())
-    return std::unexpected(path_.string() + ": error: " + problem);
+    return std::unexpected(singleError({path_.string()}, problem));
   if (previous >= devices_.size() || devices_.size() >= 0xFFFF)
-    return std::unexpected(path_.string() + ": error: layout change of device " + std::to_string(previous) +
-                           " but there are " + std::to_string(devices_.size()) + " devices");
+    return std::unexpected(singleError({path_.string()}, "layout change of device " + std::to_string(previous) +
+                                                             " but there are " + std::to_string(devices_.size()) +
+                                                             " devices"));
   const auto index = static_cast<uint16_t>(devices_.size());
   scratch_.clear();
   encodeDevice(scratch_, index, device);
@@ -322,23 +324,23 @@ std::expected<uint16_t, std::string> SessionWriter::appendLayoutChange(const Dev
   return index;
 }
 
-std::expected<void, std::string> SessionWriter::appendLayout(uint16_t device, uint16_t previous) {
+std::expected<void, Diagnostics> SessionWriter::appendLayout(uint16_t device, uint16_t previous) {
   if (auto r = usable(); !r) return r;
   if (device >= devices_.size() || previous >= device)
-    return std::unexpected(path_.string() + ": error: layout change of device " + std::to_string(previous) +
-                           " to device " + std::to_string(device));
+    return std::unexpected(singleError({path_.string()}, "layout change of device " + std::to_string(previous) +
+                                                             " to device " + std::to_string(device)));
   scratch_.clear();
   putU16(scratch_, device);
   putU16(scratch_, previous);
   return appendRecord(kLayout, scratch_);
 }
 
-std::expected<void, std::string> SessionWriter::appendCounters(uint16_t device,
+std::expected<void, Diagnostics> SessionWriter::appendCounters(uint16_t device,
                                                                std::span<const SessionCounter> counters) {
   if (auto r = usable(); !r) return r;
   if (device >= devices_.size() || counters.size() > 0xFFFF)
-    return std::unexpected(path_.string() + ": error: counters for device " + std::to_string(device) +
-                           " of " + std::to_string(devices_.size()));
+    return std::unexpected(singleError(
+        {path_.string()}, "counters for device " + std::to_string(device) + " of " + std::to_string(devices_.size())));
   scratch_.clear();
   putU16(scratch_, device);
   putU16(scratch_, static_cast<uint16_t>(counters.size()));
@@ -349,7 +351,7 @@ std::expected<void, std::string> SessionWriter::appendCounters(uint16_t device,
   return appendRecord(kCounters, scratch_);
 }
 
-std::expected<void, std::string> SessionWriter::appendSkeleton(const SessionSkeleton& skeleton) {
+std::expected<void, Diagnostics> SessionWriter::appendSkeleton(const SessionSkeleton& skeleton) {
   if (auto r = usable(); !r) return r;
   scratch_.clear();
   putU64(scratch_, std::bit_cast<uint64_t>(skeleton.positionUnitsPerCount));
@@ -357,7 +359,7 @@ std::expected<void, std::string> SessionWriter::appendSkeleton(const SessionSkel
   return appendRecord(kSkeleton, scratch_);
 }
 
-std::expected<void, std::string> SessionWriter::writeAll(std::span<const uint8_t> bytes) {
+std::expected<void, Diagnostics> SessionWriter::writeAll(std::span<const uint8_t> bytes) {
   size_t done = 0;
   while (done < bytes.size()) {
     const ssize_t n = ::write(fd_, bytes.data() + done, bytes.size() - done);
@@ -366,15 +368,15 @@ std::expected<void, std::string> SessionWriter::writeAll(std::span<const uint8_t
       const int err = errno;
       // Drop a partly written record so a later flush appends after whole records only.
       if (::ftruncate(fd_, static_cast<off_t>(flushed_)) == 0) (void)::lseek(fd_, 0, SEEK_END);
-      return std::unexpected(path_.string() + ": error: write failed at byte " + std::to_string(flushed_ + done) +
-                             ": " + errnoText(err));
+      return std::unexpected(singleError(
+          {path_.string()}, "write failed at byte " + std::to_string(flushed_ + done) + ": " + errnoText(err)));
     }
     done += static_cast<size_t>(n);
   }
   return {};
 }
 
-std::expected<void, std::string> SessionWriter::flush() {
+std::expected<void, Diagnostics> SessionWriter::flush() {
   if (auto r = usable(); !r) return r;
   lastFlushNs_ = clock().nowNs();
   if (buffer_.empty()) return {};
@@ -383,20 +385,20 @@ std::expected<void, std::string> SessionWriter::flush() {
   buffer_.clear();
   bufferedSamples_ = 0;
   if (options_.syncOnFlush && ::fdatasync(fd_) != 0)
-    return std::unexpected(path_.string() + ": error: fdatasync failed: " + errnoText(errno));
+    return std::unexpected(singleError({path_.string()}, "fdatasync failed: " + errnoText(errno)));
   return {};
 }
 
-std::expected<void, std::string> SessionWriter::close() {
+std::expected<void, Diagnostics> SessionWriter::close() {
   if (auto r = usable(); !r) return r;
   scratch_.clear();
   putU64(scratch_, samples_);
   auto result = appendRecord(kEnd, scratch_);
   if (result) result = flush();
   if (result && ::fsync(fd_) != 0)
-    result = std::unexpected(path_.string() + ": error: fsync failed: " + errnoText(errno));
+    result = std::unexpected(singleError({path_.string()}, "fsync failed: " + errnoText(errno)));
   if (::close(fd_) != 0 && result)
-    result = std::unexpected(path_.string() + ": error: close failed: " + errnoText(errno));
+    result = std::unexpected(singleError({path_.string()}, "close failed: " + errnoText(errno)));
   fd_ = -1;
   closed_ = true;
   return result;
@@ -405,37 +407,37 @@ std::expected<void, std::string> SessionWriter::close() {
 // ---------------------------------------------------------------------------------------------------------------
 // Reader
 
-std::expected<Session, std::string> readSession(const std::filesystem::path& path) {
+std::expected<Session, Diagnostics> readSession(const std::filesystem::path& path) {
   // The magic first: a file that is not a session (/dev/zero, a picture) is refused without reading it whole.
   std::ifstream in(path, std::ios::binary);
-  if (!in) return std::unexpected(path.string() + ": error: cannot open session file: " + errnoText(errno));
+  if (!in) return std::unexpected(singleError({path.string()}, "cannot open session file: " + errnoText(errno)));
   std::array<char, kFileHeaderBytes> header{};
   in.read(header.data(), header.size());
   if (in.gcount() == static_cast<std::streamsize>(header.size()) &&
       !std::equal(kMagic.begin(), kMagic.end(), header.begin()))
     return readSessionBytes(std::span(reinterpret_cast<const uint8_t*>(header.data()), header.size()), path.string());
   auto text = readFileText(path, kMaxSessionFileBytes);
-  if (!text)
-    return std::unexpected(path.string() + ": error: cannot read session file: " + text.error());
+  if (!text) return std::unexpected(singleError({path.string()}, "cannot read session file: " + text.error().message));
   return readSessionBytes(std::span(reinterpret_cast<const uint8_t*>(text->data()), text->size()), path.string());
 }
 
-std::expected<Session, std::string> readSessionBytes(std::span<const uint8_t> bytes, std::string_view name) {
+std::expected<Session, Diagnostics> readSessionBytes(std::span<const uint8_t> bytes, std::string_view name) {
   const std::string file(name);
   if (bytes.size() < kFileHeaderBytes)
-    return std::unexpected(file + ": error: not a session file: " + std::to_string(bytes.size()) +
-                           " bytes, shorter than the 16-byte header");
+    return std::unexpected(singleError(
+        {file}, "not a session file: " + std::to_string(bytes.size()) + " bytes, shorter than the 16-byte header"));
   if (!std::equal(kMagic.begin(), kMagic.end(), bytes.begin()))
-    return std::unexpected(file + ": error: not a session file: bad magic at byte 0 (expected \"IMPSSESS\")");
+    return std::unexpected(singleError({file}, "not a session file: bad magic at byte 0 (expected \"IMPSSESS\")"));
   ByteReader header(bytes.subspan(8, 8));
   Session s;
   s.formatVersion = header.u16();
   const uint16_t headerBytes = header.u16();
   if (s.formatVersion == 0 || s.formatVersion > kFormatVersion)
-    return std::unexpected(file + ": error: session format version " + std::to_string(s.formatVersion) +
-                           " is not supported (this reader knows versions 1.." + std::to_string(kFormatVersion) + ")");
+    return std::unexpected(singleError({file}, "session format version " + std::to_string(s.formatVersion) +
+                                                   " is not supported (this reader knows versions 1.." +
+                                                   std::to_string(kFormatVersion) + ")"));
   if (headerBytes < kFileHeaderBytes || headerBytes > bytes.size())
-    return std::unexpected(file + ": error: bad header size " + std::to_string(headerBytes) + " at byte 10");
+    return std::unexpected(singleError({file}, "bad header size " + std::to_string(headerBytes) + " at byte 10"));
 
   SessionRecovery& rec = s.recovery;
   rec.fileBytes = bytes.size();
@@ -647,16 +649,17 @@ std::expected<Session, std::string> readSessionBytes(std::span<const uint8_t> by
   return s;
 }
 
-std::expected<void, std::string> saveSession(const std::filesystem::path& path, const Session& session) {
+std::expected<void, Diagnostics> saveSession(const std::filesystem::path& path, const Session& session) {
   if (session.samples.size() != session.sampleDevice.size())
-    return std::unexpected(path.string() + ": error: session has " + std::to_string(session.samples.size()) +
-                           " samples but " + std::to_string(session.sampleDevice.size()) + " device indices");
+    return std::unexpected(
+        singleError({path.string()}, "session has " + std::to_string(session.samples.size()) + " samples but " +
+                                         std::to_string(session.sampleDevice.size()) + " device indices"));
   const std::filesystem::path tmp = temporarySibling(path.string());  // created exclusively by the writer
   std::error_code ignored;
   SessionWriterOptions options;
   options.flushEverySamples = 4096;
   options.flushEveryNs = 0;
-  auto result = [&]() -> std::expected<void, std::string> {
+  auto result = [&]() -> std::expected<void, Diagnostics> {
     auto writer = SessionWriter::create(tmp, session.devices, options);
     if (!writer) return std::unexpected(writer.error());
     if (session.skeleton)
@@ -693,13 +696,18 @@ std::expected<void, std::string> saveSession(const std::filesystem::path& path, 
   if (!result) {
     std::filesystem::remove(tmp, ignored);
     // The writer names the file it wrote; the user asked for `path`, and the temporary file is gone.
-    std::string message = result.error();
-    for (size_t at = message.find(tmp.string()); at != std::string::npos; at = message.find(tmp.string(), at))
-      message.replace(at, tmp.string().size(), path.string());
-    return std::unexpected(message);
+    auto named = [&](std::string text) {
+      for (size_t at = text.find(tmp.string()); at != std::string::npos; at = text.find(tmp.string(), at))
+        text.replace(at, tmp.string().size(), path.string());
+      return text;
+    };
+    Diagnostics errors;
+    for (const Diagnostic& d : result.error().all())
+      errors.error(SourceLoc{named(d.loc.file), d.loc.line, d.loc.column}, named(d.message));
+    return std::unexpected(std::move(errors));
   }
-  if (std::string error; !commitTemporaryFile(tmp.string(), path.string(), &error))
-    return std::unexpected(path.string() + ": error: " + error);
+  if (auto committed = commitTemporaryFile(tmp.string(), path.string()); !committed)
+    return std::unexpected(singleError({path.string()}, committed.error().message));
   return {};
 }
 

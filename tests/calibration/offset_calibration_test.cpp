@@ -125,7 +125,8 @@ TEST(AverageWindow, RejectsANoisyWindowNamingTheChannel) {
   EXPECT_TRUE(averageWindow(m, w, o).ok());
   auto offsets = calibrateOffsets(m, w, WindowOptions{});
   ASSERT_FALSE(offsets.has_value());
-  EXPECT_EQ(offsets.error().size(), 1u);
+  ASSERT_EQ(offsets.error().errorCount(), 1);
+  EXPECT_EQ(offsets.error().all().front().message, averageWindow(m, w, WindowOptions{}).problems.front());
 }
 
 TEST(AverageWindow, SkipsFlaggedReadingsAndRejectsADeadChannel) {
@@ -257,8 +258,9 @@ TEST(CalibrationFile, SaveAndLoadRoundTrip) {
   // A save into a directory that does not exist fails and says where.
   auto bad = cal->save(dir / "missing" / "x.json");
   ASSERT_FALSE(bad.has_value());
-  EXPECT_EQ(bad.error().rfind("cannot save '" + (dir / "missing" / "x.json").string() + "': creating a temporary file: ", 0), 0u)
-      << bad.error();
+  EXPECT_EQ(bad.error().path, (dir / "missing" / "x.json").string());
+  EXPECT_EQ(bad.error().message.rfind("cannot save '" + bad.error().path + "': creating a temporary file: ", 0), 0u)
+      << bad.error().message;
   std::filesystem::remove_all(dir);
 }
 
@@ -309,7 +311,7 @@ TEST(EndToEnd, KnownAnglesSurviveCalibrateAndApply) {
   WindowOptions wo;
   wo.device = &dev;
   auto calibrated = calibrateOffsets(map, window, wo);
-  ASSERT_TRUE(calibrated.has_value()) << calibrated.error()[0];
+  ASSERT_TRUE(calibrated.has_value()) << calibrated.error().str();
   auto cal = Calibration::create(*calibrated, &biped(), &dev);
   ASSERT_TRUE(cal.has_value()) << cal.error().str();
 

@@ -31,7 +31,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
     auto back = imps::sim::sessionToBvh(*session);
     if (!back) {
-      std::fprintf(stderr, "a converted session does not convert back: %s\n", back.error().c_str());
+      std::fprintf(stderr, "a converted session does not convert back: %s\n", back.error().firstError().c_str());
       std::abort();
     }
     FUZZ_CHECK(back->frames.size() == clip->frames.size());

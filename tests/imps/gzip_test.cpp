@@ -28,6 +28,14 @@ std::string gzipOf(const std::string& text, int level = Z_DEFAULT_COMPRESSION) {
   return out;
 }
 
+// Why gunzip failed: its one error, which has no location (the caller adds the file); "" when it did not fail.
+std::string reason(const std::expected<std::string, Diagnostics>& out) {
+  if (out) return "";
+  EXPECT_EQ(out.error().errorCount(), 1);
+  EXPECT_TRUE(out.error().all().front().loc.file.empty());
+  return out.error().all().front().message;
+}
+
 // Varied text that compresses but not to nothing, so several output buffers are needed.
 std::string sample(size_t n) {
   std::string s;
@@ -49,7 +57,7 @@ TEST(Gunzip, RoundTripsWhatZlibCompressed) {
     for (int level : {0, 1, 9}) {
       const std::string text = sample(n);
       const auto out = gunzip(gzipOf(text, level), size_t(1) << 20);
-      ASSERT_TRUE(out) << n << " " << level << ": " << out.error();
+      ASSERT_TRUE(out) << n << " " << level << ": " << reason(out);
       EXPECT_EQ(*out, text) << n << " " << level;
     }
 }
@@ -57,13 +65,13 @@ TEST(Gunzip, RoundTripsWhatZlibCompressed) {
 TEST(Gunzip, JoinsConcatenatedMembersAsGunzipDoes) {
   const std::string a = sample(70000), b = "second member\n", c = sample(10);
   const auto out = gunzip(gzipOf(a) + gzipOf(b) + gzipOf(c), size_t(1) << 20);
-  ASSERT_TRUE(out) << out.error();
+  ASSERT_TRUE(out) << reason(out);
   EXPECT_EQ(*out, a + b + c);
 }
 
 TEST(Gunzip, IgnoresTrailingZeroPadding) {
   const auto out = gunzip(gzipOf("padded") + std::string(512, '\0'), 1000);
-  ASSERT_TRUE(out) << out.error();
+  ASSERT_TRUE(out) << reason(out);
   EXPECT_EQ(*out, "padded");
 }
 
@@ -73,11 +81,11 @@ TEST(Gunzip, StopsAtTheLimitWithoutExceedingIt) {
   EXPECT_TRUE(gunzip(zipped, text.size()));  // exactly the limit is allowed
   const auto over = gunzip(zipped, text.size() - 1);
   ASSERT_FALSE(over);
-  EXPECT_EQ(over.error(), "larger than the " + byteSizeText(text.size() - 1) + " limit when decompressed");
+  EXPECT_EQ(reason(over), "larger than the " + byteSizeText(text.size() - 1) + " limit when decompressed");
   // A bomb: 64 MiB of zeros compress to about 64 KiB; a 1 MiB limit refuses it.
   const auto bomb = gunzip(gzipOf(std::string(size_t(64) << 20, '\0'), 9), size_t(1) << 20);
   ASSERT_FALSE(bomb);
-  EXPECT_EQ(bomb.error(), "larger than the 1 MiB limit when decompressed");
+  EXPECT_EQ(reason(bomb), "larger than the 1 MiB limit when decompressed");
 }
 
 TEST(Gunzip, TheLimitCountsAllMembersTogether) {
@@ -91,7 +99,7 @@ TEST(Gunzip, TruncatedInputIsReportedAsTruncated) {
   for (size_t keep : {size_t(2), size_t(10), zipped.size() / 2, zipped.size() - 4, zipped.size() - 1}) {
     const auto out = gunzip(zipped.substr(0, keep), size_t(1) << 20);
     ASSERT_FALSE(out) << keep;
-    EXPECT_EQ(out.error(), "truncated gzip data") << keep;
+    EXPECT_EQ(reason(out), "truncated gzip data") << keep;
   }
 }
 
@@ -105,11 +113,11 @@ TEST(Gunzip, CorruptInputIsReportedAsCorrupt) {
   for (const std::string* bad : {&badMethod, &badCrc, &badData}) {
     const auto out = gunzip(*bad, size_t(1) << 20);
     ASSERT_FALSE(out);
-    EXPECT_EQ(out.error().rfind("corrupt gzip data (", 0), 0u) << out.error();
+    EXPECT_EQ(reason(out).rfind("corrupt gzip data (", 0), 0u) << reason(out);
   }
   const auto notGzip = gunzip("#VRML V2.0 utf8\n", 1000);
   ASSERT_FALSE(notGzip);
-  EXPECT_EQ(notGzip.error().rfind("corrupt gzip data (", 0), 0u) << notGzip.error();
+  EXPECT_EQ(reason(notGzip).rfind("corrupt gzip data (", 0), 0u) << reason(notGzip);
 }
 
 }  // namespace

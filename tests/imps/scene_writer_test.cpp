@@ -248,8 +248,8 @@ TEST_F(SceneSave, SavesAndReadsBack) {
   auto scene = readSceneFile(scenePath("hierarchical_blanc_schlick.wrl"));
   ASSERT_TRUE(scene.has_value());
   const std::string path = (dir_ / "out.wrl").string();
-  std::string error;
-  ASSERT_TRUE(saveSceneFile(*scene, path, &error)) << error;
+  const auto saved = saveSceneFile(*scene, path);
+  ASSERT_TRUE(saved) << saved.error().message;
   EXPECT_EQ(slurp(path), writeScene(*scene));
   auto again = readSceneFile(path);
   ASSERT_TRUE(again.has_value()) << again.error().str();
@@ -266,8 +266,8 @@ TEST_F(SceneSave, OverwritesKeepingPermissions) {
   ASSERT_EQ(::chmod(path.c_str(), 0600), 0);
   Scene scene;
   scene.root = ShapeNode{};
-  std::string error;
-  ASSERT_TRUE(saveSceneFile(scene, path, &error)) << error;
+  const auto saved = saveSceneFile(scene, path);
+  ASSERT_TRUE(saved) << saved.error().message;
   EXPECT_EQ(slurp(path), writeScene(scene));
   struct stat st {};
   ASSERT_EQ(::stat(path.c_str(), &st), 0);
@@ -280,8 +280,9 @@ TEST_F(SceneSave, FailedRenameLeavesTheTargetAndNoTemporaryFile) {
   fs::create_directories(target / "inside");
   Scene scene;
   scene.root = ShapeNode{};
-  std::string error;
-  EXPECT_FALSE(saveSceneFile(scene, target.string(), &error));
+  const auto saved = saveSceneFile(scene, target.string());
+  ASSERT_FALSE(saved);
+  const std::string& error = saved.error().message;
   EXPECT_EQ(error.rfind("cannot save '" + target.string() + "': renaming the temporary file over it: ", 0), 0u)
       << error;
   EXPECT_TRUE(fs::is_directory(target / "inside"));
@@ -290,11 +291,11 @@ TEST_F(SceneSave, FailedRenameLeavesTheTargetAndNoTemporaryFile) {
 
 TEST_F(SceneSave, UnwritableDirectoryLeavesTheTarget) {
   const std::string path = (dir_ / "missing" / "scene.wrl").string();
-  std::string error;
-  EXPECT_FALSE(saveSceneFile(Scene{}, path, &error));
-  EXPECT_EQ(error, "cannot save '" + path + "': creating a temporary file: No such file or directory");
+  const auto saved = saveSceneFile(Scene{}, path);
+  ASSERT_FALSE(saved);
+  EXPECT_EQ(saved.error().message, "cannot save '" + path + "': creating a temporary file: No such file or directory");
+  EXPECT_EQ(saved.error().path, path);
   EXPECT_FALSE(fs::exists(path));
-  EXPECT_FALSE(saveSceneFile(Scene{}, path, nullptr));  // error is optional
 
   // An existing file in a directory that refuses new files keeps its contents (when not running as root,
   // which ignores permissions).
@@ -302,7 +303,7 @@ TEST_F(SceneSave, UnwritableDirectoryLeavesTheTarget) {
     const std::string kept = (dir_ / "kept.wrl").string();
     { std::ofstream(kept) << "precious"; }
     ASSERT_EQ(::chmod(dir_.c_str(), 0555), 0);
-    EXPECT_FALSE(saveSceneFile(Scene{}, kept, &error));
+    EXPECT_FALSE(saveSceneFile(Scene{}, kept));
     ::chmod(dir_.c_str(), 0755);
     EXPECT_EQ(slurp(kept), "precious");
   }

@@ -45,9 +45,9 @@ int main(int argc, char** argv) {
   auto clip = imps::sim::readBvhText(kClip, "arm.bvh");
   if (!clip) return std::fprintf(stderr, "%s", clip.error().str().c_str()), 1;
   auto session = imps::sim::bvhToSession(*clip, "arm.bvh");
-  if (!session) return std::fprintf(stderr, "%s\n", session.error().c_str()), 1;
+  if (!session) return std::fprintf(stderr, "%s", session.error().str().c_str()), 1;
   auto back = imps::sim::sessionToBvh(*session);
-  if (!back) return std::fprintf(stderr, "%s\n", back.error().c_str()), 1;
+  if (!back) return std::fprintf(stderr, "%s", back.error().str().c_str()), 1;
   if (back->joints != clip->joints || back->frames.size() != clip->frames.size())
     return std::fprintf(stderr, "the clip did not survive the session round trip\n"), 1;
 

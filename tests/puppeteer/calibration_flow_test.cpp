@@ -81,7 +81,7 @@ TEST(CalibrateWindow, AStillWindowGivesTheOffsetsItHolds) {
   const drivers::DeviceInfo device = monkey();
   const std::string info = calibrationInfoJson("scene.wrl", "rig.json", "sim:", 100, 100, device.serialNumber);
   auto result = calibrateWindow(bipedRig(), window(0), device, test::exampleCharacter("simple_biped"), 0.5, info);
-  ASSERT_TRUE(result) << (result ? "" : result.error().front());
+  ASSERT_TRUE(result) << (result ? "" : result.error().str());
   EXPECT_DOUBLE_EQ(result->maxNoiseDeg, 0.0);
   const calibration::RigMap& map = result->calibration.rigMap();
   ASSERT_FALSE(map.channels.empty());
@@ -97,9 +97,9 @@ TEST(CalibrateWindow, ANoisyWindowIsRejectedNamingItsChannel) {
   // 40 counts of wobble on a 12-bit encoder: about 1.8 degrees of standard deviation, above 0.5.
   auto result = calibrateWindow(bipedRig(), window(80), monkey(), test::exampleCharacter("simple_biped"), 0.5, "{}");
   ASSERT_FALSE(result);
-  ASSERT_EQ(result.error().size(), 1u);
-  EXPECT_TRUE(test::contains(result.error().front(), "channel 5"));
-  EXPECT_TRUE(test::contains(result.error().front(), "too noisy"));
+  ASSERT_EQ(result.error().errorCount(), 1);
+  EXPECT_TRUE(test::contains(result.error().str(), "channel 5")) << result.error().str();
+  EXPECT_TRUE(test::contains(result.error().str(), "too noisy")) << result.error().str();
   // A looser limit accepts it and names the noisiest channel.
   auto loose = calibrateWindow(bipedRig(), window(80), monkey(), test::exampleCharacter("simple_biped"), 5.0, "{}");
   ASSERT_TRUE(loose);

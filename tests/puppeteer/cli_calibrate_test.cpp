@@ -68,7 +68,7 @@ uint32_t countFor(size_t ch, double angle, int sign = 1) {
 void writeSession(const std::filesystem::path& path, int rightElbowSign = 1,
                   const drivers::DeviceInfo& device = device32()) {
   auto w = sim::SessionWriter::create(path, device);
-  ASSERT_TRUE(w.has_value()) << w.error();
+  ASSERT_TRUE(w.has_value()) << w.error().str();
   for (int k = 0; k < 2000; ++k) {
     drivers::Sample s;
     s.sequence = static_cast<uint32_t>(k);

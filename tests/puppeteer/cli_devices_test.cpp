@@ -33,7 +33,7 @@ const std::string kCalibration = sourceFile("examples/simple_biped.calibration.j
 
 sim::Session readBack(const fs::path& path) {
   auto session = sim::readSession(path);
-  EXPECT_TRUE(session) << path << ": " << session.error();
+  EXPECT_TRUE(session) << path << ": " << session.error().str();
   return session ? std::move(*session) : sim::Session{};
 }
 

@@ -59,8 +59,8 @@ TEST(ReplayCommand, ExportSessionWritesTheTakeItPlays) {
   EXPECT_TRUE(contains(run.out, "puppeteer: wrote " + fromSession)) << describe(run);
   auto original = sim::readSession(kWave);
   auto exported = sim::readSession(fromSession);
-  ASSERT_TRUE(original) << original.error();
-  ASSERT_TRUE(exported) << exported.error();
+  ASSERT_TRUE(original) << original.error().str();
+  ASSERT_TRUE(exported) << exported.error().str();
   EXPECT_EQ(exported->devices, original->devices);
   ASSERT_EQ(exported->samples.size(), original->samples.size());
   EXPECT_EQ(exported->skeleton, original->skeleton);
@@ -70,8 +70,8 @@ TEST(ReplayCommand, ExportSessionWritesTheTakeItPlays) {
   ASSERT_EQ(runPuppeteer({"convert", kBvh, (dir / "converted.session").string()}).exitCode, test::kCliOk);
   auto clipTake = sim::readSession(fromClip);
   auto converted = sim::readSession(dir / "converted.session");
-  ASSERT_TRUE(clipTake) << clipTake.error();
-  ASSERT_TRUE(converted) << converted.error();
+  ASSERT_TRUE(clipTake) << clipTake.error().str();
+  ASSERT_TRUE(converted) << converted.error().str();
   EXPECT_EQ(clipTake->samples.size(), converted->samples.size());
   EXPECT_EQ(clipTake->devices, converted->devices);
 }

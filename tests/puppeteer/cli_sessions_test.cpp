@@ -55,7 +55,7 @@ void writeSession(const std::filesystem::path& path, const std::vector<int64_t>&
   d.channelCount = 1;
   d.bitsPerChannel = 12;
   auto w = sim::SessionWriter::create(path, d);
-  ASSERT_TRUE(w.has_value()) << w.error();
+  ASSERT_TRUE(w.has_value()) << w.error().str();
   uint32_t sequence = 0;
   for (int64_t t : times) {
     drivers::Sample s;
@@ -124,7 +124,7 @@ TEST(ConvertCommand, ABvhClipRoundTripsThroughASession) {
   ASSERT_TRUE(original) << original.error().str();
   ASSERT_TRUE(copy) << copy.error().str();
   auto take = sim::readSession(session);
-  ASSERT_TRUE(take) << take.error();
+  ASSERT_TRUE(take) << take.error().str();
   const nlohmann::json report = nlohmann::json::parse(there.out);
   EXPECT_EQ(report["frames"], original->frames.size());
   EXPECT_EQ(report["samples"], take->samples.size());
@@ -157,7 +157,7 @@ TEST(ConvertCommand, ABvhClipRoundTripsThroughASession) {
                                                 (dir / "coarse.session").string()});
   ASSERT_EQ(coarse.exitCode, kCliOk) << describe(coarse);
   auto coarseTake = sim::readSession(dir / "coarse.session");
-  ASSERT_TRUE(coarseTake) << coarseTake.error();
+  ASSERT_TRUE(coarseTake) << coarseTake.error().str();
   EXPECT_EQ(coarseTake->devices[0].bitsPerChannel, 12);
 }
 

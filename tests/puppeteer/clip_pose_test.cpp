@@ -48,7 +48,7 @@ TEST(ClipDriver, BundledClipsDriveEveryJointOfTheirCharacters) {
   for (const auto& [scene, clip] : {std::pair{kBeanito, kJump}, std::pair{kFlubber, kDance}}) {
     const Character character = characterOf(scene);
     auto driver = ClipDriver::load(clip, "", "names", character);
-    ASSERT_TRUE(driver.has_value()) << driver.error();
+    ASSERT_TRUE(driver.has_value()) << driver.error().str();
     EXPECT_EQ(driver->bound().size(), character.joints().size()) << clip;
     EXPECT_TRUE(driver->unbound().empty()) << clip;
   }
@@ -57,7 +57,7 @@ TEST(ClipDriver, BundledClipsDriveEveryJointOfTheirCharacters) {
 TEST(ClipDriver, PoseAtAKeyEqualsTheHandComputedTransform) {
   const Character character = characterOf(kBeanito);
   auto driver = ClipDriver::load(kJump, "JUMP", "names", character);
-  ASSERT_TRUE(driver.has_value()) << driver.error();
+  ASSERT_TRUE(driver.has_value()) << driver.error().str();
   SkeletonCache skeleton(character);
   // 0.36 s of the 1.2 s cycle is key 0.3: BEAN_BOTTOM at (0, 0.1, 0) turned -0.15 rad about z, BEAN_TOP at (0, 0.8, 0)
   // in its frame.
@@ -86,7 +86,7 @@ float heightAt(const Character& character, const ClipDriver& driver, double seco
 TEST(ClipDriver, BeanitoSquashesAndStretches) {
   const Character character = characterOf(kBeanito);
   auto driver = ClipDriver::load(kJump, "", "names", character);
-  ASSERT_TRUE(driver.has_value()) << driver.error();
+  ASSERT_TRUE(driver.has_value()) << driver.error().str();
   const float rest = heightAt(character, *driver, 0.0);
   const float squash = heightAt(character, *driver, 0.15 * 1.2);   // BEAN_TOP down to 0.4
   const float stretch = heightAt(character, *driver, 0.3 * 1.2);   // BEAN_TOP up to 0.8
@@ -100,7 +100,7 @@ TEST(ClipDriver, AJointMapRenamesTargets) {
   std::ofstream(map) << R"({"version": 1, "joints": {"BEAN_TOP": "BEAN_BOTTOM"}})";
   auto driver = ClipDriver::load(kJump, "", map.string(), character);
   fs::remove(map);
-  ASSERT_TRUE(driver.has_value()) << driver.error();
+  ASSERT_TRUE(driver.has_value()) << driver.error().str();
   ASSERT_EQ(driver->bound().size(), 1u);
   EXPECT_EQ(driver->bound()[0].first, "BEAN_TOP");
   EXPECT_EQ(driver->bound()[0].second, character.findJoint("BEAN_BOTTOM"));
@@ -111,13 +111,13 @@ TEST(ClipDriver, ErrorsNameTheProblem) {
   const Character beanito = characterOf(kBeanito);
   auto wrongCharacter = ClipDriver::load(kDance, "", "names", beanito);
   ASSERT_FALSE(wrongCharacter.has_value());
-  EXPECT_NE(wrongCharacter.error().find("clip DANCE drives no joint of the character"), std::string::npos);
+  EXPECT_NE(wrongCharacter.error().str().find("clip DANCE drives no joint of the character"), std::string::npos);
   auto noSuchClip = ClipDriver::load(kJump, "WALK", "names", beanito);
   ASSERT_FALSE(noSuchClip.has_value());
-  EXPECT_NE(noSuchClip.error().find("no clip named 'WALK' (the clips: JUMP)"), std::string::npos);
+  EXPECT_NE(noSuchClip.error().str().find("no clip named 'WALK' (the clips: JUMP)"), std::string::npos);
   auto noClips = ClipDriver::load(kSource + "/tests/data/worlds/blender_quirks.wrl", "", "names", beanito);
   ASSERT_FALSE(noClips.has_value());
-  EXPECT_NE(noClips.error().find("error: no clip"), std::string::npos);
+  EXPECT_NE(noClips.error().str().find("error: no clip"), std::string::npos);
 }
 
 TEST(ClipPoseSource, FixedStepsAdvanceOneFrameEach) {
@@ -134,7 +134,7 @@ TEST(ClipPoseSource, FixedStepsAdvanceOneFrameEach) {
 TEST(ClipDriver, AHatOnAJointFollowsItThroughTheJump) {
   const Character character = characterOf(kBeanito);
   auto driver = ClipDriver::load(kJump, "", "names", character);
-  ASSERT_TRUE(driver.has_value()) << driver.error();
+  ASSERT_TRUE(driver.has_value()) << driver.error().str();
   auto hatFile = readVrmlFile(kSource + "/examples/beanito_hat.wrl");
   ASSERT_TRUE(hatFile.has_value());
   const std::vector<Prop> hat = readProps(*hatFile);
@@ -174,7 +174,7 @@ TEST(Grab, AGrabbedPropStaysPutThenFollowsTheHandThenStaysWhereDropped) {
 TEST(Grab, TheBundledBallIsInFlubbersHandAtThePickTime) {
   const Character flubber = characterOf(kFlubber);
   auto driver = ClipDriver::load(kDance, "", "names", flubber);
-  ASSERT_TRUE(driver.has_value()) << driver.error();
+  ASSERT_TRUE(driver.has_value()) << driver.error().str();
   auto file = readVrmlFile(kSource + "/examples/flubber_ball.wrl");
   ASSERT_TRUE(file.has_value());
   const auto props = readProps(*file);

@@ -87,13 +87,14 @@ TEST(SkinnedGlb, TheFileIsTheEncodedBytesAndReadsBack) {
   const Take take = restTake(biped, 3);
   GltfExportOptions options;
   options.cellSize = 0.06f;
-  std::string error;
-  const std::vector<uint8_t> bytes = encodeSkinnedGlb(biped, take, options, &error);
-  ASSERT_FALSE(bytes.empty()) << error;
+  const auto bytes = encodeSkinnedGlb(biped, take, options);
+  ASSERT_TRUE(bytes) << bytes.error().str();
+  ASSERT_FALSE(bytes->empty());
   const std::string path = (dir / "rest.glb").string();
-  const auto written = writeSkinnedGlb(biped, take, options, path, &error);
-  ASSERT_TRUE(written) << error;
-  EXPECT_EQ(fileBytes(path), std::string(bytes.begin(), bytes.end())) << "deterministic, and written as encoded";
+  const auto written = writeSkinnedGlb(biped, take, options, path);
+  ASSERT_TRUE(written) << written.error().str();
+  EXPECT_EQ(fileBytes(path), std::string(bytes->begin(), bytes->end())) << "deterministic, and written as encoded";
+  std::string error;
   tinygltf::Model model;
   std::string warning;
   ASSERT_TRUE(test::loadGlbModel(path, &model, &error, &warning)) << error;
@@ -111,8 +112,7 @@ TEST(SkinnedGlb, AMissingDirectoryIsAnErrorAndWritesNothing) {
   const Character& biped = test::exampleCharacter("simple_biped");
   GltfExportOptions options;
   options.cellSize = 0.08f;
-  std::string error;
-  const auto written = writeSkinnedGlb(biped, restTake(biped, 1), options, (dir / "nodir/x.glb").string(), &error);
+  const auto written = writeSkinnedGlb(biped, restTake(biped, 1), options, (dir / "nodir/x.glb").string());
   EXPECT_FALSE(written);
   EXPECT_FALSE(fs::exists(dir / "nodir"));
 }

@@ -61,14 +61,14 @@ TEST(SurfaceSequence, EachFrameIsAClosedMeshFollowingTheTake) {
   for (const char* ext : {"ply", "obj"}) {
     progress.clear();
     const std::string pattern = (dir / ext / "deeper" / (std::string("walk_##.") + ext)).string();
-    std::string error;
-    const auto written = writeSurfaceSequence(Scene{}, biped, take, options, pattern, &error);
-    ASSERT_TRUE(written) << error;
+    const auto written = writeSurfaceSequence(Scene{}, biped, take, options, pattern);
+    ASSERT_TRUE(written) << written.error().str();
     EXPECT_EQ(progress, (std::vector<size_t>{1, 2, 3})) << ext;
     float previousX = 0;
     for (size_t f = 0; f < take.frames(); ++f) {
       const std::string file = sequenceFileName(pattern, f);
       Mesh mesh;
+      std::string error;
       ASSERT_TRUE(std::string(ext) == "ply" ? test::readPly(file, &mesh, &error) : test::readObj(file, &mesh, &error))
           << file << ": " << error;
       EXPECT_GT(mesh.triangleCount(), 50u) << file;
@@ -90,9 +90,8 @@ TEST(SurfaceSequence, AnUnwritableFolderIsAnError) {
   const Character& biped = test::exampleCharacter("simple_biped");
   SurfaceSequenceOptions options;
   options.cellSize = 0.08f;
-  std::string error;
   const auto written =
-      writeSurfaceSequence(Scene{}, biped, walkingTake(biped, 1, 0), options, (dir / "file/s_#.ply").string(), &error);
+      writeSurfaceSequence(Scene{}, biped, walkingTake(biped, 1, 0), options, (dir / "file/s_#.ply").string());
   EXPECT_FALSE(written);
   EXPECT_EQ(fileBytes(dir / "file"), "not a folder");
 }

@@ -23,6 +23,7 @@
 #include <nlohmann/json.hpp>
 
 #include "examples.h"
+#include "failure_text.h"
 #include "imps/mesh_io.h"
 #include "sim/bvh.h"
 #include "sim/session_file.h"
@@ -93,7 +94,7 @@ TEST(Export, CharacterBvhMatchesTheSkeletonCacheFrameForFrame) {
   const Character& biped = test::exampleCharacter("simple_biped");
   const Take take = randomTake(biped, 10);
   const sim::BvhClip written = characterClip(biped, take);
-  auto clip = sim::readBvhText(sim::writeBvh(written), "biped.bvh");
+  auto clip = sim::readBvhText(sim::writeBvh(written).value(), "biped.bvh");
   ASSERT_TRUE(clip.has_value()) << clip.error().str();
   ASSERT_EQ(clip->joints.size(), biped.joints().size());
   ASSERT_EQ(clip->frames.size(), 10u);
@@ -173,11 +174,12 @@ std::vector<T> accessorData(const Glb& g, int accessor, size_t components) {
 TEST(Export, SkinnedGlbWeightsAreNormalisedAndTheSkinFollowsTheSurface) {
   const Character& biped = test::exampleCharacter("simple_biped");
   const Take take = randomTake(biped, 4);
-  std::string error;
   GltfExportOptions o;
   o.cellSize = 0.03f;
-  const std::vector<uint8_t> bytes = encodeSkinnedGlb(biped, take, o, &error);
-  ASSERT_FALSE(bytes.empty()) << error;
+  const auto encoded = encodeSkinnedGlb(biped, take, o);
+  ASSERT_TRUE(encoded) << encoded.error().str();
+  const std::vector<uint8_t>& bytes = *encoded;
+  ASSERT_FALSE(bytes.empty());
   const Glb g = parseGlb(bytes);
   const auto& prim = g.json["meshes"][0]["primitives"][0];
   const auto positions = accessorData<float>(g, prim["attributes"]["POSITION"].get<int>(), 3);
@@ -230,7 +232,8 @@ TEST(Export, SkinnedGlbWeightsAreNormalisedAndTheSkinFollowsTheSurface) {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / "imps_export_test";
   std::filesystem::create_directories(dir);
   const std::string path = (dir / "take.glb").string();
-  ASSERT_TRUE(writeSkinnedGlb(biped, take, o, path, &error)) << error;
+  const auto written = writeSkinnedGlb(biped, take, o, path);
+  ASSERT_TRUE(written) << written.error().str();
   const std::string script = std::string(IMPS_SOURCE_DIR) + "/tests/puppeteer/validate_gltf.js";
   const std::string command = "command -v node >/dev/null 2>&1 && NODE_PATH=\"$(npm root -g 2>/dev/null)\" node '" +
                               script + "' '" + path + "' > '" + (dir / "report.txt").string() + "' 2>&1";
@@ -274,7 +277,7 @@ TEST(Export, SessionChannelsOfTheSecondDeviceDriveTheTake) {
   ASSERT_TRUE(cal.has_value()) << cal.error().str();
   EXPECT_EQ(cal->rigMap().channels[0].device, 1);
   auto take = takeFromSession(session, *cal, biped, {});
-  ASSERT_TRUE(take.has_value()) << take.error();
+  ASSERT_TRUE(take.has_value()) << take.error().str();
   ASSERT_EQ(take->frames(), 5u);
   EXPECT_NEAR(take->frameTime, 0.01, 1e-12);
   const size_t fore = size_t(biped.findJoint("L_Forearm"));
@@ -296,13 +299,12 @@ TEST(Export, SurfaceSequencesAreNumberedFiles) {
   o.cellSize = 0.04f;
   size_t progress = 0;
   o.progress = [&](size_t done) { progress = done; };
-  std::string error;
-  ASSERT_TRUE(writeSurfaceSequence(Scene{}, biped, take, o, (dir / "take_###.ply").string(), &error)) << error;
+  ASSERT_EQ(test::failureText(writeSurfaceSequence(Scene{}, biped, take, o, (dir / "take_###.ply").string())), "");
   EXPECT_EQ(progress, 2u);
   EXPECT_TRUE(std::filesystem::exists(dir / "take_000.ply"));
   EXPECT_TRUE(std::filesystem::exists(dir / "take_001.ply"));
   EXPECT_NE(std::filesystem::file_size(dir / "take_000.ply"), std::filesystem::file_size(dir / "take_001.ply"));
-  EXPECT_FALSE(writeSurfaceSequence(Scene{}, biped, take, o, "/dev/null/take_#.ply", &error));
+  EXPECT_FALSE(writeSurfaceSequence(Scene{}, biped, take, o, "/dev/null/take_#.ply"));
 }
 
 }  // namespace

@@ -40,9 +40,9 @@ int main(int argc, char** argv) {
   if (k >= images->size()) return std::printf("FAIL: no texture %zu\n", k), 1;
   const std::string painted = character->textures()[k].path;
   if (std::filesystem::equivalent(painted, argv[2])) fail("the saved scene still names the original " + painted);
-  app::RgbaImage original;
-  std::string error;
-  if (!app::readImage(argv[2], original, &error)) return std::printf("FAIL: %s: %s\n", argv[2], error.c_str()), 1;
+  const auto read = app::readImage(argv[2]);
+  if (!read) return std::printf("FAIL: %s: %s\n", argv[2], read.error().all().front().message.c_str()), 1;
+  const app::RgbaImage& original = *read;
   const app::RgbaImage& now = (*images)[k];
   if (now.width != original.width || now.height != original.height) return std::printf("FAIL: size changed\n"), 1;
   size_t changed = 0;

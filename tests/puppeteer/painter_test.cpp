@@ -11,6 +11,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "failure_text.h"
 #include "imps/marching_cubes.h"
 #include "imps/scene_reader.h"
 #include "imps/skeleton_cache.h"
@@ -36,10 +37,9 @@ class PainterTest : public ::testing::Test {
   void SetUp() override {
     dir_ = fs::temp_directory_path() / ("imps_painter_test_" + std::to_string(::getpid()));
     fs::create_directories(dir_);
-    std::string error;
     const RgbaImage blank = white(64, 64);
-    ASSERT_TRUE(savePng(blank.rgba, 64, 64, (dir_ / "face.png").string(), &error)) << error;
-    ASSERT_TRUE(savePng(blank.rgba, 64, 64, (dir_ / "back.png").string(), &error)) << error;
+    ASSERT_EQ(test::failureText(savePng(blank.rgba, 64, 64, (dir_ / "face.png").string())), "");
+    ASSERT_EQ(test::failureText(savePng(blank.rgba, 64, 64, (dir_ / "back.png").string())), "");
     // Two balls side by side; the left one's face is a slide projected from the front.
     std::ofstream(dir_ / "s.wrl") << R"(#VRML V2.0 utf8
 ExponentialBlend { children [
@@ -127,8 +127,7 @@ TEST_F(PainterTest, SavingWritesThePaintedTexturesUnderNewNamesAndTheSceneReload
   const std::string original = slurp(dir_ / "face.png");
   fs::create_directories(dir_ / "out");
   const std::string saved = (dir_ / "out/painted.wrl").string();
-  std::string error;
-  ASSERT_TRUE(savePaintedScene(scene_, *character_, images_, {true, false}, saved, &error)) << error;
+  ASSERT_EQ(test::failureText(savePaintedScene(scene_, *character_, images_, {true, false}, saved)), "");
   EXPECT_EQ(slurp(dir_ / "face.png"), original) << "the original is never overwritten";
   EXPECT_TRUE(fs::exists(dir_ / "out/painted_face.png"));
   EXPECT_FALSE(fs::exists(dir_ / "out/painted_back.png")) << "only painted textures are written";
@@ -145,7 +144,7 @@ TEST_F(PainterTest, SavingWritesThePaintedTexturesUnderNewNamesAndTheSceneReload
   EXPECT_EQ((*reloaded)[1], images_[1]);
   // Painting the saved scene and saving it again: a new file again, the first painted one kept.
   const std::string first = slurp(dir_ / "out/painted_face.png");
-  ASSERT_TRUE(savePaintedScene(*reread, *c, *reloaded, {true, false}, saved, &error)) << error;
+  ASSERT_EQ(test::failureText(savePaintedScene(*reread, *c, *reloaded, {true, false}, saved)), "");
   EXPECT_TRUE(fs::exists(dir_ / "out/painted_painted_face.png"));
   EXPECT_EQ(slurp(dir_ / "out/painted_face.png"), first);
 }
@@ -154,9 +153,9 @@ TEST_F(PainterTest, SavingWritesThePaintedTexturesUnderNewNamesAndTheSceneReload
 // scene's own directory the urls stay as written.
 TEST_F(PainterTest, APlainSaveElsewhereKeepsTheImagesReachable) {
   fs::create_directories(dir_ / "elsewhere");
-  std::string error;
-  ASSERT_TRUE(savePaintedScene(scene_, *character_, images_, {}, (dir_ / "elsewhere/moved.wrl").string(), &error))
-      << error;
+  ASSERT_EQ(
+      test::failureText(savePaintedScene(scene_, *character_, images_, {}, (dir_ / "elsewhere/moved.wrl").string())),
+      "");
   auto moved = readSceneFile((dir_ / "elsewhere/moved.wrl").string());
   ASSERT_TRUE(moved.has_value());
   auto c = Character::fromScene(*moved);
@@ -165,7 +164,7 @@ TEST_F(PainterTest, APlainSaveElsewhereKeepsTheImagesReachable) {
   auto images = loadTextures(*c);
   ASSERT_TRUE(images.has_value()) << images.error();
   EXPECT_EQ(*images, images_);
-  ASSERT_TRUE(savePaintedScene(scene_, *character_, images_, {}, (dir_ / "same.wrl").string(), &error)) << error;
+  ASSERT_EQ(test::failureText(savePaintedScene(scene_, *character_, images_, {}, (dir_ / "same.wrl").string())), "");
   auto same = readSceneFile((dir_ / "same.wrl").string());
   ASSERT_TRUE(same.has_value());
   EXPECT_EQ(same->sceneGraph() != nullptr, true);
@@ -202,8 +201,7 @@ TEST_F(PainterTest, NeverTheNameOfAFileThatIsAlreadyThere) {
   EXPECT_EQ(second[0], (dir_ / "x_face_2.png").string());
   fs::create_symlink(dir_ / "nowhere.png", dir_ / "x_face_2.png");  // dangling: writing through it would create a file
   EXPECT_EQ(paintedTextureNames(*character_, {true, false}, scenePath)[0], (dir_ / "x_face_3.png").string());
-  std::string error;
-  ASSERT_TRUE(savePaintedScene(scene_, *character_, images_, {true, false}, scenePath, &error)) << error;
+  ASSERT_EQ(test::failureText(savePaintedScene(scene_, *character_, images_, {true, false}, scenePath)), "");
   std::ifstream kept(first[0]);
   std::string text((std::istreambuf_iterator<char>(kept)), std::istreambuf_iterator<char>());
   EXPECT_EQ(text, "someone else's picture");

@@ -33,15 +33,13 @@ TEST(Png, SavedPixelsReadBackExactly) {
   for (const auto& [width, height] : std::vector<std::pair<int, int>>{{1, 1}, {37, 5}, {64, 48}}) {
     const std::vector<uint8_t> rgba = noise(width, height, uint32_t(width * 131 + height));
     const std::string path = (dir / ("n" + std::to_string(width) + ".png")).string();
-    std::string error;
-    const auto saved = savePng(rgba, width, height, path, &error);
-    ASSERT_TRUE(saved) << error;
-    RgbaImage image;
-    const auto read = readImage(path, image, &error);
-    ASSERT_TRUE(read) << error;
-    EXPECT_EQ(image.width, width);
-    EXPECT_EQ(image.height, height);
-    EXPECT_EQ(image.rgba, rgba) << width << "x" << height;
+    const auto saved = savePng(rgba, width, height, path);
+    ASSERT_TRUE(saved) << saved.error().str();
+    const auto image = readImage(path);
+    ASSERT_TRUE(image) << image.error().str();
+    EXPECT_EQ(image->width, width);
+    EXPECT_EQ(image->height, height);
+    EXPECT_EQ(image->rgba, rgba) << width << "x" << height;
   }
 }
 
@@ -49,13 +47,12 @@ TEST(Png, SavedPixelsReadBackExactly) {
 TEST(Png, EncodedBytesAreWhatIsSaved) {
   const ScratchDir dir("imps_png");
   const std::vector<uint8_t> rgba = noise(16, 9, 7);
-  std::string error;
-  const auto bytes = encodePng(rgba, 16, 9, &error);
-  ASSERT_TRUE(bytes) << error;
+  const auto bytes = encodePng(rgba, 16, 9);
+  ASSERT_TRUE(bytes) << bytes.error().str();
   ASSERT_GT(bytes->size(), 8u);
   EXPECT_EQ(std::string(bytes->begin(), bytes->begin() + 8), std::string("\x89PNG\r\n\x1a\n", 8));
   const std::string path = (dir / "UPPER.PNG").string();
-  ASSERT_TRUE(savePng(rgba, 16, 9, path, &error)) << error;
+  ASSERT_TRUE(savePng(rgba, 16, 9, path));
   EXPECT_EQ(fileBytes(path), std::string(bytes->begin(), bytes->end()));
 }
 
@@ -63,18 +60,15 @@ TEST(Png, EncodedBytesAreWhatIsSaved) {
 TEST(Png, TruncatedGarbageAndMissingFilesAreErrors) {
   const ScratchDir dir("imps_png");
   const std::vector<uint8_t> rgba = noise(32, 32, 3);
-  std::string error;
-  ASSERT_TRUE(savePng(rgba, 32, 32, (dir / "whole.png").string(), &error)) << error;
+  ASSERT_TRUE(savePng(rgba, 32, 32, (dir / "whole.png").string()));
   const std::string whole = fileBytes(dir / "whole.png");
   for (const size_t keep : {whole.size() / 2, size_t(40), size_t(8)}) {
     writeBytes(dir / "cut.png", whole.substr(0, keep));
-    RgbaImage image;
-    EXPECT_FALSE(readImage((dir / "cut.png").string(), image, &error)) << keep << " of " << whole.size() << " bytes";
+    EXPECT_FALSE(readImage((dir / "cut.png").string())) << keep << " of " << whole.size() << " bytes";
   }
   writeBytes(dir / "garbage.png", "this is not a PNG file at all\n");
-  RgbaImage image;
-  EXPECT_FALSE(readImage((dir / "garbage.png").string(), image, &error));
-  EXPECT_FALSE(readImage((dir / "missing.png").string(), image, &error));
+  EXPECT_FALSE(readImage((dir / "garbage.png").string()));
+  EXPECT_FALSE(readImage((dir / "missing.png").string()));
 }
 
 // A name that is not .png, or a directory that does not exist, is refused; nothing is created, and a failed save
@@ -82,19 +76,18 @@ TEST(Png, TruncatedGarbageAndMissingFilesAreErrors) {
 TEST(Png, BadPathsAreRefusedAndLeaveNothing) {
   const ScratchDir dir("imps_png");
   const std::vector<uint8_t> rgba = noise(8, 8, 5);
-  std::string error;
-  EXPECT_FALSE(savePng(rgba, 8, 8, (dir / "x.jpg").string(), &error));
+  EXPECT_FALSE(savePng(rgba, 8, 8, (dir / "x.jpg").string()));
   EXPECT_FALSE(fs::exists(dir / "x.jpg"));
-  error.clear();
-  EXPECT_FALSE(savePng(rgba, 8, 8, (dir / "nodir/x.png").string(), &error));
-  EXPECT_NE(error.find("nodir"), std::string::npos) << error;
+  const auto noDir = savePng(rgba, 8, 8, (dir / "nodir/x.png").string());
+  ASSERT_FALSE(noDir);
+  EXPECT_NE(noDir.error().str().find("nodir"), std::string::npos) << noDir.error().str();
   EXPECT_FALSE(fs::exists(dir / "nodir"));
   // Replacing an existing picture is atomic: afterwards it is the new one, and no temporary file is left.
-  ASSERT_TRUE(savePng(noise(8, 8, 1), 8, 8, (dir / "p.png").string(), &error)) << error;
-  ASSERT_TRUE(savePng(rgba, 8, 8, (dir / "p.png").string(), &error)) << error;
-  RgbaImage image;
-  ASSERT_TRUE(readImage((dir / "p.png").string(), image, &error)) << error;
-  EXPECT_EQ(image.rgba, rgba);
+  ASSERT_TRUE(savePng(noise(8, 8, 1), 8, 8, (dir / "p.png").string()));
+  ASSERT_TRUE(savePng(rgba, 8, 8, (dir / "p.png").string()));
+  const auto image = readImage((dir / "p.png").string());
+  ASSERT_TRUE(image) << image.error().str();
+  EXPECT_EQ(image->rgba, rgba);
   size_t files = 0;
   for ([[maybe_unused]] const auto& entry : fs::directory_iterator(dir.path())) ++files;
   EXPECT_EQ(files, 1u);

@@ -185,7 +185,7 @@ TEST_P(EachNaming, LimbsHandsAndFeetPointWhereTheClipsDo) {
   const TestClip t = makeClip(naming);
   const Character& biped = test::exampleCharacter("simple_biped");
   auto r = Retargeter::create(t.clip, biped);
-  ASSERT_TRUE(r.has_value()) << r.error();
+  ASSERT_TRUE(r.has_value()) << r.error().str();
   const std::string report = r->report().str();
   // Every body part of the biped is driven.
   for (const char* joint : {"Pelvis", "Spine", "Neck", "Head", "L_Clavicle", "L_UpperArm", "L_Forearm", "L_Hand",
@@ -257,7 +257,7 @@ TEST(Retarget, ArmsDownClipRestPoseLowersTheBipedsArms) {
   const TestClip t = makeClip(namings()[0]);
   const Character& biped = test::exampleCharacter("simple_biped");
   auto r = Retargeter::create(t.clip, biped);
-  ASSERT_TRUE(r.has_value()) << r.error();
+  ASSERT_TRUE(r.has_value()) << r.error().str();
   std::vector<JointPose> pose;
   r->pose(t.clip.frames[0], pose);
   SkeletonCache skeleton(biped);
@@ -293,7 +293,7 @@ TEST(Retarget, ReportsWhatDidNotMapAndWhy) {
   t.clip.joints[static_cast<size_t>(t.index.at("foreR"))].name = "LeftForeArm";  // the right forearm, misnamed
   t.clip.joints[static_cast<size_t>(t.index.at("foreL"))].name = "LeftForeArmX";
   auto r = Retargeter::create(t.clip, biped);
-  ASSERT_TRUE(r.has_value()) << r.error();
+  ASSERT_TRUE(r.has_value()) << r.error().str();
   const std::string report = r->report().str();
   EXPECT_NE(report.find("LHipJoint (unmapped): a helper joint"), std::string::npos) << report;
   EXPECT_NE(report.find("LeftForeArm (unmapped): left forearm by name, but the hierarchy disagrees"), std::string::npos)
@@ -309,7 +309,7 @@ TEST(Retarget, ExplicitMapsAndBadRestFrames) {
   o.map = RetargetOptions::Map::Explicit;
   o.matches = {{"LeftUpArm", "L_UpperArm", {}}, {"LeftLowArm", "L_Forearm", {}}};
   auto r = Retargeter::create(t.clip, biped, o);
-  ASSERT_TRUE(r.has_value()) << r.error();
+  ASSERT_TRUE(r.has_value()) << r.error().str();
   EXPECT_EQ(r->report().mapped(), 2u);
   o.matches = {{"LeftUpArm", "NoSuchJoint", {}}};
   EXPECT_FALSE(Retargeter::create(t.clip, biped, o).has_value());

@@ -51,7 +51,7 @@ TEST(SessionCalibration, ReplayFindsTheCalibrationItWasCapturedWith) {
     ASSERT_TRUE(w->close().has_value());
   }
   auto session = sim::readSession(path);
-  ASSERT_TRUE(session.has_value()) << session.error();
+  ASSERT_TRUE(session.has_value()) << session.error().str();
   ASSERT_EQ(session->calibrations.size(), 2u);
   auto at5 = calibrationForSample(*session, 5, &test::exampleCharacter("simple_biped"), path.string());
   auto at15 = calibrationForSample(*session, 15, &test::exampleCharacter("simple_biped"), path.string());
@@ -75,7 +75,7 @@ TEST(SessionCalibration, ReplayFindsTheCalibrationItWasCapturedWith) {
 // not a calibration (channels map by name), so none is in force — no error to report.
 TEST(SessionCalibration, OldBvhChannelMappingIsNoCalibration) {
   auto old = sim::readSession(test::sourceFile("tests/data/sessions/legacy_bvh_mapping.session"));
-  ASSERT_TRUE(old.has_value()) << old.error();
+  ASSERT_TRUE(old.has_value()) << old.error().str();
   ASSERT_EQ(old->calibrations.size(), 1u);
   EXPECT_TRUE(isBvhChannelMapping(old->calibrations[0].json));
   auto found = calibrationForSample(*old, 0, &test::exampleCharacter("simple_biped"), "legacy_bvh_mapping.session");
@@ -98,7 +98,7 @@ TEST(SessionCalibration, NoneBeforeItsFirstSampleAndCheckedAgainstTheDevice) {
   small.channelNames.resize(4);
   for (const auto& [device, name] : {std::pair{dev, "late.session"}, std::pair{small, "small.session"}}) {
     auto w = sim::SessionWriter::create(dir / name, device);
-    ASSERT_TRUE(w.has_value()) << w.error();
+    ASSERT_TRUE(w.has_value()) << w.error().str();
     drivers::Sample s;
     s.channelCount = uint16_t(device.channelCount);
     for (int k = 0; k < 5; ++k) ASSERT_TRUE(w->append(s).has_value());
@@ -107,7 +107,7 @@ TEST(SessionCalibration, NoneBeforeItsFirstSampleAndCheckedAgainstTheDevice) {
     ASSERT_TRUE(w->close().has_value());
   }
   auto late = sim::readSession(dir / "late.session");
-  ASSERT_TRUE(late.has_value()) << late.error();
+  ASSERT_TRUE(late.has_value()) << late.error().str();
   ASSERT_EQ(late->calibrations.size(), 1u);
   EXPECT_EQ(late->calibrations[0].firstSample, 5u);
   EXPECT_EQ(late->calibrations[0].json, cal->toJson()) << "stored as the calibration file's text";
@@ -118,7 +118,7 @@ TEST(SessionCalibration, NoneBeforeItsFirstSampleAndCheckedAgainstTheDevice) {
   ASSERT_TRUE(after.has_value() && after->has_value());
   EXPECT_EQ((*after)->toJson(), cal->toJson());
   auto small4 = sim::readSession(dir / "small.session");
-  ASSERT_TRUE(small4.has_value()) << small4.error();
+  ASSERT_TRUE(small4.has_value()) << small4.error().str();
   auto mismatch = calibrationForSample(*small4, 5, &biped, "small.session");
   ASSERT_FALSE(mismatch.has_value());
   EXPECT_NE(mismatch.error().str().find("small.session calibration #0:"), std::string::npos) << mismatch.error().str();

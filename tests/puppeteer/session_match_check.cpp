@@ -18,7 +18,7 @@ int main(int argc, char** argv) {
   auto take = imps::sim::readSession(argv[1]);
   auto source = imps::sim::readSession(argv[2]);
   if (!take || !source) {
-    std::fprintf(stderr, "%s\n", (!take ? take.error() : source.error()).c_str());
+    std::fputs((!take ? take.error() : source.error()).str().c_str(), stderr);
     return 1;
   }
   if (!take->recovery.closedCleanly) {

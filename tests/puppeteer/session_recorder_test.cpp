@@ -75,7 +75,7 @@ TEST(SessionRecorder, WhatIsRecordedReadsBackSampleExact) {
   ASSERT_TRUE(recorder->close());
 
   auto session = sim::readSession(path);
-  ASSERT_TRUE(session) << session.error();
+  ASSERT_TRUE(session) << session.error().str();
   EXPECT_TRUE(session->recovery.closedCleanly);
   ASSERT_EQ(session->devices.size(), 1u);
   EXPECT_EQ(session->devices[0], dev);
@@ -104,7 +104,7 @@ TEST(SessionRecorder, ALayoutChangeIsRecordedNotDropped) {
   EXPECT_EQ(recorder->layoutChanges(), 1u);
   ASSERT_TRUE(recorder->close());
   auto session = sim::readSession(path);
-  ASSERT_TRUE(session) << session.error();
+  ASSERT_TRUE(session) << session.error().str();
   ASSERT_EQ(session->samples.size(), 90u);
   EXPECT_EQ(session->layoutChanges.size(), 1u);
   ASSERT_EQ(session->devices.size(), 2u);
@@ -149,7 +149,7 @@ TEST(SessionRecorder, AFullDiskIsReportedAndTheTakeStaysReadable) {
   ASSERT_TRUE(failed) << "32 KiB cannot hold 2000 samples of 32 channels";
   EXPECT_NE(error.find("File too large"), std::string::npos) << error;
   auto session = sim::readSession(path);
-  ASSERT_TRUE(session) << session.error();
+  ASSERT_TRUE(session) << session.error().str();
   EXPECT_FALSE(session->recovery.closedCleanly);
   ASSERT_GT(session->samples.size(), 0u);
   ASSERT_LT(session->samples.size(), all.size());

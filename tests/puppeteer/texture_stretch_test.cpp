@@ -23,8 +23,8 @@ TEST(TextureStretch, CarriedCoordinatesBringTheElbowsDotBackWithinOneParticleRad
   const StretchOptions options;  // L_Forearm, 90 degrees about z over 30 frames, the dot under the elbow
   const auto projective = measureStretch(*character, o, TextureMode::Projective, options);
   const auto carried = measureStretch(*character, o, TextureMode::Carried, options);
-  ASSERT_TRUE(projective.has_value()) << projective.error();
-  ASSERT_TRUE(carried.has_value()) << carried.error();
+  ASSERT_TRUE(projective.has_value()) << projective.error().str();
+  ASSERT_TRUE(carried.has_value()) << carried.error().str();
   for (const StretchResult* r : {&*projective, &*carried})
     std::printf("  %-10s round trip %.4f m (%.2f radii), slide when bent %.4f m (%.2f radii)\n",
                 r->mode == TextureMode::Carried ? "carried" : "projective", double(r->roundTrip),

@@ -16,6 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "failure_text.h"
 #include "imps/marching_cubes.h"
 #include "imps/scene_reader.h"
 #include "imps/skeleton_cache.h"
@@ -71,8 +72,7 @@ TEST_F(TexturedExport, GlbEmbedsTheImagesAndTheGeneratorsCoordinates) {
   const Blobs b = texturedBlobs();
   ASSERT_TRUE(b.mesh.textured());
   const std::string path = (dir_ / "blobs.glb").string();
-  std::string error;
-  ASSERT_TRUE(writeTexturedMesh(b.mesh, b.character, b.images, path, &error)) << error;
+  ASSERT_EQ(test::failureText(writeTexturedMesh(b.mesh, b.character, b.images, path)), "");
   const std::string bytes = slurp(path);
   uint32_t jsonLength = 0;
   std::memcpy(&jsonLength, bytes.data() + 12, 4);
@@ -131,8 +131,7 @@ TEST_F(TexturedExport, GlbEmbedsTheImagesAndTheGeneratorsCoordinates) {
 TEST_F(TexturedExport, ObjWritesTheMaterialLibraryAndTheImagesBesideIt) {
   const Blobs b = texturedBlobs();
   const std::string path = (dir_ / "blobs.obj").string();
-  std::string error;
-  ASSERT_TRUE(writeTexturedMesh(b.mesh, b.character, b.images, path, &error)) << error;
+  ASSERT_EQ(test::failureText(writeTexturedMesh(b.mesh, b.character, b.images, path)), "");
   const std::string obj = slurp(path), mtl = slurp(dir_ / "blobs.mtl");
   EXPECT_NE(obj.find("mtllib blobs.mtl\n"), std::string::npos);
   EXPECT_NE(obj.find("usemtl texture0\n"), std::string::npos);
@@ -152,7 +151,7 @@ TEST_F(TexturedExport, ObjWritesTheMaterialLibraryAndTheImagesBesideIt) {
   // An untextured mesh is written as before, without a material library.
   Mesh plain = b.mesh;
   plain.clearTextures();
-  ASSERT_TRUE(writeTexturedMesh(plain, b.character, b.images, (dir_ / "plain.obj").string(), &error)) << error;
+  ASSERT_EQ(test::failureText(writeTexturedMesh(plain, b.character, b.images, (dir_ / "plain.obj").string())), "");
   EXPECT_EQ(slurp(dir_ / "plain.obj").find("mtllib"), std::string::npos);
   EXPECT_FALSE(fs::exists(dir_ / "plain.mtl"));
 }

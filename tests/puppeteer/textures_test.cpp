@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "failure_text.h"
 #include "imps/marching_cubes.h"
 #include "imps/scene_reader.h"
 #include "imps/skeleton_cache.h"
@@ -56,8 +57,7 @@ class TexturesTest : public ::testing::Test {
 
 TEST_F(TexturesTest, ImagesAreReadRelativeToTheSceneFile) {
   const RgbaImage image = halves(8, 4, {255, 0, 0}, {0, 0, 255});
-  std::string error;
-  ASSERT_TRUE(savePng(image.rgba, image.width, image.height, (dir_ / "maps/skin.png").string(), &error)) << error;
+  ASSERT_EQ(test::failureText(savePng(image.rgba, image.width, image.height, (dir_ / "maps/skin.png").string())), "");
   const auto loaded = loadTextures(character("maps/skin.png"));
   ASSERT_TRUE(loaded.has_value()) << loaded.error();
   ASSERT_EQ(loaded->size(), 1u);
@@ -101,9 +101,9 @@ TEST_F(TexturesTest, ExrLinearValuesComeBackLinearThroughTheSrgbDecoding) {
     std::vector<float> rgba;
     for (float x : linear) rgba.insert(rgba.end(), {x, x * 0.5f, 0.25f, 0.6f});
     writeImage(dir_ / "maps/light.exr", 8, 1, 4, type, rgba, OIIO::TypeDesc::FLOAT);
-    RgbaImage image;
-    std::string error;
-    ASSERT_TRUE(readImage((dir_ / "maps/light.exr").string(), image, &error)) << error;
+    const auto read = readImage((dir_ / "maps/light.exr").string());
+    ASSERT_TRUE(read) << read.error().str();
+    const RgbaImage& image = *read;
     ASSERT_EQ(image.width, 8);
     ASSERT_EQ(image.height, 1);
     for (int x = 0; x < 8; ++x) {

@@ -61,7 +61,7 @@ fs::path writeSourceSession(const fs::path& dir, bool moving, size_t samples = 7
   }
   const fs::path path = dir / (moving ? "moving.session" : "still.session");
   auto saved = sim::saveSession(path, session);
-  EXPECT_TRUE(saved) << saved.error();
+  EXPECT_TRUE(saved) << saved.error().str();
   return path;
 }
 
@@ -107,7 +107,7 @@ TEST(LiveRecording, RecordsEverySampleBitExactWithDeviceAndCalibration) {
   TempDir dir;
   const fs::path source = writeSourceSession(dir.path, true);
   auto sent = sim::readSession(source);
-  ASSERT_TRUE(sent) << sent.error();
+  ASSERT_TRUE(sent) << sent.error().str();
   LiveSourceOptions live;
   live.recordPath = (dir.path / "take.session").string();
   Rig rig("sim:" + source.string() + "?rate=1000", exampleCalibration(), live);
@@ -118,7 +118,7 @@ TEST(LiveRecording, RecordsEverySampleBitExactWithDeviceAndCalibration) {
   EXPECT_NE(message.find("take.session"), std::string::npos) << message;
 
   auto take = sim::readSession(live.recordPath);
-  ASSERT_TRUE(take) << take.error();
+  ASSERT_TRUE(take) << take.error().str();
   EXPECT_TRUE(take->recovery.closedCleanly);
   ASSERT_EQ(take->devices.size(), 1u);
   EXPECT_EQ(take->devices[0].channelCount, 32);
@@ -170,7 +170,7 @@ TEST(LiveRecording, KeyStartsAndStopsATakeInTheRecordDirectory) {
     ++takes;
     EXPECT_EQ(e.path().extension(), ".session");
     auto take = sim::readSession(e.path());
-    ASSERT_TRUE(take) << take.error();
+    ASSERT_TRUE(take) << take.error().str();
     EXPECT_TRUE(take->recovery.closedCleanly);
     EXPECT_GT(take->samples.size(), 100u);
     EXPECT_TRUE(take->calibrations.empty());  // mapped by channel names: no calibration in force
@@ -208,7 +208,7 @@ TEST(LiveCalibration, StillArmatureCalibratesSavesAppliesAndRecords) {
   // The take records both calibrations, the new one from the samples after the re-calibration.
   rig.source->finish();
   auto take = sim::readSession(live.recordPath);
-  ASSERT_TRUE(take) << take.error();
+  ASSERT_TRUE(take) << take.error().str();
   ASSERT_EQ(take->calibrations.size(), 2u);
   EXPECT_GT(take->calibrations[1].firstSample, 0u);
   EXPECT_EQ(take->calibrations[1].json, saved->toJson());
@@ -274,7 +274,7 @@ TEST(LiveRecording, LayoutChangeMidTakeIsRecordedNotDropped) {
   EXPECT_EQ(source.exitCode(), kExitOk);
 
   auto take = sim::readSession(live.recordPath);
-  ASSERT_TRUE(take) << take.error();
+  ASSERT_TRUE(take) << take.error().str();
   EXPECT_TRUE(take->recovery.closedCleanly);
   ASSERT_EQ(take->samples.size(), 40u);
   ASSERT_EQ(take->devices.size(), 2u);

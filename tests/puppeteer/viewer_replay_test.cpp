@@ -69,7 +69,7 @@ sim::Session clipSession() {
   auto clip = sim::readBvhText(kClip, "wave.bvh");
   EXPECT_TRUE(clip.has_value()) << clip.error().str();
   auto session = sim::bvhToSession(*clip, "wave.bvh");
-  EXPECT_TRUE(session.has_value()) << session.error();
+  EXPECT_TRUE(session.has_value()) << session.error().str();
   return std::move(*session);
 }
 

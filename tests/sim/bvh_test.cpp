@@ -234,11 +234,13 @@ TEST(BvhWrite, WriteThenReadReproducesEveryQuirkFile) {
   for (const auto& file : kQuirkFiles) {
     SCOPED_TRACE(file);
     const BvhClip clip = read(file);
-    const std::string text = writeBvh(clip);
+    const auto written = writeBvh(clip);
+    ASSERT_TRUE(written) << written.error().str();
+    const std::string& text = *written;
     auto back = readBvhText(text, "written");
     ASSERT_TRUE(back) << back.error().str();
     EXPECT_EQ(*back, clip);
-    EXPECT_EQ(writeBvh(*back), text);  // canonical: a fixed point
+    EXPECT_EQ(writeBvh(*back).value(), text);  // canonical: a fixed point
     EXPECT_EQ(text.find('\r'), std::string::npos);
   }
 }
@@ -250,17 +252,48 @@ TEST(BvhWrite, CanonicalText) {
   clip.joints.push_back({"B", 0, {-0.1, 0, 0}, {}, true, {0, -2, 0}});
   clip.frameTime = 1.0 / 30;
   clip.frames = {{0.1f, 2, -3, 45.5f, -0.25f}};
-  EXPECT_EQ(writeBvh(clip),
-            "HIERARCHY\nROOT Root\n{\n\tOFFSET 0 1.5 0\n\tCHANNELS 4 Xposition Yposition Zposition Zrotation\n"
-            "\tJOINT A\n\t{\n\t\tOFFSET 0.1 0 0\n\t\tCHANNELS 1 Zrotation\n\t\tEnd Site\n\t\t{\n\t\t\tOFFSET 0 2 0\n"
-            "\t\t}\n\t}\n\tJOINT B\n\t{\n\t\tOFFSET -0.1 0 0\n\t\tCHANNELS 0\n\t\tEnd Site\n\t\t{\n\t\t\tOFFSET 0 -2 0\n"
-            "\t\t}\n\t}\n}\nMOTION\nFrames: 1\nFrame Time: 0.03333333333333333\n0.1 2 -3 45.5 -0.25\n");
+  EXPECT_EQ(
+      writeBvh(clip).value(),
+      "HIERARCHY\nROOT Root\n{\n\tOFFSET 0 1.5 0\n\tCHANNELS 4 Xposition Yposition Zposition Zrotation\n"
+      "\tJOINT A\n\t{\n\t\tOFFSET 0.1 0 0\n\t\tCHANNELS 1 Zrotation\n\t\tEnd Site\n\t\t{\n\t\t\tOFFSET 0 2 0\n"
+      "\t\t}\n\t}\n\tJOINT B\n\t{\n\t\tOFFSET -0.1 0 0\n\t\tCHANNELS 0\n\t\tEnd Site\n\t\t{\n\t\t\tOFFSET 0 -2 0\n"
+      "\t\t}\n\t}\n}\nMOTION\nFrames: 1\nFrame Time: 0.03333333333333333\n0.1 2 -3 45.5 -0.25\n");
+}
+
+TEST(BvhWrite, AClipThatCannotBeWrittenIsAnErrorNotAnException) {
+  BvhClip clip;
+  clip.joints.push_back({"Root", -1, {0, 0, 0}, {C::Zrotation}, false, {}});
+  clip.joints.push_back({"A", 0, {0.1, 0, 0}, {C::Zrotation}, true, {0, 2, 0}});
+  clip.frameTime = 1.0 / 30;
+  clip.frames = {{1, 2}};
+  ASSERT_TRUE(writeBvh(clip));
+  // Each problem is one error without a location (the clip is not a file), naming the joint or frame.
+  auto refused = [](const BvhClip& bad) {
+    const auto text = writeBvh(bad);
+    if (text) return std::string("written");
+    EXPECT_EQ(text.error().errorCount(), 1);
+    EXPECT_EQ(text.error().all().front().loc.file, "");
+    return text.error().all().front().message;
+  };
+  BvhClip badParent = clip;
+  badParent.joints[1].parent = 1;  // its own parent
+  EXPECT_EQ(refused(badParent), "cannot write BVH: joint 'A' has a bad parent index");
   BvhClip badOrder = clip;
-  badOrder.joints[2].parent = 2;
-  EXPECT_THROW(writeBvh(badOrder), std::invalid_argument);
+  badOrder.joints.push_back({"B", 0, {0, 0, 0}, {}, false, {}});
+  badOrder.joints.push_back({"C", 1, {0, 0, 0}, {}, false, {}});  // A's child after A's subtree was closed
+  EXPECT_EQ(refused(badOrder), "cannot write BVH: joints are not in depth-first order at 'C'");
+  BvhClip badName = clip;
+  badName.joints[1].name = "A{";
+  EXPECT_EQ(refused(badName), "cannot write BVH: joint name 'A{' cannot be written");
   BvhClip badFrame = clip;
-  badFrame.frames[0].pop_back();
-  EXPECT_THROW(writeBvh(badFrame), std::invalid_argument);
+  badFrame.frames.push_back({3});
+  EXPECT_EQ(refused(badFrame), "cannot write BVH: frame 1 has 1 values for 2 channels");
+  // saveBvh puts the problem at the file and writes nothing.
+  const fs::path target = fs::temp_directory_path() / ("imps_bvh_refused_" + std::to_string(::getpid()) + ".bvh");
+  const auto saved = saveBvh(target, badFrame);
+  ASSERT_FALSE(saved);
+  EXPECT_EQ(saved.error().str(), target.string() + ": error: cannot write BVH: frame 1 has 1 values for 2 channels\n");
+  EXPECT_FALSE(fs::exists(target));
 }
 
 TEST(BvhWrite, SaveIsAtomicAndReplaces) {
@@ -279,8 +312,9 @@ TEST(BvhWrite, SaveIsAtomicAndReplaces) {
   auto nowhere = saveBvh(dir / "missing_dir" / "x.bvh", clip);
   ASSERT_FALSE(nowhere);
   const std::string target = (dir / "missing_dir" / "x.bvh").string();
-  EXPECT_EQ(nowhere.error(), target + ": error: cannot save '" + target +
-                                 "': creating a temporary file: No such file or directory");
+  EXPECT_EQ(nowhere.error().firstError(),
+            target + ": error: cannot save '" + target + "': creating a temporary file: No such file or directory");
+  EXPECT_EQ(nowhere.error().errorCount(), 1);
   fs::remove_all(dir);
 }
 

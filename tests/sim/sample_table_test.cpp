@@ -78,7 +78,7 @@ TEST(SampleTable, ReadSessionTakesAboutItsFileSize) {
   d.channelNames = {"a", "b", "c"};
   {
     auto writer = SessionWriter::create(path, d);
-    ASSERT_TRUE(writer.has_value()) << writer.error();
+    ASSERT_TRUE(writer.has_value()) << writer.error().firstError();
     Sample s;
     s.channelCount = 3;
     for (uint32_t i = 0; i < 100000; ++i) {
@@ -92,7 +92,7 @@ TEST(SampleTable, ReadSessionTakesAboutItsFileSize) {
   const auto fileBytes = std::filesystem::file_size(path);
   auto session = readSession(path);
   std::filesystem::remove(path);
-  ASSERT_TRUE(session.has_value()) << session.error();
+  ASSERT_TRUE(session.has_value()) << session.error().firstError();
   ASSERT_EQ(session->samples.size(), 100000u);
   EXPECT_EQ(session->samples[99999].counts[2], (99999u * 13) & 4095);
   EXPECT_LE(session->samples.bytes(), fileBytes * 3 / 2) << "bytes per sample: " << double(session->samples.bytes()) / 1e5;

@@ -75,7 +75,7 @@ TEST(SessionFile, WriteThenReadIsBitExact) {
     options.flushEverySamples = 97;
     options.flushEveryNs = 0;
     auto writer = SessionWriter::create(path, devices, options);
-    ASSERT_TRUE(writer) << writer.error();
+    ASSERT_TRUE(writer) << writer.error().firstError();
     ASSERT_TRUE(writer->appendNote("performer: test"));
     ASSERT_TRUE(writer->appendCalibration(R"({"rig":"a","gains":[1,2]})"));
     for (int i = 0; i < 3000; ++i) {
@@ -95,7 +95,7 @@ TEST(SessionFile, WriteThenReadIsBitExact) {
     ASSERT_TRUE(writer->close());
   }
   auto session = readSession(path);
-  ASSERT_TRUE(session) << session.error();
+  ASSERT_TRUE(session) << session.error().firstError();
   EXPECT_EQ(session->formatVersion, 1);
   EXPECT_EQ(session->devices, devices);
   ASSERT_EQ(session->samples.size(), written.size());
@@ -175,11 +175,11 @@ TEST(SessionFile, TruncationAtEveryByteRecoversWholeRecords) {
     auto session = readSessionBytes(std::span(bytes.data(), cut), "cut.session");
     if (cut < 16) {
       ASSERT_FALSE(session);
-      EXPECT_EQ(session.error(), "cut.session: error: not a session file: " + std::to_string(cut) +
-                                     " bytes, shorter than the 16-byte header");
+      EXPECT_EQ(session.error().firstError(), "cut.session: error: not a session file: " + std::to_string(cut) +
+                                                  " bytes, shorter than the 16-byte header");
       continue;
     }
-    ASSERT_TRUE(session) << session.error();
+    ASSERT_TRUE(session) << session.error().firstError();
     size_t whole = 0;
     while (whole < sampleEnds.size() && sampleEnds[whole] <= cut) ++whole;
     ASSERT_EQ(session->samples.size(), whole);
@@ -229,7 +229,7 @@ TEST(SessionFile, CorruptByteStopsAtLastGoodRecord) {
     std::vector<uint8_t> bytes = original;
     bytes[offset] ^= 0x10;
     auto session = readSessionBytes(bytes, "corrupt.session");
-    ASSERT_TRUE(session) << session.error();
+    ASSERT_TRUE(session) << session.error().firstError();
     ASSERT_EQ(session->samples.size(), 9u);
     for (size_t i = 0; i < 9; ++i) EXPECT_EQ(session->samples[i], written[i]);
     EXPECT_TRUE(session->recovery.corrupt);
@@ -302,12 +302,13 @@ TEST(SessionFile, WriterRejectsBadUse) {
   std::ofstream(path) << "keep me";
   auto clobber = SessionWriter::create(path, device(2, 12));
   ASSERT_FALSE(clobber);
-  EXPECT_EQ(clobber.error(), path.string() + ": error: cannot create session file: File exists");
+  EXPECT_EQ(clobber.error().firstError(), path.string() + ": error: cannot create session file: File exists");
   EXPECT_EQ(fileBytes(path).size(), 7u);
 
   auto noChannels = SessionWriter::create(dir / "bad.session", device(0, 12, "empty"));
   ASSERT_FALSE(noChannels);
-  EXPECT_EQ(noChannels.error(), (dir / "bad.session").string() + ": error: device 'empty' has 0 channels; expected 1..64");
+  EXPECT_EQ(noChannels.error().firstError(),
+            (dir / "bad.session").string() + ": error: device 'empty' has 0 channels; expected 1..64");
 
   auto writer = SessionWriter::create(dir / "ok.session", device(2, 12));
   ASSERT_TRUE(writer);
@@ -315,16 +316,33 @@ TEST(SessionFile, WriterRejectsBadUse) {
   s.channelCount = 3;
   auto wrong = writer->append(s);
   ASSERT_FALSE(wrong);
-  EXPECT_EQ(wrong.error(), (dir / "ok.session").string() + ": error: sample has 3 channels but device 0 has 2");
+  EXPECT_EQ(wrong.error().firstError(),
+            (dir / "ok.session").string() + ": error: sample has 3 channels but device 0 has 2");
   s.channelCount = 2;
   EXPECT_FALSE(writer->append(s, 1));
+}
+
+TEST(SessionFile, AnUnreadableFileIsOneDiagnosticAtTheFile) {
+  // The reader fails two ways (the file cannot be opened, its bytes are not a session); callers treat both as a bad
+  // input, so both are Diagnostics, the I/O failure located at the file with no line.
+  const fs::path missing = tempDir() / "missing.session";
+  auto gone = readSession(missing);
+  ASSERT_FALSE(gone);
+  ASSERT_EQ(gone.error().all().size(), 1u);
+  const Diagnostic& d = gone.error().all().front();
+  EXPECT_EQ(d.severity, Severity::Error);
+  EXPECT_EQ(d.loc.file, missing.string());
+  EXPECT_EQ(d.loc.line, 0);
+  EXPECT_EQ(d.message, "cannot open session file: No such file or directory");
+  EXPECT_EQ(gone.error().str(), missing.string() + ": error: " + d.message + "\n");
 }
 
 TEST(SessionFile, ReaderErrorsAndUnknownRecords) {
   std::vector<uint8_t> junk(32, 'x');
   auto bad = readSessionBytes(junk, "junk.bin");
   ASSERT_FALSE(bad);
-  EXPECT_EQ(bad.error(), "junk.bin: error: not a session file: bad magic at byte 0 (expected \"IMPSSESS\")");
+  EXPECT_EQ(bad.error().firstError(),
+            "junk.bin: error: not a session file: bad magic at byte 0 (expected \"IMPSSESS\")");
 
   const fs::path path = tempDir() / "v.session";
   {
@@ -340,7 +358,8 @@ TEST(SessionFile, ReaderErrorsAndUnknownRecords) {
   future[8] = 2;  // version 2
   auto newer = readSessionBytes(future, "v.session");
   ASSERT_FALSE(newer);
-  EXPECT_EQ(newer.error(), "v.session: error: session format version 2 is not supported (this reader knows versions 1..1)");
+  EXPECT_EQ(newer.error().firstError(),
+            "v.session: error: session format version 2 is not supported (this reader knows versions 1..1)");
 
   // A record type from a newer writer, inserted after the header, is skipped.
   std::vector<uint8_t> unknown = {99, 0, 0, 0, 3, 0, 0, 0, 0, 0, 0, 0, 'a', 'b', 'c'};
@@ -374,7 +393,7 @@ TEST(SessionFile, SaveSessionRoundTrips) {
   ASSERT_TRUE(saveSession(dir / "out.session", s));  // replaces an existing file, keeping its permissions
   EXPECT_EQ(fs::status(dir / "out.session").permissions(), fs::perms::owner_read | fs::perms::owner_write);
   auto back = readSession(dir / "out.session");
-  ASSERT_TRUE(back) << back.error();
+  ASSERT_TRUE(back) << back.error().firstError();
   EXPECT_EQ(back->devices, s.devices);
   EXPECT_EQ(back->samples, s.samples);
   EXPECT_EQ(back->sampleDevice, s.sampleDevice);
@@ -391,7 +410,7 @@ TEST(SessionFile, LayoutChangesAndCountersRoundTrip) {
   const fs::path dir = tempDir();
   std::mt19937_64 rng(9);
   auto w = SessionWriter::create(dir / "take.session", device(4, 12));
-  ASSERT_TRUE(w) << w.error();
+  ASSERT_TRUE(w) << w.error().firstError();
   std::vector<Sample> four, six;
   for (int i = 0; i < 5; ++i) ASSERT_TRUE(w->append(four.emplace_back(randomSample(rng, 4, 4095, false))));
   const std::vector<SessionCounter> early = {{"timeouts", 1}};
@@ -400,7 +419,7 @@ TEST(SessionFile, LayoutChangesAndCountersRoundTrip) {
   const Sample wide = randomSample(rng, 6, 4095, false);
   EXPECT_FALSE(w->append(wide, 0));
   auto index = w->appendLayoutChange(device(6, 12, "IMPS Monkey-test, 6 channels"), 0);
-  ASSERT_TRUE(index) << index.error();
+  ASSERT_TRUE(index) << index.error().firstError();
   EXPECT_EQ(*index, 1u);
   EXPECT_FALSE(w->appendLayoutChange(device(2, 12), 7));  // no such device
   for (int i = 0; i < 3; ++i) ASSERT_TRUE(w->append(six.emplace_back(randomSample(rng, 6, 4095, false)), 1));
@@ -409,7 +428,7 @@ TEST(SessionFile, LayoutChangesAndCountersRoundTrip) {
   ASSERT_TRUE(w->close());
 
   auto back = readSession(dir / "take.session");
-  ASSERT_TRUE(back) << back.error();
+  ASSERT_TRUE(back) << back.error().firstError();
   EXPECT_TRUE(back->recovery.closedCleanly);
   EXPECT_EQ(back->recovery.unknownRecords, 0u);
   ASSERT_EQ(back->devices.size(), 2u);
@@ -423,7 +442,7 @@ TEST(SessionFile, LayoutChangesAndCountersRoundTrip) {
 
   ASSERT_TRUE(saveSession(dir / "copy.session", *back));
   auto copy = readSession(dir / "copy.session");
-  ASSERT_TRUE(copy) << copy.error();
+  ASSERT_TRUE(copy) << copy.error().firstError();
   EXPECT_EQ(copy->samples, back->samples);
   EXPECT_EQ(copy->layoutChanges, back->layoutChanges);
   EXPECT_EQ(copy->counters, back->counters);

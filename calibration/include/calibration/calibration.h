@@ -19,6 +19,7 @@
 #include "drivers/sample.h"
 #include "imps/character.h"
 #include "imps/diagnostic.h"
+#include "imps/io_error.h"
 #include "imps/skeleton_cache.h"
 
 namespace imps::calibration {
@@ -51,8 +52,8 @@ class Calibration {
   const RigMap& rigMap() const { return map_; }
   // The calibration file / session blob text (toJson of the map); parse(toJson()) gives an equal calibration.
   std::string toJson() const { return calibration::toJson(map_); }
-  // toJson() written with imps::writeFileAtomically (atomic_file.h).
-  std::expected<void, std::string> save(const std::filesystem::path& path) const;
+  // toJson() written with imps::writeFileAtomically (atomic_file.h), failing as it does.
+  IoResult<void> save(const std::filesystem::path& path) const;
 
   // Angle in radians of mapping i (index into rigMap().channels) for a raw count, before limits; metres for a
   // translation channel.

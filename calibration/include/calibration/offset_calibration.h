@@ -52,10 +52,10 @@ WindowAverage averageWindow(const RigMap& map, std::span<const drivers::Sample> 
                             const WindowOptions& options = {});
 
 // Sets every channel's offset to the window's mean (the calibration pose reads as angle 0). Returns the
-// calibrated map, or the window's problems. `report`, when given, receives the averages either way.
-std::expected<RigMap, std::vector<std::string>> calibrateOffsets(RigMap map, std::span<const drivers::Sample> samples,
-                                                                 const WindowOptions& options = {},
-                                                                 WindowAverage* report = nullptr);
+// calibrated map, or the window's problems: one error each, in WindowAverage::problems' order, without a location
+// (a window of samples is not a file). `report`, when given, receives the averages either way.
+std::expected<RigMap, Diagnostics> calibrateOffsets(RigMap map, std::span<const drivers::Sample> samples,
+                                                    const WindowOptions& options = {}, WindowAverage* report = nullptr);
 
 // One target of a check pose: joint `joint` should be at `angle` radians about `axis` (the calibrated angle,
 // i.e. relative to the calibration pose).

@@ -13,18 +13,17 @@
 namespace imps {
 namespace {
 
-bool failWith(std::string* error, const std::string& path, const char* step, int code) {
-  if (error) *error = "cannot save '" + path + "': " + step + ": " + std::strerror(code);
-  return false;
+std::unexpected<IoError> failWith(const std::string& path, const char* step, int code) {
+  return std::unexpected(IoError{path, "cannot save '" + path + "': " + step + ": " + std::strerror(code), code});
 }
 
 // Step 4 of a save: replace the target in one step, then make the rename itself durable (best effort: the data is
 // safe once renamed).
-bool renameOver(const std::string& temp, const std::string& path, std::string* error) {
+IoResult<void> renameOver(const std::string& temp, const std::string& path) {
   if (::rename(temp.c_str(), path.c_str()) != 0) {
     const int code = errno;
     ::unlink(temp.c_str());
-    return failWith(error, path, "renaming the temporary file over it", code);
+    return failWith(path, "renaming the temporary file over it", code);
   }
   const size_t slash = path.find_last_of('/');
   const std::string directory = slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
@@ -32,7 +31,7 @@ bool renameOver(const std::string& temp, const std::string& path, std::string* e
     ::fsync(dir);
     ::close(dir);
   }
-  return true;
+  return {};
 }
 
 }  // namespace
@@ -42,18 +41,18 @@ std::string temporarySibling(const std::string& path) {
   return path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter.fetch_add(1));
 }
 
-bool commitTemporaryFile(const std::string& temp, const std::string& path, std::string* error) {
+IoResult<void> commitTemporaryFile(const std::string& temp, const std::string& path) {
   struct stat existing {};
   if (::stat(path.c_str(), &existing) == 0 && ::chmod(temp.c_str(), existing.st_mode & 07777) != 0) {
     const int code = errno;
     ::unlink(temp.c_str());
-    return failWith(error, path, "setting permissions", code);
+    return failWith(path, "setting permissions", code);
   }
-  return renameOver(temp, path, error);
+  return renameOver(temp, path);
 }
 
-bool writeFileAtomically(const std::string& path, std::span<const uint8_t> bytes, std::string* error) {
-  auto fail = [&](const char* step, int code) { return failWith(error, path, step, code); };
+IoResult<void> writeFileAtomically(const std::string& path, std::span<const uint8_t> bytes) {
+  auto fail = [&](const char* step, int code) { return failWith(path, step, code); };
   // 1. A unique sibling: same directory so the rename stays within one file system; O_EXCL so concurrent savers
   // never share one; mode 0666 so the umask applies as it would to a plain fopen().
   std::string temp;
@@ -92,12 +91,12 @@ bool writeFileAtomically(const std::string& path, std::span<const uint8_t> bytes
   }
 
   // 4. Replace the target in one step, durably.
-  return renameOver(temp, path, error);
+  return renameOver(temp, path);
 }
 
-bool writeFileAtomically(const std::string& path, std::string_view text, std::string* error) {
-  return writeFileAtomically(path, std::span<const uint8_t>(reinterpret_cast<const uint8_t*>(text.data()), text.size()),
-                             error);
+IoResult<void> writeFileAtomically(const std::string& path, std::string_view text) {
+  return writeFileAtomically(path,
+                             std::span<const uint8_t>(reinterpret_cast<const uint8_t*>(text.data()), text.size()));
 }
 
 }  // namespace imps

@@ -42,6 +42,18 @@ std::string Diagnostics::str() const {
   return out;
 }
 
+std::string Diagnostics::firstError() const {
+  for (const Diagnostic& d : items_)
+    if (d.severity == Severity::Error) return d.str();
+  return {};
+}
+
+Diagnostics singleError(SourceLoc loc, std::string message) {
+  Diagnostics d;
+  d.error(std::move(loc), std::move(message));
+  return d;
+}
+
 void Diagnostics::append(const Diagnostics& other) {
   for (const Diagnostic& d : other.items_) items_.push_back(d);
   errorCount_ += other.errorCount_;

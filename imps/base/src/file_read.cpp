@@ -19,7 +19,7 @@ std::string byteSizeText(size_t bytes) {
   return buf;
 }
 
-std::expected<size_t, std::string> inputLimitBytes(size_t maxBytes) {
+std::expected<size_t, Diagnostics> inputLimitBytes(size_t maxBytes) {
   const char* env = std::getenv("IMPS_MAX_INPUT_MIB");
   if (env == nullptr) return maxBytes;
   constexpr uint64_t kMostMiB = uint64_t{1} << 24;  // 16 TiB: beyond any file this machine class reads
@@ -27,26 +27,28 @@ std::expected<size_t, std::string> inputLimitBytes(size_t maxBytes) {
   errno = 0;
   const unsigned long long mib = std::strtoull(env, &end, 10);
   if (*env < '0' || *env > '9' || *end != '\0' || errno != 0 || mib == 0 || mib > kMostMiB)
-    return std::unexpected("IMPS_MAX_INPUT_MIB='" + std::string(env) + "' is not a whole number of MiB from 1 to " +
-                           std::to_string(kMostMiB));
+    return std::unexpected(singleError({}, "IMPS_MAX_INPUT_MIB='" + std::string(env) +
+                                               "' is not a whole number of MiB from 1 to " + std::to_string(kMostMiB)));
   return size_t(mib) << 20;
 }
 
-std::expected<std::string, std::string> readFileText(const std::filesystem::path& path, size_t maxBytes) {
+IoResult<std::string> readFileText(const std::filesystem::path& path, size_t maxBytes) {
   const auto limit = inputLimitBytes(maxBytes);
-  if (!limit) return std::unexpected(limit.error());
+  if (!limit) return std::unexpected(IoError{path.string(), limit.error().all().front().message, 0});
   maxBytes = *limit;
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
-  if (!file) return std::unexpected(std::strerror(errno));
+  const auto systemError = [&](int err) { return std::unexpected(IoError{path.string(), std::strerror(err), err}); };
+  if (!file) return systemError(errno);
   std::string text;
   char buffer[1 << 16];
   for (;;) {
     const size_t n = std::fread(buffer, 1, sizeof buffer, file.get());
     if (n > maxBytes - text.size())
-      return std::unexpected("larger than the " + byteSizeText(maxBytes) + " limit (IMPS_MAX_INPUT_MIB=N raises it)");
+      return std::unexpected(IoError{
+          path.string(), "larger than the " + byteSizeText(maxBytes) + " limit (IMPS_MAX_INPUT_MIB=N raises it)", 0});
     text.append(buffer, n);
     if (n < sizeof buffer) {
-      if (std::ferror(file.get())) return std::unexpected(std::strerror(errno));
+      if (std::ferror(file.get())) return systemError(errno);
       return text;
     }
   }

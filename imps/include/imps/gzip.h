@@ -7,15 +7,17 @@
 #include <string>
 #include <string_view>
 
+#include "imps/diagnostic.h"
+
 namespace imps {
 
 // Does `bytes` start with the gzip magic number (1F 8B)?
 bool isGzip(std::string_view bytes);
 
 // The decompressed contents of the gzip stream `bytes` (concatenated members are joined, as gunzip does), or why it
-// cannot be decompressed: "corrupt gzip data (...)", "truncated gzip data", or "larger than the N MiB limit" once
-// the output would exceed `maxBytes` (decompression stops there, so a gzip bomb costs at most `maxBytes`).
-// Thread-safe.
-std::expected<std::string, std::string> gunzip(std::string_view bytes, size_t maxBytes);
+// cannot be decompressed: one error without a location (the caller knows the file and adds it) saying
+// "corrupt gzip data (...)", "truncated gzip data", or "larger than the N MiB limit" once the output would exceed
+// `maxBytes` (decompression stops there, so a gzip bomb costs at most `maxBytes`). Thread-safe.
+std::expected<std::string, Diagnostics> gunzip(std::string_view bytes, size_t maxBytes);
 
 }  // namespace imps

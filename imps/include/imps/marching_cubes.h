@@ -32,6 +32,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "imps/diagnostic.h"
 #include "imps/field.h"
 #include "imps/mesh.h"
 
@@ -80,11 +81,11 @@ struct MarchingCubesStats {
   bool cancelled = false;          // options.cancel stopped the call: the mesh is empty
 };
 
-// The grid polygonize() uses for `field` with `options`: cells along x, y and z (zero for an empty field), or the
-// message "a grid of X x Y x Z cells (N) for a surface of ... m at cell C m is more than the limit of M cells" when
-// it would have more than options.maxCells cells. Cheap (the field's bounds only); call it before polygonize() to
-// report a refused grid.
-std::expected<glm::ivec3, std::string> planGrid(const Field& field, const MarchingCubesOptions& options);
+// The grid polygonize() uses for `field` with `options`: cells along x, y and z (zero for an empty field), or, when
+// it would have more than options.maxCells cells, one error without a location (the caller knows where the cell
+// size came from) saying "a grid of X x Y x Z cells (N) for a surface of ... m at cell C m is more than the limit
+// of M cells". Cheap (the field's bounds only); call it before polygonize() to report a refused grid.
+std::expected<glm::ivec3, Diagnostics> planGrid(const Field& field, const MarchingCubesOptions& options);
 
 // Polygonizes field's iso-surface. Reuses nothing between calls; see MarchingCubes for repeated use. A grid beyond
 // options.maxCells gives an empty mesh (see planGrid); so does options.cancel (stats->cancelled then says so).

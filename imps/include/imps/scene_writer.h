@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include "imps/io_error.h"
 #include "imps/scene.h"
 
 namespace imps {
@@ -23,8 +24,8 @@ std::string writeScene(const Scene& scene);
 
 // Saves writeScene(scene) to `path` without ever leaving a partly written file there: writes a temporary file in
 // the same directory, flushes and fsyncs it, then renames it over `path` (an existing file keeps its permissions).
-// Returns true on success. On failure returns false, leaves `path` as it was, removes the temporary file and, when
-// `error` is not null, sets it to a message naming the failing step and the system's reason.
-bool saveSceneFile(const Scene& scene, const std::string& path, std::string* error);
+// On failure leaves `path` as it was, removes the temporary file and returns atomic_file.h's IoError (message
+// "cannot save 'PATH': STEP: REASON").
+IoResult<void> saveSceneFile(const Scene& scene, const std::string& path);
 
 }  // namespace imps

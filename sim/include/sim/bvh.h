@@ -59,12 +59,14 @@ std::expected<BvhClip, Diagnostics> readBvhText(std::string_view text, std::stri
                                                 Diagnostics* warnings = nullptr);
 
 // Writes a clip in a canonical form: LF line endings, tab indentation, numbers in the shortest form that reads
-// back to the same value, so readBvhText(writeBvh(c)) == c. The clip must be well formed (parents before children,
-// every frame channelCount() long); violations throw std::invalid_argument (they are bugs, not bad input).
-std::string writeBvh(const BvhClip& clip);
+// back to the same value, so readBvhText(writeBvh(c)) == c. A clip that cannot be written (a parent after its child,
+// joints not in depth-first order, a name with braces or line breaks, a frame not channelCount() long) is one error
+// without a location saying which joint or frame.
+std::expected<std::string, Diagnostics> writeBvh(const BvhClip& clip);
 
 // Writes writeBvh(clip) to `path` without ever leaving a half-written file: a temporary file beside it is written,
-// flushed to disk and renamed over the target. Errors: "path: error: ...".
-std::expected<void, std::string> saveBvh(const std::filesystem::path& path, const BvhClip& clip);
+// flushed to disk and renamed over the target. Fails with one error at `path` (printed "path: error: ..."): the
+// clip's problem, or the save's "cannot save 'PATH': STEP: REASON" (atomic_file.h).
+std::expected<void, Diagnostics> saveBvh(const std::filesystem::path& path, const BvhClip& clip);
 
 }  // namespace imps::sim

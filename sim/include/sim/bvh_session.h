@@ -33,9 +33,9 @@ struct BvhToSessionOptions {
 // channels are split across several devices of at most kMaxChannels channels each. Frame f becomes one sample per
 // device with sequence f and deviceTimeNs = arrivalTimeNs = round(f * frameTime * 1e9). The devices are named
 // "BVH: <sourceName>". The session carries a SKELETON record (the hierarchy as a zero-frame BVH file) and one
-// CALIBRATION JSON blob describing the mapping. Errors: "sourceName: error: ..." (no channels, bad options,
-// positions out of range).
-std::expected<Session, std::string> bvhToSession(const BvhClip& clip, std::string_view sourceName,
+// CALIBRATION JSON blob describing the mapping. Fails with one error at `sourceName` (no channels, bad options,
+// positions out of range, a hierarchy writeBvh refuses).
+std::expected<Session, Diagnostics> bvhToSession(const BvhClip& clip, std::string_view sourceName,
                                                  BvhToSessionOptions options = {});
 
 struct SessionToBvhOptions {
@@ -53,7 +53,8 @@ struct SessionToBvhOptions {
 // Zrotation channel. One frame is written per sample of device 0, taking every other device's most recent sample
 // (samples of one frame are recorded device 0 first). Channels flagged NotConnected or Outlier hold their last
 // valid value (0 degrees / mid-scale before any). Frame time: the skeleton's, else the median spacing of device
-// 0's timestamps (device time when it has one), else 1/60 s. Errors: "session: error: ...".
-std::expected<BvhClip, std::string> sessionToBvh(const Session& session, SessionToBvhOptions options = {});
+// 0's timestamps (device time when it has one), else 1/60 s. Fails with one error at "session" (printed
+// "session: error: ..."), or at "session skeleton:LINE:COLUMN" for a SKELETON record the BVH reader refuses.
+std::expected<BvhClip, Diagnostics> sessionToBvh(const Session& session, SessionToBvhOptions options = {});
 
 }  // namespace imps::sim

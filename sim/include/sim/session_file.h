@@ -17,6 +17,7 @@
 
 #include "drivers/sample.h"
 #include "imps/clock.h"
+#include "imps/diagnostic.h"
 #include "sim/sample_table.h"
 
 namespace imps::sim {
@@ -121,14 +122,17 @@ struct SessionWriterOptions {
 // header and DEVICE_INFO records are written and flushed at once; afterwards bytes are only ever appended. Records
 // are buffered and written with one write() per flush, so after a crash the file reads back up to the last flush.
 // Not thread-safe: one recording thread owns the writer. Movable, not copyable.
+// Every method fails with one error at the file's path (printed "path: error: ..."), whether the system refused
+// (create, write, fsync: the reason in the system's words) or the call was wrong (a bad DeviceInfo, a sample of
+// the wrong size, a closed writer); a recorder reports both alike, as an output that could not be written.
 class SessionWriter {
  public:
   // Creates `path` for a session of one or more devices (several when an armature has more than kMaxChannels
-  // channels, or a rig combines armatures). Errors: "path: error: ..." (exists, not writable, bad DeviceInfo).
-  static std::expected<SessionWriter, std::string> create(const std::filesystem::path& path,
+  // channels, or a rig combines armatures). Errors: the file exists or is not writable, a bad DeviceInfo.
+  static std::expected<SessionWriter, Diagnostics> create(const std::filesystem::path& path,
                                                           std::span<const DeviceInfo> devices,
                                                           SessionWriterOptions options = {});
-  static std::expected<SessionWriter, std::string> create(const std::filesystem::path& path, const DeviceInfo& device,
+  static std::expected<SessionWriter, Diagnostics> create(const std::filesystem::path& path, const DeviceInfo& device,
                                                           SessionWriterOptions options = {});
 
   SessionWriter(SessionWriter&& other) noexcept;
@@ -140,28 +144,28 @@ class SessionWriter {
 
   // Buffers one sample of device `device`. The sample's channelCount must equal that device's channelCount and be
   // <= kMaxChannels. May flush (see SessionWriterOptions); flush errors are returned.
-  std::expected<void, std::string> append(const Sample& sample, uint16_t device = 0);
+  std::expected<void, Diagnostics> append(const Sample& sample, uint16_t device = 0);
   // Buffers a calibration JSON blob (stored verbatim); it applies from the next appended sample on.
-  std::expected<void, std::string> appendCalibration(std::string_view json);
+  std::expected<void, Diagnostics> appendCalibration(std::string_view json);
   // Buffers a marker at `timeNs` (host steady clock).
-  std::expected<void, std::string> appendMarker(int64_t timeNs, std::string_view label);
+  std::expected<void, Diagnostics> appendMarker(int64_t timeNs, std::string_view label);
   // Buffers a free-text note.
-  std::expected<void, std::string> appendNote(std::string_view text);
+  std::expected<void, Diagnostics> appendNote(std::string_view text);
   // Declares a new device (DEVICE_INFO) that continues device `previous` with another channel layout (LAYOUT), for
   // the samples appended from now on; returns its device index. Errors: a bad DeviceInfo, no such device.
-  std::expected<uint16_t, std::string> appendLayoutChange(const DeviceInfo& device, uint16_t previous);
+  std::expected<uint16_t, Diagnostics> appendLayoutChange(const DeviceInfo& device, uint16_t previous);
   // Buffers a LAYOUT record alone: device `device`, already declared, continues device `previous` (< device).
   // For copying a session whose devices were all declared up front (saveSession).
-  std::expected<void, std::string> appendLayout(uint16_t device, uint16_t previous);
+  std::expected<void, Diagnostics> appendLayout(uint16_t device, uint16_t previous);
   // Buffers the link's counters for `device` (COUNTERS); a later call supersedes an earlier one for readers.
-  std::expected<void, std::string> appendCounters(uint16_t device, std::span<const SessionCounter> counters);
+  std::expected<void, Diagnostics> appendCounters(uint16_t device, std::span<const SessionCounter> counters);
   size_t deviceCount() const { return devices_.size(); }
   // Buffers the BVH skeleton the channels map onto (see SessionSkeleton).
-  std::expected<void, std::string> appendSkeleton(const SessionSkeleton& skeleton);
+  std::expected<void, Diagnostics> appendSkeleton(const SessionSkeleton& skeleton);
   // Writes everything buffered with one write() (and fdatasync() if syncOnFlush).
-  std::expected<void, std::string> flush();
+  std::expected<void, Diagnostics> flush();
   // Flushes, appends the END record, syncs and closes. Further calls are errors.
-  std::expected<void, std::string> close();
+  std::expected<void, Diagnostics> close();
 
   uint64_t samplesWritten() const { return samples_; }  // appended so far, flushed or not
   uint64_t bytesFlushed() const { return flushed_; }
@@ -169,9 +173,9 @@ class SessionWriter {
 
  private:
   SessionWriter() = default;
-  std::expected<void, std::string> appendRecord(uint16_t type, std::span<const uint8_t> payload);
-  std::expected<void, std::string> writeAll(std::span<const uint8_t> bytes);
-  std::expected<void, std::string> usable() const;
+  std::expected<void, Diagnostics> appendRecord(uint16_t type, std::span<const uint8_t> payload);
+  std::expected<void, Diagnostics> writeAll(std::span<const uint8_t> bytes);
+  std::expected<void, Diagnostics> usable() const;
   Clock& clock() const;
 
   std::filesystem::path path_;
@@ -190,17 +194,20 @@ class SessionWriter {
 // ---------------------------------------------------------------------------------------------------------------
 // Reading
 
-// Reads a whole session file. Errors ("path: error: ...") only when nothing can be trusted: unreadable file, bad
-// magic, unsupported version, header cut short. Truncated or corrupt records end the read cleanly; see
+// Reads a whole session file. Fails (one error at the path, printed "path: error: ...") only when nothing can be
+// trusted: unreadable file, bad magic, unsupported version, header cut short. An unreadable file is bad input here
+// like a corrupt one (the commands exit 1 for both). Truncated or corrupt records end the read cleanly; see
 // Session::recovery.
-std::expected<Session, std::string> readSession(const std::filesystem::path& path);
+std::expected<Session, Diagnostics> readSession(const std::filesystem::path& path);
 // The same from bytes in memory; `name` stands for the file in messages. Never reads outside `bytes`.
-std::expected<Session, std::string> readSessionBytes(std::span<const uint8_t> bytes, std::string_view name = "<memory>");
+std::expected<Session, Diagnostics> readSessionBytes(std::span<const uint8_t> bytes,
+                                                     std::string_view name = "<memory>");
 
 // Writes an in-memory session (devices, skeleton, notes, then samples interleaved with calibrations and markers at
 // their recorded sample indices, then END) to `path` atomically: a temporary file beside it is written and synced,
-// then renamed over the target. Used to save converted sessions. Errors: "path: error: ...".
-std::expected<void, std::string> saveSession(const std::filesystem::path& path, const Session& session);
+// then renamed over the target. Used to save converted sessions. Fails with one error at `path` (a session whose
+// parts disagree, or the writer's or the save's failure, naming `path`, never the temporary file).
+std::expected<void, Diagnostics> saveSession(const std::filesystem::path& path, const Session& session);
 
 // CRC-32C (Castagnoli, reflected, init and final xor 0xFFFFFFFF), as used by the record headers.
 // crc32c("123456789") == 0xE3069283.

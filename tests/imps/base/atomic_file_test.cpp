@@ -8,6 +8,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <csignal>
 #include <cstdint>
 #include <filesystem>
@@ -43,9 +44,8 @@ class AtomicFile : public ::testing::Test {
 TEST_F(AtomicFile, CreatesANewFileWithExactlyTheBytes) {
   const fs::path target = dir_ / "new.txt";
   const std::string bytes("line 1\n\0binary\xff", 15);
-  std::string error = "unchanged";
-  ASSERT_TRUE(writeFileAtomically(target.string(), bytes, &error));
-  EXPECT_EQ(error, "unchanged");  // success leaves *error alone
+  const auto saved = writeFileAtomically(target.string(), bytes);
+  ASSERT_TRUE(saved) << saved.error().message;
   EXPECT_EQ(fileBytes(target), bytes);
   EXPECT_EQ(names(), std::set<std::string>{"new.txt"});
 }
@@ -53,7 +53,7 @@ TEST_F(AtomicFile, CreatesANewFileWithExactlyTheBytes) {
 TEST_F(AtomicFile, ReplacesAnExistingFileWhole) {
   const fs::path target = dir_ / "scene.json";
   writeBytes(target, std::string(100000, 'o'));  // longer than the new contents: nothing of it may remain
-  ASSERT_TRUE(writeFileAtomically(target.string(), std::string_view("short"), nullptr));
+  ASSERT_TRUE(writeFileAtomically(target.string(), std::string_view("short")));
   EXPECT_EQ(fileBytes(target), "short");
   EXPECT_EQ(names(), std::set<std::string>{"scene.json"});
 }
@@ -61,9 +61,9 @@ TEST_F(AtomicFile, ReplacesAnExistingFileWhole) {
 TEST_F(AtomicFile, TheByteSpanOverloadWritesTheSameBytes) {
   const fs::path target = dir_ / "mesh.bin";
   const std::vector<uint8_t> bytes = {0, 1, 2, 0xfe, 0xff, 0};
-  ASSERT_TRUE(writeFileAtomically(target.string(), std::span<const uint8_t>(bytes), nullptr));
+  ASSERT_TRUE(writeFileAtomically(target.string(), std::span<const uint8_t>(bytes)));
   EXPECT_EQ(fileBytes(target), std::string("\0\1\2\xfe\xff\0", 6));
-  ASSERT_TRUE(writeFileAtomically(target.string(), std::span<const uint8_t>(), nullptr));
+  ASSERT_TRUE(writeFileAtomically(target.string(), std::span<const uint8_t>()));
   EXPECT_EQ(fs::file_size(target), 0u);
 }
 
@@ -71,14 +71,14 @@ TEST_F(AtomicFile, AnExistingTargetKeepsItsPermissions) {
   const fs::path target = dir_ / "private.json";
   writeBytes(target, "old");
   fs::permissions(target, fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
-  ASSERT_TRUE(writeFileAtomically(target.string(), std::string_view("new"), nullptr));
+  ASSERT_TRUE(writeFileAtomically(target.string(), std::string_view("new")));
   EXPECT_EQ(fileBytes(target), "new");
   EXPECT_EQ(modeOf(target), mode_t{0640});
 }
 
 TEST_F(AtomicFile, ANewFileGetsTheUsualModeLessTheUmask) {
   const mode_t previous = ::umask(027);
-  const bool saved = writeFileAtomically((dir_ / "a.txt").string(), std::string_view("a"), nullptr);
+  const bool saved = writeFileAtomically((dir_ / "a.txt").string(), std::string_view("a")).has_value();
   ::umask(previous);
   ASSERT_TRUE(saved);
   EXPECT_EQ(modeOf(dir_ / "a.txt"), mode_t{0640});  // 0666 & ~027
@@ -86,17 +86,21 @@ TEST_F(AtomicFile, ANewFileGetsTheUsualModeLessTheUmask) {
 
 TEST_F(AtomicFile, AMissingDirectoryFailsWithTheStepAndReasonAndWritesNothing) {
   const fs::path target = dir_ / "no_such_dir" / "out.txt";
-  std::string error;
-  EXPECT_FALSE(writeFileAtomically(target.string(), std::string_view("x"), &error));
-  EXPECT_EQ(error, "cannot save '" + target.string() + "': creating a temporary file: No such file or directory");
+  const auto saved = writeFileAtomically(target.string(), std::string_view("x"));
+  ASSERT_FALSE(saved);
+  EXPECT_EQ(saved.error().message,
+            "cannot save '" + target.string() + "': creating a temporary file: No such file or directory");
+  EXPECT_EQ(saved.error().path, target.string());
+  EXPECT_EQ(saved.error().code, ENOENT);
   EXPECT_TRUE(names().empty());
-  EXPECT_FALSE(writeFileAtomically(target.string(), std::string_view("x"), nullptr));  // a null error is allowed
 }
 
 TEST_F(AtomicFile, AParentThatIsAFileFails) {
   writeBytes(dir_ / "plain", "I am a file");
-  std::string error;
-  EXPECT_FALSE(writeFileAtomically((dir_ / "plain" / "out.txt").string(), std::string_view("x"), &error));
+  const auto saved = writeFileAtomically((dir_ / "plain" / "out.txt").string(), std::string_view("x"));
+  ASSERT_FALSE(saved);
+  const std::string error = saved.error().message;
+  EXPECT_EQ(saved.error().code, ENOTDIR);
   EXPECT_NE(error.find("creating a temporary file: Not a directory"), std::string::npos) << error;
   EXPECT_EQ(fileBytes(dir_ / "plain"), "I am a file");
   EXPECT_EQ(names(), std::set<std::string>{"plain"});
@@ -107,9 +111,10 @@ TEST_F(AtomicFile, AnUnwritableDirectoryFailsAndLeavesTheTargetUntouched) {
   const fs::path target = dir_ / "kept.txt";
   writeBytes(target, "precious");
   fs::permissions(dir_.path(), fs::perms::owner_read | fs::perms::owner_exec);
-  std::string error;
-  EXPECT_FALSE(writeFileAtomically(target.string(), std::string_view("lost?"), &error));
+  const auto saved = writeFileAtomically(target.string(), std::string_view("lost?"));
   fs::permissions(dir_.path(), fs::perms::owner_all);
+  ASSERT_FALSE(saved);
+  const std::string error = saved.error().message;
   EXPECT_NE(error.find("creating a temporary file: Permission denied"), std::string::npos) << error;
   EXPECT_EQ(fileBytes(target), "precious");
   EXPECT_EQ(names(), std::set<std::string>{"kept.txt"});
@@ -120,8 +125,9 @@ TEST_F(AtomicFile, ARenameFailureRemovesTheTemporaryFileAndLeavesTheTargetUntouc
   const fs::path target = dir_ / "occupied";
   fs::create_directories(target);
   writeBytes(target / "inside.txt", "still here");
-  std::string error;
-  EXPECT_FALSE(writeFileAtomically(target.string(), std::string_view("data"), &error));
+  const auto saved = writeFileAtomically(target.string(), std::string_view("data"));
+  ASSERT_FALSE(saved);
+  const std::string error = saved.error().message;
   EXPECT_EQ(error.rfind("cannot save '" + target.string() + "': renaming the temporary file over it: ", 0), 0u)
       << error;
   EXPECT_EQ(names(), std::set<std::string>{"occupied"});
@@ -138,12 +144,12 @@ TEST_F(AtomicFile, AWriteFailureRemovesTheTemporaryFileAndLeavesTheTargetUntouch
   small.rlim_cur = 4096;
   auto* previousHandler = std::signal(SIGXFSZ, SIG_IGN);
   ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &small), 0);
-  std::string error;
-  const bool saved = writeFileAtomically(target.string(), std::string(100000, 'x'), &error);
+  const auto saved = writeFileAtomically(target.string(), std::string(100000, 'x'));
   ::setrlimit(RLIMIT_FSIZE, &previous);
   std::signal(SIGXFSZ, previousHandler);
-  EXPECT_FALSE(saved);
-  EXPECT_EQ(error, "cannot save '" + target.string() + "': writing: File too large");
+  ASSERT_FALSE(saved);
+  EXPECT_EQ(saved.error().message, "cannot save '" + target.string() + "': writing: File too large");
+  EXPECT_EQ(saved.error().code, EFBIG);
   EXPECT_EQ(fileBytes(target), "old contents");
   EXPECT_EQ(names(), std::set<std::string>{"big.bin"});
 }
@@ -170,7 +176,7 @@ TEST_F(AtomicFile, AnExistingFileWithTheNextTemporaryNameIsNeverOverwritten) {
     squatters.push_back(probe.substr(0, dash + 1) + std::to_string(n));
     writeBytes(squatters.back(), "someone else's");
   }
-  ASSERT_TRUE(writeFileAtomically(path, std::string_view("mine"), nullptr));
+  ASSERT_TRUE(writeFileAtomically(path, std::string_view("mine")));
   EXPECT_EQ(fileBytes(path), "mine");
   for (const fs::path& s : squatters) EXPECT_EQ(fileBytes(s), "someone else's") << s;
   EXPECT_EQ(names().size(), 1 + squatters.size());
@@ -184,7 +190,7 @@ TEST_F(AtomicFile, ConcurrentSavesOfOneTargetLeaveOneWholeVersion) {
   std::vector<int> ok(kWriters, 0);
   for (int w = 0; w < kWriters; ++w)
     writers.emplace_back([&, w] {
-      for (int k = 0; k < 10; ++k) ok[size_t(w)] += writeFileAtomically(path, contents(w), nullptr) ? 1 : 0;
+      for (int k = 0; k < 10; ++k) ok[size_t(w)] += writeFileAtomically(path, contents(w)) ? 1 : 0;
     });
   for (std::thread& t : writers) t.join();
   for (int w = 0; w < kWriters; ++w) EXPECT_EQ(ok[size_t(w)], 10) << w;
@@ -200,8 +206,8 @@ TEST_F(AtomicFile, CommitTemporaryFileRenamesOverTheTargetKeepingItsPermissions)
   fs::permissions(target, fs::perms::owner_read | fs::perms::owner_write);
   const std::string temp = temporarySibling(target.string());
   writeBytes(temp, "recorded");
-  std::string error;
-  ASSERT_TRUE(commitTemporaryFile(temp, target.string(), &error)) << error;
+  const auto committed = commitTemporaryFile(temp, target.string());
+  ASSERT_TRUE(committed) << committed.error().message;
   EXPECT_EQ(fileBytes(target), "recorded");
   EXPECT_EQ(modeOf(target), mode_t{0600});
   EXPECT_EQ(names(), std::set<std::string>{"session.imps"});
@@ -212,8 +218,9 @@ TEST_F(AtomicFile, AFailedCommitRemovesTheTemporaryFile) {
   fs::create_directories(target / "child");
   const std::string temp = temporarySibling(target.string());
   writeBytes(temp, "recorded");
-  std::string error;
-  EXPECT_FALSE(commitTemporaryFile(temp, target.string(), &error));
+  const auto committed = commitTemporaryFile(temp, target.string());
+  ASSERT_FALSE(committed);
+  const std::string error = committed.error().message;
   EXPECT_EQ(error.rfind("cannot save '" + target.string() + "': renaming the temporary file over it: ", 0), 0u)
       << error;
   EXPECT_FALSE(fs::exists(temp));

@@ -97,6 +97,24 @@ TEST(Diagnostics, AppendKeepsOrderAndAddsErrorCounts) {
   EXPECT_EQ(b.all().size(), 2u);  // the source is unchanged
 }
 
+TEST(Diagnostics, FirstErrorIsTheFirstErrorOnOneLineSkippingWarnings) {
+  Diagnostics d;
+  EXPECT_EQ(d.firstError(), "");
+  d.warning({"a.wrl", 1, 2}, "only a warning");
+  EXPECT_EQ(d.firstError(), "");
+  d.error({"a.wrl", 3, 4}, "first");
+  d.error({"b.wrl"}, "second");
+  EXPECT_EQ(d.firstError(), "a.wrl:3:4: error: first");
+}
+
+TEST(Diagnostics, SingleErrorHoldsOneError) {
+  const Diagnostics d = singleError({"out.session"}, "cannot create session file: File exists");
+  EXPECT_EQ(d.errorCount(), 1);
+  ASSERT_EQ(d.all().size(), 1u);
+  EXPECT_EQ(d.str(), "out.session: error: cannot create session file: File exists\n");
+  EXPECT_EQ(singleError({}, "no place").firstError(), "error: no place");
+}
+
 TEST(ClosestMatch, SuggestsATypoFixIgnoringCase) {
   const std::vector<std::string> keys = {"radius", "center", "strength", "blendGroup"};
   EXPECT_EQ(closestMatch("raduis", keys), "radius");

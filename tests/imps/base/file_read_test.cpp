@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdlib>
 #include <filesystem>
 #include <optional>
@@ -58,7 +59,7 @@ TEST_F(FileRead, ReadsTheWholeFileAcrossChunks) {
   for (size_t n : {size_t(0), size_t(1), size_t(65535), size_t(65536), size_t(65537), size_t(3 * 65536 + 5)}) {
     const std::string bytes = pattern(n);
     const auto text = readFileText(fileOf("f", bytes), kMiB);
-    ASSERT_TRUE(text) << n << ": " << text.error();
+    ASSERT_TRUE(text) << n << ": " << text.error().str();
     EXPECT_EQ(*text, bytes) << n;
   }
 }
@@ -68,14 +69,16 @@ TEST_F(FileRead, AFileOfExactlyTheLimitIsReadAndOneByteMoreIsRefused) {
     EXPECT_TRUE(readFileText(fileOf("at", pattern(limit)), limit)) << limit;
     const auto over = readFileText(fileOf("over", pattern(limit + 1)), limit);
     ASSERT_FALSE(over) << limit;
-    EXPECT_EQ(over.error(), "larger than the " + byteSizeText(limit) + " limit (IMPS_MAX_INPUT_MIB=N raises it)");
+    EXPECT_EQ(over.error().message,
+              "larger than the " + byteSizeText(limit) + " limit (IMPS_MAX_INPUT_MIB=N raises it)");
   }
 }
 
 TEST_F(FileRead, AnEndlessInputIsRefusedAtTheLimit) {
   const auto zero = readFileText("/dev/zero", kMiB);
   ASSERT_FALSE(zero);
-  EXPECT_EQ(zero.error(), "larger than the 1 MiB limit (IMPS_MAX_INPUT_MIB=N raises it)");
+  EXPECT_EQ(zero.error().path, "/dev/zero");
+  EXPECT_EQ(zero.error().message, "larger than the 1 MiB limit (IMPS_MAX_INPUT_MIB=N raises it)");
 }
 
 TEST_F(FileRead, TheEnvironmentVariableReplacesTheReadersDefault) {
@@ -85,14 +88,14 @@ TEST_F(FileRead, TheEnvironmentVariableReplacesTheReadersDefault) {
     const ScopedLimit limit("2");
     EXPECT_EQ(inputLimitBytes(100).value_or(0), size_t(2 * kMiB));
     const auto text = readFileText(twoMiB, 100);
-    ASSERT_TRUE(text) << text.error();
+    ASSERT_TRUE(text) << text.error().str();
     EXPECT_EQ(text->size(), 2 * kMiB);
   }
   {
     const ScopedLimit limit("1");  // lowers a default too
     const auto text = readFileText(twoMiB, 64 * kMiB);
     ASSERT_FALSE(text);
-    EXPECT_EQ(text.error(), "larger than the 1 MiB limit (IMPS_MAX_INPUT_MIB=N raises it)");
+    EXPECT_EQ(text.error().message, "larger than the 1 MiB limit (IMPS_MAX_INPUT_MIB=N raises it)");
   }
 }
 
@@ -112,22 +115,26 @@ TEST_F(FileRead, AnInvalidValueIsAnErrorNamingTheVariable) {
     const ScopedLimit limit{std::string(value)};
     const auto bytes = inputLimitBytes(kMiB);
     ASSERT_FALSE(bytes) << "'" << value << "'";
-    EXPECT_EQ(bytes.error(),
+    ASSERT_EQ(bytes.error().errorCount(), 1);
+    EXPECT_EQ(bytes.error().all().front().message,
               "IMPS_MAX_INPUT_MIB='" + std::string(value) + "' is not a whole number of MiB from 1 to 16777216");
     // The reader refuses too rather than falling back to its default.
     const auto text = readFileText(small, kMiB);
     ASSERT_FALSE(text) << "'" << value << "'";
-    EXPECT_EQ(text.error(), bytes.error());
+    EXPECT_EQ(text.error().message, bytes.error().all().front().message);
   }
 }
 
 TEST_F(FileRead, SystemErrorsAreReportedInTheSystemsWords) {
   const auto missing = readFileText(dir_ / "missing.wrl", kMiB);
   ASSERT_FALSE(missing);
-  EXPECT_EQ(missing.error(), "No such file or directory");
+  EXPECT_EQ(missing.error().message, "No such file or directory");
+  EXPECT_EQ(missing.error().code, ENOENT);
+  EXPECT_EQ(missing.error().str(), (dir_ / "missing.wrl").string() + ": No such file or directory");
   const auto directory = readFileText(dir_.path(), kMiB);
   ASSERT_FALSE(directory);
-  EXPECT_EQ(directory.error(), "Is a directory");
+  EXPECT_EQ(directory.error().message, "Is a directory");
+  EXPECT_EQ(directory.error().code, EISDIR);
 }
 
 TEST(ByteSizeText, NamesTheLargestWholeUnit) {

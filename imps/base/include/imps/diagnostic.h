@@ -41,11 +41,17 @@ class Diagnostics {
   std::string str() const;
   static constexpr size_t kMaxPrinted = 100;
   void append(const Diagnostics& other);
+  // The first error as Diagnostic::str() (no newline), "" when there is none: a result that failed for one reason,
+  // printed inside a longer line ("puppeteer convert: error: " + firstError()).
+  std::string firstError() const;
 
  private:
   std::vector<Diagnostic> items_;
   int errorCount_ = 0;
 };
+
+// Diagnostics holding one error: the result of a function that fails for a single reason.
+Diagnostics singleError(SourceLoc loc, std::string message);
 
 // The closest candidate to `word` by edit distance, or "" when none is close enough to be a likely typo.
 // Used for "did you mean 'radius'?" suggestions.

@@ -4,7 +4,9 @@
 // A failure of the world outside the program — a file, directory, device or socket that cannot be opened, read,
 // written, synced or renamed — is an `IoError`: `IoResult<T>` = `std::expected<T, IoError>`. Library code returns
 // one of the two and never prints; only `puppeteer/` turns them into messages and exit codes (docs/cli.md: bad input
-// exits 1, I/O exits 3).
+// exits 1, I/O exits 3). A function that can fail both ways (a reader whose file may be missing or corrupt, a writer
+// whose mesh or clip may be invalid) returns Diagnostics with the I/O failure as one of them, unless its callers must
+// tell the two apart for the exit code (docs/ARCHITECTURE.md, "How failures travel").
 #pragma once
 
 #include <expected>
@@ -15,7 +17,8 @@ namespace imps {
 
 struct IoError {
   std::string path;     // the file, directory, device or address concerned; "" when none applies
-  std::string message;  // what failed and why, e.g. "cannot save: rename: No space left on device"
+  std::string message;  // what failed and why, e.g. "No such file or directory"; an atomic save's is the whole
+                        // sentence "cannot save 'PATH': STEP: REASON" (atomic_file.h)
   int code = 0;         // the errno the OS gave, or 0
 
   // "PATH: MESSAGE", or MESSAGE alone when there is no path.
