@@ -520,18 +520,6 @@ void Field::values(std::span<const glm::vec3> points, std::span<float> out, Fiel
 
 namespace {
 
-// The rows of lattice slice z that a metaball's support ball may reach: [lo, hi) into ys. A superset (relative margins
-// of 1e-3, far above float rounding) of the rows where metaballDistance() is at most `skip` anywhere, beyond which
-// value() skips the point: the other rows take nothing from the metaball.
-inline std::pair<size_t, size_t> metaballRows(const Primitive& p, std::span<const float> ys, float z, float skip) {
-  const float vz = z - p.center.z;
-  const float reach2 = skip * (p.radius * p.radius) * (1.0f + 1e-3f) - vz * vz;
-  if (reach2 < 0.0f) return {0, 0};
-  const float h = std::sqrt(reach2) * (1.0f + 1e-3f) + 1e-6f;
-  return {size_t(std::lower_bound(ys.begin(), ys.end(), p.center.y - h) - ys.begin()),
-          size_t(std::upper_bound(ys.begin(), ys.end(), p.center.y + h) - ys.begin())};
-}
-
 }  // namespace
 
 void Field::latticeValues(std::span<const float> xs, std::span<const float> ys, std::span<const float> zs,
@@ -622,18 +610,26 @@ void Field::latticeValues(std::span<const float> xs, std::span<const float> ys, 
       pending = true;
     };
     // A metaball whose support ball holds every point of its box's lattice range needs no trimming.
+    // A metaball's rows are trimmed to its support ball, unless that holds the box's whole lattice range: row
+    // (y, z) is kept while vy^2 <= reach2 - vz^2, a superset (relative margins of 1e-3, far above float rounding) of
+    // the rows where metaballDistance() = ((vx^2 + vy^2) + vz^2) / r^2 is at most supportSkip_ anywhere. Beyond it
+    // value() skips the point, so the other rows take nothing from the metaball. The kept rows are consecutive.
+    const float reach2 = supportSkip_[p] * (prim.radius * prim.radius) * (1.0f + 1e-3f);
     bool trim = false;
     if (prim.kind == PrimitiveKind::Metaball) {
       const glm::vec3 far = glm::max(glm::abs(glm::vec3(xs[i0], ys[j0], zs[z0]) - prim.center),
                                      glm::abs(glm::vec3(xs[i1 - 1], ys[j1 - 1], zs[z1 - 1]) - prim.center));
-      trim = glm::dot(far, far) >= supportSkip_[p] * (prim.radius * prim.radius) * (1.0f - 1e-3f);
+      trim = glm::dot(far, far) >= reach2 * (1.0f - 3e-3f);
+      atLeast(scratch.rowReach, ny);
+      for (size_t j = j0; j < j1; ++j) scratch.rowReach[j] = (ys[j] - prim.center.y) * (ys[j] - prim.center.y);
     }
     for (size_t z = z0; z < z1; ++z) {
       auto [ja, jb] = std::pair{j0, j1};
       if (trim) {
-        const auto [ba, bb] = metaballRows(prim, ys, zs[z], supportSkip_[p]);
-        ja = std::max(ja, ba);
-        jb = std::min(jb, bb);
+        const float vz = zs[z] - prim.center.z;
+        const float limit = (reach2 - vz * vz) * (1.0f + 1e-3f) + 1e-12f;
+        while (ja < jb && scratch.rowReach[ja] > limit) ++ja;
+        while (jb > ja && scratch.rowReach[jb - 1] > limit) --jb;
       }
       if (rows.empty() || wholeSlice[z]) {
         if (ja < jb) addRows(ja + ny * z, jb - 1 + ny * z);

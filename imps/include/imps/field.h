@@ -52,6 +52,7 @@ struct FieldScratch {
   uint32_t lastWinner = 0;                        // sample(): the winning local set of the last call
   std::vector<uint8_t> setStarted;               // accumulate(): which sets hold a value yet
   std::vector<uint8_t> wholeSlice;               // latticeValues(): the slices whose every row is wanted
+  std::vector<float> rowReach;                   // latticeValues(): a metaball's squared y offset of each row
   std::vector<int32_t> globalToLocal;
   // Working storage of single calls, kept here so a worker reuses it from call to call (no allocation once grown)
   // and no two workers share it. Each belongs to one function: calls that nest (samples() -> sample()) never alias.
