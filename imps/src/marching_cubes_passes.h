@@ -44,6 +44,7 @@ inline constexpr int kCentre = 12;                        // table code of a cel
 inline constexpr uint32_t kProvisional = 0x80000000u;     // triangle index of a centre vertex before gatherMesh
 inline constexpr int kSubBlock = kBlock / 2;              // cells per sub-block side (cullSubBlocks)
 inline constexpr int kSubBlocks = 8;                      // sub-blocks per block
+inline constexpr size_t kSubBlockMinCandidates = 4;       // fewer candidates: every sub-block is sampled
 enum SubBlockClass : uint8_t { kLive, kOutside, kInside };  // cullSubBlocks' verdicts
 
 inline int sampleIndex(int i, int j, int k) { return i + kBlockVerts * (j + kBlockVerts * k); }
@@ -181,8 +182,9 @@ bool cullBlock(const Field& field, const Grid& g, size_t b, std::span<const uint
 // 4b. Sub-blocks (kSubBlock^3 cells, sub-block (x, y, z) at index x + 2 y + 4 z) whose conservative field bounds
 // lie entirely below (kOutside) or above (kInside) iso, 1e-3 relative margin, hold no surface cell, so the samples
 // only they hold need no field value, only their side. ws.subBlocks gets each sub-block's class, ws.rows (j + 9 k) a
-// 1 for every row of samples some kLive sub-block's closed vertex range meets. A forced block keeps every sub-block
-// live. Returns whether any is live: if none is, the block holds no surface. ws.field must be prepared for the block.
+// 1 for every row of samples some kLive sub-block's closed vertex range meets. A forced block, or one with fewer than
+// kSubBlockMinCandidates candidates, keeps every sub-block live. Returns whether any is live: if none is, the block
+// holds no surface. ws.field must be prepared for the block.
 bool cullSubBlocks(const Field& field, const Grid& g, glm::ivec3 block, bool forced, WorkerScratch& ws);
 
 // 4c. The block's 9^3 samples into r.samples (sampleIndex order): F on the rows ws.rows asks for; on the others a
