@@ -1,11 +1,17 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
-"""Writes examples/swarm_1000.wrl: the benchmark swarm of issue 2 (1000 metaballs, centres uniform in [-2, 2]^3,
-radii uniform in [0.15, 0.35]), as a flat scene. Deterministic (fixed seed); rerun only to change the swarm."""
-import random
-import sys
+"""Writes the benchmark swarm of issue 2 (1000 metaballs, centres uniform in [-2, 2]^3, radii uniform in
+[0.15, 0.35]) as a flat scene. Deterministic (fixed seed): the same balls whatever the variance.
 
-def main(path="examples/swarm_1000.wrl", count=1000, seed=1000):
+  scripts/make_swarm.py                     examples/swarm_1000.wrl, variance 0.25 (blobbiness B = -4)
+  scripts/make_swarm.py PATH --variance 0.5 the same balls at B = -2 (issue 15's scene, the one Blender and
+                                            scikit-image were measured on): examples/swarm_1000_b2.wrl
+"""
+import argparse
+import random
+
+
+def write(path, variance=0.25, count=1000, seed=1000):
     rng = random.Random(seed)
     lines = [
         "#VRML V2.0 utf8",
@@ -15,7 +21,7 @@ def main(path="examples/swarm_1000.wrl", count=1000, seed=1000):
         "MarchingCubes {",
         "  cellSize 0.025",
         "  sceneGraph ExponentialBlend {",
-        "    variance 0.25",
+        "    variance %g" % variance,
         "    children [",
     ]
     for _ in range(count):
@@ -28,5 +34,17 @@ def main(path="examples/swarm_1000.wrl", count=1000, seed=1000):
     with open(path, "w") as f:
         f.write("\n".join(lines))
 
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("path", nargs="?", default="examples/swarm_1000.wrl")
+    parser.add_argument("--variance", type=float, default=0.25,
+                        help="the ExponentialBlend's variance v (blobbiness B = -1/v); default 0.25")
+    parser.add_argument("--count", type=int, default=1000)
+    parser.add_argument("--seed", type=int, default=1000)
+    args = parser.parse_args()
+    write(args.path, args.variance, args.count, args.seed)
+
+
 if __name__ == "__main__":
-    main(*sys.argv[1:2])
+    main()

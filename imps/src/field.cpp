@@ -421,6 +421,42 @@ void maxOverSets(bool additive, size_t sets, size_t n, const float* accs, float*
 
 }  // namespace
 
+namespace {
+
+// The additive blends' sum step of one candidate over a run of points: acc[i] += Term(Distance(x_i)), the very
+// arithmetic of terms() then `acc += t`, so the same bits. Two passes, distances into t and then terms into acc: one
+// fused loop would be one long dependency chain per point (division, exponential, sum), which runs slower.
+template <float (*Term)(float, float)>
+IMPS_VECTOR_CLONES void addTermLoop(float param, size_t n, const float* __restrict t, float* __restrict acc) {
+  for (size_t i = 0; i < n; ++i) acc[i] += Term(param, t[i]);
+}
+
+template <float (*Distance)(const Primitive&, float, float, float)>
+void addTermsOfKind(const BlendFunction& blend, const Primitive& p, float param, const float* xs, const float* ys,
+                    const float* zs, size_t n, float* t, float* acc) {
+  distanceLoop<Distance>(p, xs, ys, zs, n, t);
+  switch (blend.kind) {
+    case BlendKind::Exponential:
+      if (blend.fastExp) addTermLoop<fastExponentialTerm>(param, n, t, acc);
+      else addTermLoop<exponentialTerm>(param, n, t, acc);
+      break;
+    case BlendKind::BlancSchlick: addTermLoop<blancSchlickTerm>(param, n, t, acc); break;
+    case BlendKind::Elliptical: IMPS_CHECK(false); break;  // not additive: callers fold instead
+  }
+}
+
+// t: scratch of n floats (not acc).
+void addTerms(const BlendFunction& blend, const Primitive& p, float param, const float* xs, const float* ys,
+              const float* zs, size_t n, float* t, float* acc) {
+  switch (p.kind) {
+    case PrimitiveKind::Metaball: addTermsOfKind<metaballDistance>(blend, p, param, xs, ys, zs, n, t, acc); break;
+    case PrimitiveKind::Ellipsoid: addTermsOfKind<ellipsoidDistance>(blend, p, param, xs, ys, zs, n, t, acc); break;
+    case PrimitiveKind::LineSeg: addTermsOfKind<lineSegDistance>(blend, p, param, xs, ys, zs, n, t, acc); break;
+  }
+}
+
+}  // namespace
+
 void Field::accumulate(std::span<const glm::vec3> points, FieldScratch& scratch, bool keepTerms) const {
   const size_t n = points.size();
   atLeast(scratch.xs, n);
@@ -443,6 +479,17 @@ void Field::accumulate(std::span<const glm::vec3> points, FieldScratch& scratch,
   for (size_t k = 0; k < scratch.candidates.size(); ++k) {
     if (scratch.memberOffsets[k] == scratch.memberOffsets[k + 1]) {
       if (keepTerms) std::fill_n(scratch.terms.begin() + long(k * n), n, 0.0f);
+      continue;
+    }
+    if (!keepTerms && additive && scratch.memberOffsets[k + 1] - scratch.memberOffsets[k] == 1) {
+      // One set takes the terms: added in one pass (0 + t is exactly t, so a fresh set may start at 0).
+      const uint32_t set = scratch.memberSets[scratch.memberOffsets[k]];
+      float* acc = scratch.acc.data() + size_t(set) * n;
+      if (!scratch.setStarted[set]) std::fill_n(acc, n, 0.0f);
+      scratch.setStarted[set] = 1;
+      const uint32_t p = scratch.candidates[k];
+      addTerms(blend_, primitives_[p], params_[p], scratch.xs.data(), scratch.ys.data(), scratch.zs.data(), n,
+               scratch.term.data(), acc);
       continue;
     }
     terms(scratch.candidates[k], 0, n, scratch);
@@ -471,10 +518,15 @@ void Field::values(std::span<const glm::vec3> points, std::span<float> out, Fiel
   maxOverSets(blend_.additive(), scratch.setCount(), points.size(), scratch.acc.data(), out.data());
 }
 
+namespace {
+
+}  // namespace
+
 void Field::latticeValues(std::span<const float> xs, std::span<const float> ys, std::span<const float> zs,
-                          std::span<float> out, FieldScratch& scratch) const {
+                          std::span<float> out, FieldScratch& scratch, std::span<const uint8_t> rows) const {
   const size_t nx = xs.size(), ny = ys.size(), nz = zs.size(), n = nx * ny * nz;
   IMPS_CHECK_EQ(out.size(), n);
+  IMPS_CHECK(rows.empty() || rows.size() == ny * nz);
   atLeast(scratch.xs, n);
   atLeast(scratch.ys, n);
   atLeast(scratch.zs, n);
@@ -505,21 +557,31 @@ void Field::latticeValues(std::span<const float> xs, std::span<const float> ys, 
     return std::pair{size_t(std::lower_bound(axis.begin(), axis.end(), lo) - axis.begin()),
                      size_t(std::upper_bound(axis.begin(), axis.end(), hi) - axis.begin())};
   };
+  // The slices whose every row is wanted.
+  auto& wholeSlice = scratch.wholeSlice;
+  wholeSlice.assign(nz, 1);
+  for (size_t z = 0; z < nz && !rows.empty(); ++z)
+    for (size_t j = 0; j < ny; ++j)
+      if (rows[j + ny * z] == 0) wholeSlice[z] = 0;
   for (size_t k = 0; k < scratch.candidates.size(); ++k) {
     const uint32_t first = scratch.memberOffsets[k], last = scratch.memberOffsets[k + 1];
     if (first == last) continue;
     const uint32_t p = scratch.candidates[k];
+    const Primitive& prim = primitives_[p];
     const Box& box = supportBoxes_[p];
     const auto [i0, i1] = inside(xs, box.lo.x, box.hi.x);
     const auto [j0, j1] = inside(ys, box.lo.y, box.hi.y);
     const auto [z0, z1] = inside(zs, box.lo.z, box.hi.z);
     if (i0 >= i1 || j0 >= j1 || z0 >= z1) continue;
-    // One run of consecutive points per z slice from its first to its last reached point (whole rows along x keep
-    // the loops long enough to vectorise), or a single run when the reached rows span whole slices.
-    const bool wholeSlices = j0 == 0 && j1 == ny;
-    for (size_t z = z0; z < z1; z = wholeSlices ? z1 : z + 1) {
-      const size_t begin = i0 + nx * (j0 + ny * z);
-      const size_t end = i1 + nx * (j1 - 1 + ny * (wholeSlices ? z1 - 1 : z));
+    const bool single = additive && last - first == 1;
+    float* acc0 = scratch.acc.data() + size_t(scratch.memberSets[first]) * n;
+    // Points [begin, end) take the candidate's terms.
+    auto evaluate = [&](size_t begin, size_t end) {
+      if (single) {  // the common case: one set takes the terms, in one pass
+        addTerms(blend_, prim, params_[p], scratch.xs.data() + begin, scratch.ys.data() + begin,
+                 scratch.zs.data() + begin, end - begin, scratch.term.data() + begin, acc0 + begin);
+        return;
+      }
       terms(p, begin, end - begin, scratch);
       const float* t = scratch.term.data() + begin;
       for (uint32_t m = first; m < last; ++m) {
@@ -530,7 +592,58 @@ void Field::latticeValues(std::span<const float> xs, std::span<const float> ys, 
           for (size_t i = 0; i < end - begin; ++i) acc[i] = foldElliptical(acc[i], t[i]);
         }
       }
+    };
+    // The candidate is evaluated on the rows its support box reaches (a metaball's: its support ball), that the
+    // caller wants. Consecutive rows (in memory order: y, then z) make one run of points, from the box's first x in
+    // its first row to its last x in its last row, so the loops are long enough to vectorise; points of a run that
+    // the support misses take an exact "nothing".
+    size_t runFirst = 0, runLast = 0;  // rows j + ny z, inclusive
+    bool pending = false;
+    auto addRows = [&, i0 = i0, i1 = i1](size_t firstRow, size_t lastRow) {
+      if (pending && firstRow == runLast + 1) {
+        runLast = lastRow;
+        return;
+      }
+      if (pending) evaluate(i0 + nx * runFirst, i1 + nx * runLast);
+      runFirst = firstRow;
+      runLast = lastRow;
+      pending = true;
+    };
+    // A metaball whose support ball holds every point of its box's lattice range needs no trimming.
+    // A metaball's rows are trimmed to its support ball, unless that holds the box's whole lattice range: row
+    // (y, z) is kept while vy^2 <= reach2 - vz^2, a superset (relative margins of 1e-3, far above float rounding) of
+    // the rows where metaballDistance() = ((vx^2 + vy^2) + vz^2) / r^2 is at most supportSkip_ anywhere. Beyond it
+    // value() skips the point, so the other rows take nothing from the metaball. The kept rows are consecutive.
+    const float reach2 = supportSkip_[p] * (prim.radius * prim.radius) * (1.0f + 1e-3f);
+    bool trim = false;
+    if (prim.kind == PrimitiveKind::Metaball) {
+      const glm::vec3 far = glm::max(glm::abs(glm::vec3(xs[i0], ys[j0], zs[z0]) - prim.center),
+                                     glm::abs(glm::vec3(xs[i1 - 1], ys[j1 - 1], zs[z1 - 1]) - prim.center));
+      trim = glm::dot(far, far) >= reach2 * (1.0f - 3e-3f);
+      atLeast(scratch.rowReach, ny);
+      for (size_t j = j0; j < j1; ++j) scratch.rowReach[j] = (ys[j] - prim.center.y) * (ys[j] - prim.center.y);
     }
+    for (size_t z = z0; z < z1; ++z) {
+      auto [ja, jb] = std::pair{j0, j1};
+      if (trim) {
+        const float vz = zs[z] - prim.center.z;
+        const float limit = (reach2 - vz * vz) * (1.0f + 1e-3f) + 1e-12f;
+        while (ja < jb && scratch.rowReach[ja] > limit) ++ja;
+        while (jb > ja && scratch.rowReach[jb - 1] > limit) --jb;
+      }
+      if (rows.empty() || wholeSlice[z]) {
+        if (ja < jb) addRows(ja + ny * z, jb - 1 + ny * z);
+        continue;
+      }
+      for (size_t j = ja; j < jb; ++j) {
+        if (!rows.empty() && !rows[j + ny * z]) continue;
+        size_t end = j + 1;
+        while (end < jb && (rows.empty() || rows[end + ny * z])) ++end;
+        addRows(j + ny * z, end - 1 + ny * z);
+        j = end;
+      }
+    }
+    if (pending) evaluate(i0 + nx * runFirst, i1 + nx * runLast);
   }
   maxOverSets(additive, sets, n, scratch.acc.data(), out.data());
 }
@@ -782,6 +895,98 @@ float Field::lowerBound(const Box& box, const FieldScratch& scratch) const {
     best = std::max(best, blend_.additive() ? t : (t > -1.0f ? 1.0f + t : 0.0f));
   }
   return best;
+}
+
+float Field::lowerBound(std::span<const float> maxDistances, FieldScratch& scratch) const {
+  const auto& cand = scratch.candidates;
+  IMPS_CHECK_EQ(maxDistances.size(), cand.size());
+  if (!blend_.additive()) {  // the rounded union is at least the larger of its arguments
+    float best = 0.0f;
+    for (size_t k = 0; k < cand.size(); ++k) {
+      const float t = blend_.term(maxDistances[k], params_[cand[k]]);
+      best = std::max(best, t > -1.0f ? 1.0f + t : 0.0f);
+    }
+    return best;
+  }
+  // Each set's sum is at least the sum of its members' smallest terms in the box. The distances are grown by a
+  // relative 1e-3 first: every term then lies clearly below the evaluated one (float rounding of the distance and
+  // the exponential is far smaller), also where the evaluated term is barely above the exponential's cut-off.
+  auto& t = scratch.pointTerms;
+  t.resize(cand.size());
+  for (size_t k = 0; k < cand.size(); ++k)
+    t[k] = blend_.term(maxDistances[k] * (1.0f + 1e-3f) + 1e-3f, params_[cand[k]]);
+  float best = 0.0f;
+  for (size_t s = 0; s < scratch.setCount(); ++s) {
+    float sum = 0.0f;
+    for (uint32_t m = scratch.setOffsets[s]; m < scratch.setOffsets[s + 1]; ++m) sum += t[scratch.setMembers[m]];
+    best = std::max(best, sum);
+  }
+  return best;
+}
+
+void Field::boxBounds(std::span<const Box> boxes, std::span<float> lower, std::span<float> upper,
+                      FieldScratch& scratch) const {
+  const auto& cand = scratch.candidates;
+  const size_t nb = boxes.size(), nc = cand.size();
+  IMPS_CHECK(lower.size() == nb && upper.size() == nb);
+  if (!blend_.additive()) {  // rare: one box at a time
+    for (size_t b = 0; b < nb; ++b) {
+      auto& d = scratch.pointDistances;
+      d.resize(nc);
+      for (size_t k = 0; k < nc; ++k) d[k] = primitives_[cand[k]].minDistance(boxes[b]);
+      upper[b] = upperBound(d, scratch);
+      for (size_t k = 0; k < nc; ++k) d[k] = primitives_[cand[k]].maxDistance(boxes[b]);
+      lower[b] = lowerBound(d, scratch);
+    }
+    return;
+  }
+  // Every candidate's smallest and largest kernel distance in each box (candidate-major: nb smallest, then nb
+  // largest), shrunk and grown by a relative 1e-3 so that neither bound depends on the last bits of a distance or of
+  // a term near the exponential's cut-off; then their terms, one vectorised pass per candidate.
+  atLeast(scratch.term, 2 * nb * nc);
+  float* t = scratch.term.data();
+  for (size_t k = 0; k < nc; ++k) {
+    const Primitive& p = primitives_[cand[k]];
+    float* d = t + 2 * nb * k;
+    for (size_t b = 0; b < nb; ++b) {
+      float lo, hi;
+      if (p.kind == PrimitiveKind::Metaball) {  // inline: the common case, and most of the cost
+        const glm::vec3 near = glm::max(glm::max(boxes[b].lo - p.center, p.center - boxes[b].hi), glm::vec3(0.0f));
+        const glm::vec3 far = glm::max(glm::abs(boxes[b].lo - p.center), glm::abs(boxes[b].hi - p.center));
+        const float rr = p.radius * p.radius;
+        lo = glm::dot(near, near) / rr;
+        hi = glm::dot(far, far) / rr;
+      } else {
+        lo = p.minDistance(boxes[b], /*tight=*/false);
+        hi = p.maxDistance(boxes[b]);
+      }
+      d[b] = std::max(lo * (1.0f - 1e-3f) - 1e-3f, 0.0f);
+      d[nb + b] = hi * (1.0f + 1e-3f) + 1e-3f;
+    }
+    const float param = params_[cand[k]];
+    switch (blend_.kind) {
+      case BlendKind::Exponential:
+        if (blend_.fastExp) termLoop<fastExponentialTerm>(param, 2 * nb, d);
+        else termLoop<exponentialTerm>(param, 2 * nb, d);
+        break;
+      case BlendKind::BlancSchlick: termLoop<blancSchlickTerm>(param, 2 * nb, d); break;
+      case BlendKind::Elliptical: break;
+    }
+  }
+  // Each set's sum lies between the sums of its members' smallest and largest terms; F is the largest set.
+  for (size_t b = 0; b < nb; ++b) {
+    lower[b] = upper[b] = 0.0f;
+    for (size_t s = 0; s < scratch.setCount(); ++s) {
+      float lo = 0.0f, hi = 0.0f;
+      for (uint32_t m = scratch.setOffsets[s]; m < scratch.setOffsets[s + 1]; ++m) {
+        const float* d = t + 2 * nb * scratch.setMembers[m];
+        hi += d[b];
+        lo += d[nb + b];
+      }
+      lower[b] = std::max(lower[b], lo);
+      upper[b] = std::max(upper[b], hi);
+    }
+  }
 }
 
 float Field::value(const glm::vec3& x) const {

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <cfloat>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -600,10 +601,53 @@ bool cullBlock(const Field& field, const Grid& g, size_t b, std::span<const uint
   return true;
 }
 
+bool cullSubBlocks(const Field& field, const Grid& g, glm::ivec3 block, bool forced, WorkerScratch& ws) {
+  const float iso = field.iso();
+  std::array<Box, kSubBlocks> boxes;
+  for (int s = 0; s < kSubBlocks; ++s) {
+    const glm::ivec3 lo = block * kBlock + glm::ivec3(s & 1, (s >> 1) & 1, s >> 2) * kSubBlock;
+    boxes[size_t(s)].lo = g.vertex(lo.x, lo.y, lo.z);
+    boxes[size_t(s)].hi = g.vertex(lo.x + kSubBlock, lo.y + kSubBlock, lo.z + kSubBlock);
+  }
+  // With few candidates the samples are cheaper than the bounds (the biped: about three per block).
+  forced |= ws.field.candidates.size() < kSubBlockMinCandidates;
+  std::array<float, kSubBlocks> lower, upper;
+  if (!forced) field.boxBounds(boxes, lower, upper, ws.field);
+  bool anyLive = false;
+  for (size_t s = 0; s < kSubBlocks; ++s) {
+    ws.subBlocks[s] = forced                            ? kLive
+                      : upper[s] < iso * (1.0f - 1e-3f) ? kOutside
+                      : lower[s] > iso * (1.0f + 1e-3f) ? kInside
+                                                        : kLive;
+    anyLive |= ws.subBlocks[s] == kLive;
+  }
+  // Row (j, k) is needed when a live sub-block's closed vertex range [lo, lo + kSubBlock] holds j and k.
+  ws.rows.fill(0);
+  for (int s = 0; s < kSubBlocks; ++s) {
+    if (ws.subBlocks[size_t(s)] != kLive) continue;
+    const int j0 = ((s >> 1) & 1) * kSubBlock, k0 = (s >> 2) * kSubBlock;
+    for (int k = k0; k <= k0 + kSubBlock; ++k)
+      for (int j = j0; j <= j0 + kSubBlock; ++j) ws.rows[size_t(j + kBlockVerts * k)] = 1;
+  }
+  return anyLive;
+}
+
 void sampleBlock(const Field& field, const Grid& g, glm::ivec3 block, const BlockAxes& axes,
                  std::span<const Snap> snaps, BlockResult& r, WorkerScratch& ws) {
   r.samples.resize(kBlockSamples);
-  field.latticeValues(axes.xs, axes.ys, axes.zs, r.samples, ws.field);
+  field.latticeValues(axes.xs, axes.ys, axes.zs, r.samples, ws.field, ws.rows);
+  // The rows left out lie in culled sub-blocks only: their side from the sub-block's class (the sub-blocks that
+  // share a sample agree, their bounds being conservative).
+  auto half = [](int v) { return std::min(v / kSubBlock, 1); };
+  for (int k = 0; k < kBlockVerts; ++k)
+    for (int j = 0; j < kBlockVerts; ++j) {
+      if (ws.rows[size_t(j + kBlockVerts * k)]) continue;
+      for (int i = 0; i < kBlockVerts; ++i) {
+        const uint8_t c = ws.subBlocks[size_t(half(i) + 2 * half(j) + 4 * half(k))];
+        IMPS_DCHECK(c != kLive);
+        r.samples[size_t(sampleIndex(i, j, k))] = c == kInside ? FLT_MAX : 0.0f;
+      }
+    }
   if (snaps.empty()) return;
   for (int k = 0; k < kBlockVerts; ++k)
     for (int j = 0; j < kBlockVerts; ++j) {
@@ -799,7 +843,7 @@ void shadeEdgeVertices(const Field& field, const MarchingCubesOptions& options, 
 
 namespace {
 
-// Passes 4a-4e for block b: whether it was sampled and has surface, its edge vertices.
+// Passes 4a-4f for block b: whether it was sampled and has surface, its edge vertices.
 void processBlock(const Field& field, const Grid& g, size_t b, const MarchingCubesOptions& options,
                   RootTransform tf, MarchingCubes::State& st, WorkerScratch& ws) {
   BlockResult& r = st.blocks[b];
@@ -811,8 +855,9 @@ void processBlock(const Field& field, const Grid& g, size_t b, const MarchingCub
   r.moved.clear();
   if (cancelled(options)) return;
   if (!cullBlock(field, g, b, st.bins.of(b), st.forced[b] != 0, ws)) return;
-  r.sampled = true;
   const glm::ivec3 block = g.blockCoords(b);
+  if (!cullSubBlocks(field, g, block, st.forced[b] != 0, ws)) return;
+  r.sampled = true;
   const BlockAxes axes(g, block);
   sampleBlock(field, g, block, axes, st.snaps, r, ws);
   r.hasSurface = classifyBlock(field.iso(), options.rootIterations, axes, r, ws);

@@ -8,10 +8,11 @@
 //   3. findThinFeatures grid vertices moved onto skeleton points, and the blocks that must be sampled for them;
 //   4. per block, in parallel (sampleBlocks):
 //      a. cullBlock          conservative field bounds: blocks entirely inside or outside are never sampled;
-//      b. sampleBlock        the 9^3 field samples (moved vertices overwritten);
-//      c. classifyBlock      surface cells (case codes) and the crossing edges the block owns, numbered locally;
-//      d. findEdgeRoots      each crossing edge's vertex by Anderson-Bjorck regula falsi on the true field;
-//      e. shadeEdgeVertices  positions, normals and colours of those vertices;
+//      b. cullSubBlocks      the same bounds on the block's 2^3 sub-blocks: the rows of samples that need the field;
+//      c. sampleBlock        the field samples on those rows (moved vertices overwritten), the others' side known;
+//      d. classifyBlock      surface cells (case codes) and the crossing edges the block owns, numbered locally;
+//      e. findEdgeRoots      each crossing edge's vertex by Anderson-Bjorck regula falsi on the true field;
+//      f. shadeEdgeVertices  positions, normals and colours of those vertices;
 //   5. numberVertices   global vertex numbers: each surface block's first vertex, in block order;
 //   6. triangulateBlock per surface block, in parallel: each cell's triangles from the face-consistent case table,
 //                       ambiguous faces decided by the asymptotic decider, loop-centre vertices where needed;
@@ -41,6 +42,10 @@ static_assert(kBlockEdges <= INT16_MAX, "a block's local vertex indices fit Bloc
 inline constexpr uint32_t kCellBits = (1u << kBlock) - 1;  // the cells (or owned edges) of one row, as bits
 inline constexpr int kCentre = 12;                        // table code of a cell's first loop-centre vertex
 inline constexpr uint32_t kProvisional = 0x80000000u;     // triangle index of a centre vertex before gatherMesh
+inline constexpr int kSubBlock = kBlock / 2;              // cells per sub-block side (cullSubBlocks)
+inline constexpr int kSubBlocks = 8;                      // sub-blocks per block
+inline constexpr size_t kSubBlockMinCandidates = 4;       // fewer candidates: every sub-block is sampled
+enum SubBlockClass : uint8_t { kLive, kOutside, kInside };  // cullSubBlocks' verdicts
 
 inline int sampleIndex(int i, int j, int k) { return i + kBlockVerts * (j + kBlockVerts * k); }
 inline int ownedEdgeIndex(int axis, int i, int j, int k) {
@@ -122,6 +127,8 @@ struct WorkerScratch {
   FieldScratch field;
   std::vector<uint32_t> reaching;        // cullBlock: the candidates whose support reaches the block
   std::vector<float> reachingDistances;  // and their minDistance() to it
+  std::array<uint8_t, kSubBlocks> subBlocks{};  // cullSubBlocks -> sampleBlock: each sub-block's SubBlockClass
+  std::array<uint8_t, kBlockVerts * kBlockVerts> rows{};  // cullSubBlocks -> sampleBlock: rows (j + 9 k) to sample
   std::vector<EdgeRoot> edges;           // classifyBlock -> findEdgeRoots -> shadeEdgeVertices
   std::vector<float> ends;               // F at each edge's two ends, then their transformed values
   std::vector<uint32_t> active, stillActive;
@@ -172,22 +179,32 @@ void findThinFeatures(const Field& field, const Grid& g, MarchingCubes::State& s
 bool cullBlock(const Field& field, const Grid& g, size_t b, std::span<const uint32_t> candidates, bool forced,
                WorkerScratch& ws);
 
-// 4b. The block's 9^3 samples into r.samples (sampleIndex order), moved vertices' values and positions from snaps
-// (sorted by key) into r.samples and r.moved. ws.field must be prepared for the block.
+// 4b. Sub-blocks (kSubBlock^3 cells, sub-block (x, y, z) at index x + 2 y + 4 z) whose conservative field bounds
+// lie entirely below (kOutside) or above (kInside) iso, 1e-3 relative margin, hold no surface cell, so the samples
+// only they hold need no field value, only their side. ws.subBlocks gets each sub-block's class, ws.rows (j + 9 k) a
+// 1 for every row of samples some kLive sub-block's closed vertex range meets. A forced block, or one with fewer than
+// kSubBlockMinCandidates candidates, keeps every sub-block live. Returns whether any is live: if none is, the block
+// holds no surface. ws.field must be prepared for the block.
+bool cullSubBlocks(const Field& field, const Grid& g, glm::ivec3 block, bool forced, WorkerScratch& ws);
+
+// 4c. The block's 9^3 samples into r.samples (sampleIndex order): F on the rows ws.rows asks for; on the others a
+// stand-in of the right side (0 outside, FLT_MAX inside, from ws.subBlocks), never used but by its side (every
+// crossing edge and surface cell lies in a live sub-block). Moved vertices' values and positions from snaps (sorted
+// by key) into r.samples and r.moved. ws.field, ws.rows and ws.subBlocks must be prepared by cullSubBlocks.
 void sampleBlock(const Field& field, const Grid& g, glm::ivec3 block, const BlockAxes& axes,
                  std::span<const Snap> snaps, BlockResult& r, WorkerScratch& ws);
 
-// 4c. From r.samples: r.cells (surface cells in index order with their case codes), r.edgeVertex (every owned edge's
+// 4d. From r.samples: r.cells (surface cells in index order with their case codes), r.edgeVertex (every owned edge's
 // local vertex number or -1) and, in the same order, ws.edges (ends' positions, iterations) and ws.ends (F at both
 // ends). Local numbers follow cells (i, j, k) ascending with i fastest, axes x, y, z within a cell. Returns whether
 // the block has a surface cell.
 bool classifyBlock(float iso, int rootIterations, const BlockAxes& axes, BlockResult& r, WorkerScratch& ws);
 
-// 4d. Root finding on ws.edges: their parameters t in (0, 1) along pa -> pb, at most each edge's iterations batched
+// 4e. Root finding on ws.edges: their parameters t in (0, 1) along pa -> pb, at most each edge's iterations batched
 // evaluations of the true field after the first interpolation. ws.field must be prepared for the block.
 void findEdgeRoots(const Field& field, RootTransform transform, WorkerScratch& ws);
 
-// 4e. r.positions (and, as the options ask, r.normals and r.colors) of ws.edges' vertices, 3 floats per vertex.
+// 4f. r.positions (and, as the options ask, r.normals and r.colors) of ws.edges' vertices, 3 floats per vertex.
 void shadeEdgeVertices(const Field& field, const MarchingCubesOptions& options, BlockResult& r, WorkerScratch& ws);
 
 // 5. Global vertex numbers: every surface block's r.base (blocks without surface get the running total too) and

@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <random>
 
+#include <glm/gtc/quaternion.hpp>
+
 namespace imps {
 namespace {
 
@@ -129,12 +131,75 @@ TEST(Field, LatticeValuesAreBitIdenticalToPointValues) {
       f.prepare(region, scratch);
       std::vector<float> lattice(9 * 9 * 9);
       f.latticeValues(axes[0], axes[1], axes[2], lattice, scratch);
+      // Some rows left out: the others keep their values, those are 0.
+      std::vector<uint8_t> rows(9 * 9);
+      for (uint8_t& row : rows) row = u(rng) > -0.4f ? 1 : 0;
+      std::vector<float> some(9 * 9 * 9);
+      f.latticeValues(axes[0], axes[1], axes[2], some, scratch, rows);
       for (int k = 0; k < 9; ++k)
         for (int j = 0; j < 9; ++j)
-          for (int i = 0; i < 9; ++i)
-            ASSERT_EQ(lattice[size_t(i + 9 * (j + 9 * k))],
-                      f.value({axes[0][size_t(i)], axes[1][size_t(j)], axes[2][size_t(k)]}))
+          for (int i = 0; i < 9; ++i) {
+            const float v = f.value({axes[0][size_t(i)], axes[1][size_t(j)], axes[2][size_t(k)]});
+            ASSERT_EQ(lattice[size_t(i + 9 * (j + 9 * k))], v)
                 << int(kind) << " lattice " << n << " point " << i << " " << j << " " << k;
+            ASSERT_EQ(some[size_t(i + 9 * (j + 9 * k))], rows[size_t(j + 9 * k)] ? v : 0.0f)
+                << int(kind) << " lattice " << n << " rows, point " << i << " " << j << " " << k;
+          }
+    }
+  }
+}
+
+// boxBounds() brackets F at every point of each box, for every blend, several blend sets and every primitive kind,
+// and is not trivial (some boxes wholly inside or outside).
+TEST(Field, BoxBoundsHoldAtEveryPointOfTheirBox) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f), r(0.1f, 0.4f), unit(0.0f, 1.0f);
+  std::vector<Primitive> prims;
+  for (int i = 0; i < 12; ++i) prims.push_back(Primitive::metaball({u(rng), u(rng), u(rng)}, r(rng)));
+  for (int i = 0; i < 3; ++i)
+    prims.push_back(Primitive::lineSeg({u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, r(rng), r(rng)));
+  const glm::vec3 axis = glm::normalize(glm::vec3(1, 2, 3));
+  for (int i = 0; i < 3; ++i)
+    prims.push_back(
+        Primitive::ellipsoid({u(rng), u(rng), u(rng)}, glm::angleAxis(u(rng), axis), {r(rng), r(rng), r(rng)}));
+  BlendSets sets;
+  for (uint32_t first = 0; first < prims.size(); first += 5) {
+    std::vector<uint32_t> members;
+    for (uint32_t i = first; i < std::min<uint32_t>(first + 7, uint32_t(prims.size())); ++i) members.push_back(i);
+    sets.add(members);
+  }
+  for (BlendKind kind : {BlendKind::Exponential, BlendKind::BlancSchlick, BlendKind::Elliptical}) {
+    BlendFunction blend;
+    blend.kind = kind;
+    blend.defaultParam = kind == BlendKind::Exponential ? -2.0f : 0.7f;
+    const Field f = makeField(prims, blend, sets);
+    FieldScratch scratch;
+    int inside = 0, outside = 0;
+    for (int n = 0; n < 200; ++n) {
+      std::vector<Box> boxes(4);
+      Box region;
+      for (Box& b : boxes) {
+        b.lo = glm::vec3(u(rng), u(rng), u(rng));
+        b.hi = b.lo + 0.1f * glm::vec3(unit(rng), unit(rng), unit(rng));
+        region.extend(b);
+      }
+      f.prepare(region, scratch);
+      std::vector<float> lower(boxes.size()), upper(boxes.size());
+      f.boxBounds(boxes, lower, upper, scratch);
+      for (size_t b = 0; b < boxes.size(); ++b) {
+        inside += lower[b] > f.iso();
+        outside += upper[b] < f.iso();
+        for (int q = 0; q < 30; ++q) {
+          const glm::vec3 x = boxes[b].lo + (boxes[b].hi - boxes[b].lo) * glm::vec3(unit(rng), unit(rng), unit(rng));
+          const float v = f.value(x, scratch);
+          ASSERT_LE(lower[b], v) << int(kind) << " box " << n << "." << b;
+          ASSERT_GE(upper[b], v) << int(kind) << " box " << n << "." << b;
+        }
+      }
+    }
+    EXPECT_GT(inside, 0) << int(kind);
+    if (kind != BlendKind::Elliptical) {
+      EXPECT_GT(outside, 0) << int(kind);
     }
   }
 }

@@ -238,6 +238,64 @@ TEST(MarchingCubesPasses, GatherMeshPutsLoopCentresAfterEveryEdgeVertex) {
   EXPECT_EQ(out.position(7), glm::vec3(1, 1, 0)) << "block 2's second centre";
 }
 
+// Every culled sub-block is wholly on the side it is given: all the samples of its closed vertex range (evaluated
+// here without culling) agree; sampleBlock puts F on every row a live sub-block meets and a stand-in of the right
+// side elsewhere; and some sub-blocks of blocks that are sampled are culled.
+TEST(MarchingCubesPasses, CullSubBlocksCullsOnlySubBlocksWhollyInsideOrOutside) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f), radius(0.1f, 0.3f);
+  std::vector<Primitive> prims;
+  for (int i = 0; i < 40; ++i) prims.push_back(Primitive::metaball({u(rng), u(rng), u(rng)}, radius(rng)));
+  const Field field = makeField(prims, -2.0f);
+  MarchingCubesOptions o;
+  o.cellSize = 0.02f;
+  const Grid g = makeGrid(field, o);
+  Bins bins;
+  binPrimitives(field, g, bins);
+  WorkerScratch ws;
+  size_t culled[3] = {0, 0, 0};
+  for (size_t b = 0; b < g.blockCount(); ++b) {
+    if (!cullBlock(field, g, b, bins.of(b), false, ws)) continue;
+    const glm::ivec3 block = g.blockCoords(b);
+    const BlockAxes axes(g, block);
+    BlockResult all;
+    all.samples.resize(kBlockSamples);
+    field.latticeValues(axes.xs, axes.ys, axes.zs, all.samples, ws.field);
+    const bool live = cullSubBlocks(field, g, block, false, ws);
+    BlockResult r;
+    sampleBlock(field, g, block, axes, {}, r, ws);
+    bool anyLive = false;
+    for (int s = 0; s < kSubBlocks; ++s) {
+      const uint8_t c = ws.subBlocks[size_t(s)];
+      ++culled[c];
+      anyLive |= c == kLive;
+      const glm::ivec3 lo = glm::ivec3(s & 1, (s >> 1) & 1, s >> 2) * kSubBlock;
+      for (int k = lo.z; k <= lo.z + kSubBlock; ++k)
+        for (int j = lo.y; j <= lo.y + kSubBlock; ++j) {
+          if (c == kLive) {
+            EXPECT_TRUE(ws.rows[size_t(j + kBlockVerts * k)]) << "a live sub-block's row is sampled";
+          }
+          for (int i = lo.x; i <= lo.x + kSubBlock; ++i) {
+            const size_t q = size_t(sampleIndex(i, j, k));
+            if (c != kLive) {
+              ASSERT_EQ(all.samples[q] >= field.iso(), c == kInside) << "block " << b << " sub " << s;
+            }
+            ASSERT_EQ(r.samples[q] >= field.iso(), all.samples[q] >= field.iso()) << "block " << b << " sub " << s;
+            if (ws.rows[size_t(j + kBlockVerts * k)]) {
+              ASSERT_EQ(r.samples[q], all.samples[q]);
+            }
+          }
+        }
+    }
+    EXPECT_EQ(live, anyLive);
+    EXPECT_TRUE(cullSubBlocks(field, g, block, true, ws)) << "a forced block keeps every sub-block";
+    for (uint8_t c : ws.subBlocks) EXPECT_EQ(c, kLive);
+  }
+  EXPECT_GT(culled[kLive], 0u);
+  EXPECT_GT(culled[kOutside], 0u);
+  EXPECT_GT(culled[kInside], 0u);
+}
+
 TEST(MarchingCubesPasses, PassesByHandMakeThePolygonizersMesh) {
   const Field field = threeBalls();
   MarchingCubesOptions o;
@@ -254,6 +312,7 @@ TEST(MarchingCubesPasses, PassesByHandMakeThePolygonizersMesh) {
     WorkerScratch& ws = st.workers[0];
     r.sampled = r.hasSurface = false;
     if (!cullBlock(field, g, b, st.bins.of(b), false, ws)) continue;
+    if (!cullSubBlocks(field, g, g.blockCoords(b), false, ws)) continue;
     const BlockAxes axes(g, g.blockCoords(b));
     sampleBlock(field, g, g.blockCoords(b), axes, {}, r, ws);
     r.hasSurface = classifyBlock(field.iso(), o.rootIterations, axes, r, ws);

@@ -7,6 +7,7 @@
 // neighbours: a hand that touches a hip is unioned with it, never blended. The field convention (F >= 0, surface at iso, inside larger) is in blend.h.
 #pragma once
 
+#include <cstdint>
 #include <span>
 #include <utility>
 #include <vector>
@@ -50,11 +51,13 @@ struct FieldScratch {
   std::vector<uint32_t> winner;                  // samples(): each point's winning set
   uint32_t lastWinner = 0;                        // sample(): the winning local set of the last call
   std::vector<uint8_t> setStarted;               // accumulate(): which sets hold a value yet
+  std::vector<uint8_t> wholeSlice;               // latticeValues(): the slices whose every row is wanted
+  std::vector<float> rowReach;                   // latticeValues(): a metaball's squared y offset of each row
   std::vector<int32_t> globalToLocal;
   // Working storage of single calls, kept here so a worker reuses it from call to call (no allocation once grown)
   // and no two workers share it. Each belongs to one function: calls that nest (samples() -> sample()) never alias.
   std::vector<uint32_t> restrictOffsets, restrictMembers, fill;  // prepareSets()
-  std::vector<float> pointTerms, pointDistances;                 // sample(), contributions(), upperBound()
+  std::vector<float> pointTerms, pointDistances;                 // sample(), contributions(), the bounds
   std::vector<glm::vec3> pointGradients;                         // sample()
   struct Lanes {                                                 // samples(): one value per point
     std::vector<float> d, dgx, dgy, dgz, gx, gy, gz, cr, cg, cb, weight, bestWeight;
@@ -103,10 +106,13 @@ class Field {
   void values(std::span<const glm::vec3> points, std::span<float> out, FieldScratch& scratch) const;
   // values() at the points of a lattice inside the prepared region: out[i + nx (j + ny k)] is F at
   // (xs[i], ys[j], zs[k]), the axis coordinates ascending, out.size() == nx ny nz. Each candidate is evaluated only
-  // on the lattice rows its support box reaches (its term is exactly nothing elsewhere), which is much cheaper than
-  // values() when the primitives are small against the lattice. Bit-identical to value().
+  // on the lattice rows its support box (a metaball's: its support ball) reaches (its term is exactly nothing
+  // elsewhere), which is much cheaper than values() when the primitives are small against the lattice.
+  // Bit-identical to value().
+  // `rows`, when not empty (ny nz entries), says which rows along x are wanted: rows[j + ny k] == 0 leaves row
+  // (ys[j], zs[k]) out, its values 0 (not F), for callers that know the field there by other means.
   void latticeValues(std::span<const float> xs, std::span<const float> ys, std::span<const float> zs,
-                     std::span<float> out, FieldScratch& scratch) const;
+                     std::span<float> out, FieldScratch& scratch, std::span<const uint8_t> rows = {}) const;
   float value(const glm::vec3& x, FieldScratch& scratch) const;
   FieldSample sample(const glm::vec3& x, FieldScratch& scratch) const;
   // The blend weights at x that sample() blends colours with: every member of the winning set with a positive
@@ -121,6 +127,14 @@ class Field {
   // (scratch.candidates[k]) in the box, e.g. its Primitive::minDistance(box), which callers often have already.
   float upperBound(std::span<const float> minDistances, FieldScratch& scratch) const;
   float lowerBound(const Box& box, const FieldScratch& scratch) const;
+  // A tighter lower bound for the additive blends: each set's sum of its members' smallest terms, the largest over
+  // the sets (the elliptical blend: the largest single term, as above). maxDistances[k] >= the largest kernel
+  // distance of candidate k in the box, e.g. its Primitive::maxDistance(box).
+  float lowerBound(std::span<const float> maxDistances, FieldScratch& scratch) const;
+  // lower[b] <= F(x) <= upper[b] for every x in boxes[b] (inside the prepared region), for many boxes at once:
+  // lowerBound(maxDistances) and upperBound() with a relative 1e-3 margin on every distance, vectorised.
+  void boxBounds(std::span<const Box> boxes, std::span<float> lower, std::span<float> upper,
+                 FieldScratch& scratch) const;
 
  private:
   void prepareSets(FieldScratch& scratch) const;
