@@ -4,6 +4,11 @@
 
 namespace imps::app {
 
+IoError sessionWriterError(const std::filesystem::path& path, const Diagnostics& error) {
+  if (error.all().empty()) return IoError{path.string(), "cannot write"};
+  return IoError{error.all().front().loc.file, error.all().front().message};
+}
+
 IoResult<void> appendCalibration(sim::SessionWriter& writer, const calibration::Calibration& c) {
   auto r = writer.appendCalibration(c.toJson());
   if (!r) return std::unexpected(sessionWriterError(writer.path(), r.error()));

@@ -21,22 +21,9 @@ namespace imps::app {
 // with the calibration file's text). Errors are the writer's, as an IoError (sessionWriterError).
 IoResult<void> appendCalibration(sim::SessionWriter& writer, const calibration::Calibration& c);
 
-// A SessionWriter error about the file at `path` as an IoError: an IoError as it is, the first of Diagnostics at
-// its file, or a message "PATH: error: …" as {PATH, "…"}. (A template so that it fits whichever the writer returns.)
-template <class E>
-IoError sessionWriterError(const std::filesystem::path& path, const E& error) {
-  if constexpr (std::is_same_v<E, IoError>) {
-    return error;
-  } else if constexpr (std::is_same_v<E, Diagnostics>) {
-    if (error.all().empty()) return IoError{path.string(), "cannot write"};
-    return IoError{error.all().front().loc.file, error.all().front().message};
-  } else {
-    const std::string prefix = path.string() + ": error: ";
-    std::string message(error);
-    if (message.starts_with(prefix)) return IoError{path.string(), message.substr(prefix.size())};
-    return IoError{"", std::move(message)};
-  }
-}
+// A SessionWriter error (Diagnostics at the session file) as the IoError a recorder reports: the first diagnostic's
+// file and message, or "cannot write" at `path` when there is none.
+IoError sessionWriterError(const std::filesystem::path& path, const Diagnostics& error);
 
 // Whether a CALIBRATION blob is the BVH channel mapping `puppeteer convert` wrote into sessions made from BVH clips
 // before rig-map calibrations existed (`{"source":"bvh",…}`, no version; examples/simple_biped_wave.session had

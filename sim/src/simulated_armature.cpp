@@ -74,31 +74,6 @@ bool parseValue(std::string_view s, T& out) {
 
 }  // namespace
 
-namespace {
-
-// What readSession() reported, as diagnostics: its Diagnostics as they are, an IoError as one diagnostic at its
-// path, or a message "PATH: error: …" as one diagnostic at PATH (a template, so whichever it returns compiles).
-template <class E>
-Diagnostics sessionDiagnostics(const std::string& path, const E& error) {
-  if constexpr (std::is_same_v<E, Diagnostics>) {
-    return error;
-  } else {
-    Diagnostics d;
-    if constexpr (std::is_same_v<E, IoError>) {
-      d.error({error.path}, error.message);
-    } else {
-      const std::string prefix = path + ": error: ";
-      std::string message = std::string(error);
-      if (message.starts_with(prefix)) message.erase(0, prefix.size());
-      while (!message.empty() && message.back() == '\n') message.pop_back();
-      d.error({path}, std::move(message));
-    }
-    return d;
-  }
-}
-
-}  // namespace
-
 std::expected<ArmatureOptions, Diagnostics> armatureOptionsFromSpec(const drivers::DeviceSpec& spec) {
   ArmatureOptions o;
   o.protocol = spec.protocol;
@@ -151,7 +126,7 @@ std::expected<ArmatureOptions, Diagnostics> armatureOptionsFromSpec(const driver
   o.info.hasDeviceTimestamp = o.deviceTimestamps;
   if (!spec.path.empty()) {
     auto session = readSession(spec.path);
-    if (!session) return std::unexpected(sessionDiagnostics(spec.path, session.error()));
+    if (!session) return std::unexpected(session.error());
     if (session->devices.empty() || session->samples.empty()) {
       Diagnostics d;
       d.error({spec.path}, "the session has no samples to play");
