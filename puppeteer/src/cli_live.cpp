@@ -150,7 +150,7 @@ std::unique_ptr<ViewerPipeline> makePipeline(const LiveArgs& a, int* exitCode) {
   }
   auto textures = loadTextures(loaded->character);
   if (!textures) {
-    std::fprintf(stderr, "%s\n", textures.error().c_str());
+    std::fputs(textures.error().str().c_str(), stderr);
     *exitCode = kExitInvalidInput;
     return nullptr;
   }
@@ -189,11 +189,11 @@ std::unique_ptr<ViewerPipeline> makePipeline(const LiveArgs& a, int* exitCode) {
 
 // --prop specs loaded for `character`; nullopt after printing the errors.
 std::optional<std::vector<AttachedProp>> propsFor(const LiveArgs& a, const Character& character) {
-  std::string warnings;
+  Diagnostics warnings;
   auto props = loadProps(a.props, character, &warnings);
-  std::fputs(warnings.c_str(), stderr);
+  std::fputs(warnings.str().c_str(), stderr);
   if (!props) {
-    std::fputs(props.error().c_str(), stderr);
+    std::fputs(props.error().str().c_str(), stderr);
     return std::nullopt;
   }
   return std::move(*props);
@@ -396,7 +396,7 @@ int runWorldView(const LiveArgs& a) {
     WorldCharacter& c = world->characters[k];
     auto textures = loadTextures(c.character);
     if (!textures) {
-      std::fprintf(stderr, "%s\n", textures.error().c_str());
+      std::fputs(textures.error().str().c_str(), stderr);
       return kExitInvalidInput;
     }
     PipelineOptions o;
@@ -439,7 +439,8 @@ int runWorldView(const LiveArgs& a) {
       placed.push_back(std::make_unique<PlacedPoseSource>(*world, k, actors[k].source.get(), time));
     v.moveProps = [&world, &worldProp, time](int frame, std::vector<AttachedProp>& props) {
       World::Pose pose = world->poseAt(time.seconds(frame));
-      for (size_t i = 0; i < worldProp.size() && i < props.size(); ++i) props[i].mesh = std::move(pose.props[worldProp[i]]);
+      for (size_t i = 0; i < worldProp.size() && i < props.size(); ++i)
+        props[i].mesh = std::move(pose.props[worldProp[i]]);
       return true;
     };
     std::printf("puppeteer: world %s: %zu clip%s of its own\n", a.scene.c_str(), world->clips.size(),
@@ -834,7 +835,9 @@ void addLiveCommands(CLI::App& app, Commands& commands) {
   auto live = std::make_shared<LiveArgs>();
   CLI::App* liveCmd = app.add_subcommand("live", "Drive a scene's character from an armature in the live app");
   liveCmd->add_option("scene", live->scene, "Scene file (.wrl)")->required()->check(inputFile());
-  liveCmd->add_option("--device", live->device, "Device spec (docs/devices.md): serial:/dev/ttyACM0, sim:SESSION, osc.udp://:PORT …")
+  liveCmd
+      ->add_option("--device", live->device,
+                   "Device spec (docs/devices.md): serial:/dev/ttyACM0, sim:SESSION, osc.udp://:PORT …")
       ->required();
   liveCmd->add_option("--calibration", live->calibration,
                       "Calibration file (puppeteer calibrate); without one, channels map to joints by name")

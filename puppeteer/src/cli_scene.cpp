@@ -264,7 +264,7 @@ int runMesh(const MeshArgs& a) {
   const Character& character = loaded->character;
   const auto images = loadTextures(character);
   if (!images) {
-    std::fprintf(stderr, "%s\n", images.error().c_str());
+    std::fputs(images.error().str().c_str(), stderr);
     return kExitInvalidInput;
   }
 
@@ -297,12 +297,12 @@ int runMesh(const MeshArgs& a) {
 
   if (!a.props.empty()) {
     // The character and each prop its own object (glTF node, OBJ object); textures are not written then.
-    std::string propWarnings;
+    Diagnostics propWarnings;
     auto props = loadProps(a.props, character, &propWarnings);
-    std::fputs(propWarnings.c_str(), stderr);
+    std::fputs(propWarnings.str().c_str(), stderr);
     progress.done();
     if (!props) {
-      std::fputs(props.error().c_str(), stderr);
+      std::fputs(props.error().str().c_str(), stderr);
       return kExitInvalidInput;
     }
     std::vector<Mesh> posed;
@@ -323,7 +323,8 @@ int runMesh(const MeshArgs& a) {
     std::fprintf(stderr, "puppeteer mesh: error: %s\n", written.error().all().front().message.c_str());
     return kExitIoError;
   }
-  const double writeMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - writeStart).count();
+  const double writeMs =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - writeStart).count();
   progress.done();
   if (a.json) {
     Json json{{"scene", a.scene},
@@ -456,14 +457,14 @@ bool addGrabbedProps(const RenderArgs& a, const Character& character, Mesh& mesh
   for (const std::string& spec : a.grabs) {
     auto grab = parseGrab(spec, character);
     if (!grab) {
-      std::fputs(grab.error().c_str(), stderr);
+      std::fputs(grab.error().str().c_str(), stderr);
       return false;
     }
-    std::string warnings;
+    Diagnostics warnings;
     auto props = loadProps({grab->first}, character, &warnings);
-    std::fputs(warnings.c_str(), stderr);
+    std::fputs(warnings.str().c_str(), stderr);
     if (!props) {
-      std::fputs(props.error().c_str(), stderr);
+      std::fputs(props.error().str().c_str(), stderr);
       return false;
     }
     auto jointWorldAt = [&](double seconds) {
@@ -542,7 +543,7 @@ int runRender(const RenderArgs& a) {
   const Character& character = loaded->character;
   const auto textures = loadTextures(character);
   if (!textures) {
-    std::fprintf(stderr, "%s\n", textures.error().c_str());
+    std::fputs(textures.error().str().c_str(), stderr);
     return kExitInvalidInput;
   }
   SkeletonCache skeleton(character);
@@ -565,12 +566,12 @@ int runRender(const RenderArgs& a) {
   followPolygonizing(progress, options);
   Mesh mesh = polygonize(skeleton.field(), options);
   textureMesh(mesh, skeleton);
-  std::string propWarnings;
+  Diagnostics propWarnings;
   auto props = loadProps(a.props, character, &propWarnings);
-  std::fputs(propWarnings.c_str(), stderr);
+  std::fputs(propWarnings.str().c_str(), stderr);
   if (!props) {
     progress.done();
-    std::fputs(props.error().c_str(), stderr);
+    std::fputs(props.error().str().c_str(), stderr);
     return kExitInvalidInput;
   }
   appendPosedProps(mesh, *props, skeleton);
@@ -619,7 +620,8 @@ void addSceneCommands(CLI::App& app, Commands& commands) {
       ->check(CLI::IsMember({"mc", "particles"}));
   meshCmd->add_option("--updates", mesh->updates, "particles: updates to run (default: until settled)")
       ->check(CLI::Range(1, 1000000));
-  meshCmd->add_option("--max-cells", mesh->maxCells, "Marching Cubes: the most grid cells (default 2^28; more is refused)")
+  meshCmd
+      ->add_option("--max-cells", mesh->maxCells, "Marching Cubes: the most grid cells (default 2^28; more is refused)")
       ->check(positiveNumber());
   meshCmd->add_option("--max-particles", mesh->maxParticles, "particles: the most particles (default 2^18)")
       ->check(positiveNumber());
@@ -644,13 +646,17 @@ void addSceneCommands(CLI::App& app, Commands& commands) {
   CLI::App* renderCmd = app.add_subcommand("render", "Render a scene's surface to a PNG in software (no GPU needed)");
   renderCmd->add_option("scene", render->scene, "Scene file (.wrl)")->required()->check(inputFile());
   renderCmd->add_option("-o,--output", render->output, "Output image (.png)")->required();
-  auto* renderCell = renderCmd->add_option("--cell", render->cell, "Marching Cubes cell size in metres")->check(positiveNumber());
-  renderCmd->add_option("--res", render->res, "Cells along the longest side (default 96)")->check(CLI::Range(1, 4096))->excludes(renderCell);
+  auto* renderCell =
+      renderCmd->add_option("--cell", render->cell, "Marching Cubes cell size in metres")->check(positiveNumber());
+  renderCmd->add_option("--res", render->res, "Cells along the longest side (default 96)")
+      ->check(CLI::Range(1, 4096))
+      ->excludes(renderCell);
   renderCmd->add_option("--width", render->width, "Image width in pixels")->check(CLI::Range(16, 8192));
   renderCmd->add_option("--height", render->height, "Image height in pixels")->check(CLI::Range(16, 8192));
   renderCmd->add_option("--max-cells", render->maxCells, "The most grid cells (default 2^28; more is refused)")
       ->check(positiveNumber());
-  renderCmd->add_option("--view", render->view, "Camera direction")->check(CLI::IsMember({"three-quarter", "front", "side", "top"}));
+  renderCmd->add_option("--view", render->view, "Camera direction")
+      ->check(CLI::IsMember({"three-quarter", "front", "side", "top"}));
   renderCmd->add_flag("--json", render->json, "Print the report as JSON (for scripts)");
   auto* renderClip = renderCmd->add_option("--clip", render->clip, "Pose the character from a VRML 97 clip file "
                                                                    "(docs/world-format.md)")->check(inputFile());

@@ -19,11 +19,11 @@ struct AttachedProp {
   int joint = -1;
 };
 
-// Reads every `FILE.wrl[@JOINT]` spec: all the Shapes of FILE, attached to JOINT when given. Errors are whole
-// messages: the file's `file:line:column` errors, or "--prop SPEC: the scene has no joint 'X'". Warnings (skipped
-// nodes, bad faces) are appended to `warnings`.
-std::expected<std::vector<AttachedProp>, std::string> loadProps(const std::vector<std::string>& specs,
-                                                                const Character& character, std::string* warnings);
+// Reads every `FILE.wrl[@JOINT]` spec: all the Shapes of FILE, attached to JOINT when given. Errors: the file's
+// `file:line:column` ones, or "--prop SPEC: the scene has no joint 'X'" (located at "puppeteer", so that it prints
+// as `puppeteer: error: …`). Warnings (skipped nodes, bad faces) are appended to *warnings when given.
+std::expected<std::vector<AttachedProp>, Diagnostics> loadProps(const std::vector<std::string>& specs,
+                                                                const Character& character, Diagnostics* warnings);
 
 // The grab constraint (thesis 4.1): a hand picks a prop up at `pickSeconds` and puts it down at `dropSeconds`.
 struct Grab {
@@ -31,9 +31,9 @@ struct Grab {
   double pickSeconds = 0.0, dropSeconds = 0.0;  // pickSeconds <= dropSeconds
 };
 
-// Parses `FILE.wrl@JOINT@PICK:DROP` (seconds) into the file, the grab and nothing else; errors are messages
-// ("--grab SPEC: expected FILE.wrl@JOINT@PICK:DROP", an unknown joint, PICK > DROP).
-std::expected<std::pair<std::string, Grab>, std::string> parseGrab(const std::string& spec, const Character& character);
+// Parses `FILE.wrl@JOINT@PICK:DROP` (seconds) into the file, the grab and nothing else; an error is one diagnostic
+// at "puppeteer" ("--grab SPEC: expected FILE.wrl@JOINT@PICK:DROP", an unknown joint, PICK > DROP).
+std::expected<std::pair<std::string, Grab>, Diagnostics> parseGrab(const std::string& spec, const Character& character);
 
 // Where a grabbed prop is at `seconds`, as a rigid motion of its file coordinates: not moved before the pick; while
 // held, moved with the joint as if glued to it at the pick (jointWorldAt(t) * jointWorldAt(pick)^-1); after the

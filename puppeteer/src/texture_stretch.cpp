@@ -149,7 +149,7 @@ std::expected<StretchResult, Diagnostics> measureStretch(const Character& charac
   std::vector<RgbaImage> images;
   if (!options.pictures.empty()) {
     auto loaded = loadTextures(character);
-    if (!loaded) return fail(loaded.error());
+    if (!loaded) return std::unexpected(loaded.error());
     images = std::move(*loaded);
     Brush brush;
     brush.size = 5;  // 7 texels

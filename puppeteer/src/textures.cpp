@@ -28,9 +28,9 @@ const std::array<float, 256>& linearTable() {
 
 }  // namespace
 
-std::expected<std::vector<RgbaImage>, std::string> loadTextures(const Character& character) {
+std::expected<std::vector<RgbaImage>, Diagnostics> loadTextures(const Character& character) {
   std::vector<RgbaImage> images;
-  std::string errors;
+  Diagnostics errors;
   for (const CharacterTexture& t : character.textures()) {
     RgbaImage image;
     std::string reason;
@@ -44,14 +44,10 @@ std::expected<std::vector<RgbaImage>, std::string> loadTextures(const Character&
     } else {
       image = std::move(*read);
     }
-    if (!reason.empty()) {
-      errors += (errors.empty() ? "" : "\n") + t.loc.file + ":" + std::to_string(t.loc.line) + ":" +
-                std::to_string(t.loc.column) + ": error: cannot read texture '" + t.url + "' (" + t.path + "): " +
-                reason;
-    }
+    if (!reason.empty()) errors.error(t.loc, "cannot read texture '" + t.url + "' (" + t.path + "): " + reason);
     images.push_back(std::move(image));
   }
-  if (!errors.empty()) return std::unexpected(errors);
+  if (errors.hasErrors()) return std::unexpected(std::move(errors));
   return images;
 }
 
@@ -70,7 +66,8 @@ glm::vec3 sampleTexture(const RgbaImage& image, float u, float v) {
     const uint8_t* p = image.rgba.data() + (size_t(j) * size_t(image.width) + size_t(i)) * 4;
     return glm::vec3(lin[p[0]], lin[p[1]], lin[p[2]]);
   };
-  return (1 - ay) * ((1 - ax) * texel(x0, y0) + ax * texel(x1, y0)) + ay * ((1 - ax) * texel(x0, y1) + ax * texel(x1, y1));
+  return (1 - ay) * ((1 - ax) * texel(x0, y0) + ax * texel(x1, y0)) +
+         ay * ((1 - ax) * texel(x0, y1) + ax * texel(x1, y1));
 }
 
 void TriangleLayers::gather(const Mesh& mesh, uint32_t a, uint32_t b, uint32_t c) {

@@ -17,10 +17,9 @@
 namespace imps::app {
 
 // Reads every image of character.textures(), in that order. A missing or unreadable image fails the whole load
-// with one message per bad file, "scene.wrl:LINE:COL: error: cannot read texture 'URL' (PATH): REASON", lines
-// joined by '\n' (no trailing newline). A character without textures gives an empty list without loading the
-// image plugin.
-std::expected<std::vector<RgbaImage>, std::string> loadTextures(const Character& character);
+// with one error per bad file at its ImageTexture's url in the scene: "cannot read texture 'URL' (PATH): REASON".
+// A character without textures gives an empty list without loading the image plugin.
+std::expected<std::vector<RgbaImage>, Diagnostics> loadTextures(const Character& character);
 
 // The texel of `image` at (u, v) (u to the right, v up, repeating outside [0, 1]), bilinearly filtered, as linear
 // RGB in [0, 1] (the image's bytes are sRGB). A white texel for an empty image.

@@ -111,7 +111,7 @@ std::optional<std::vector<WorldObject>> poseWorld(const World& world, const std:
     if (textures != nullptr && c.character.textured()) {
       auto images = loadTextures(c.character);
       if (!images) {
-        std::fprintf(stderr, "%s\n", images.error().c_str());
+        std::fputs(images.error().str().c_str(), stderr);
         return std::nullopt;
       }
       const int32_t offset = int32_t(textures->size());
@@ -149,7 +149,8 @@ bool PlacedPoseSource::poll(SkeletonCache& skeleton, int64_t* arrivalNs) {
   Rigid placement;
   placement.rotation = glm::normalize(glm::quat_cast(r));
   placement.translation = glm::vec3(m[3]);
-  if (placement.rotation != skeleton.placement().rotation || placement.translation != skeleton.placement().translation) {
+  if (placement.rotation != skeleton.placement().rotation ||
+      placement.translation != skeleton.placement().translation) {
     skeleton.setPlacement(placement);
     changed = true;
   }

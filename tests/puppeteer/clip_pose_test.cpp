@@ -202,16 +202,16 @@ TEST(Grab, TheBundledBallIsInFlubbersHandAtThePickTime) {
 TEST(Grab, SpecsAreChecked) {
   const Character flubber = characterOf(kFlubber);
   auto ok = parseGrab("ball.wrl@L_ARM_JOINT@0.5:1.5", flubber);
-  ASSERT_TRUE(ok.has_value()) << ok.error();
+  ASSERT_TRUE(ok.has_value()) << ok.error().str();
   EXPECT_EQ(ok->first, "ball.wrl");
   EXPECT_EQ(ok->second.joint, flubber.findJoint("L_ARM_JOINT"));
   EXPECT_EQ(ok->second.pickSeconds, 0.5);
   EXPECT_EQ(ok->second.dropSeconds, 1.5);
-  EXPECT_NE(parseGrab("ball.wrl@L_ARM_JOINT", flubber).error().find("expected FILE.wrl@JOINT@PICK:DROP"),
+  EXPECT_NE(parseGrab("ball.wrl@L_ARM_JOINT", flubber).error().str().find("expected FILE.wrl@JOINT@PICK:DROP"),
             std::string::npos);
-  EXPECT_NE(parseGrab("ball.wrl@HAND@0:1", flubber).error().find("no joint 'HAND'"), std::string::npos);
-  EXPECT_NE(parseGrab("ball.wrl@L_ARM_JOINT@2:1", flubber).error().find("0 <= PICK <= DROP"), std::string::npos);
-  EXPECT_NE(parseGrab("ball.wrl@L_ARM_JOINT@x:1", flubber).error().find("must be numbers"), std::string::npos);
+  EXPECT_NE(parseGrab("ball.wrl@HAND@0:1", flubber).error().str().find("no joint 'HAND'"), std::string::npos);
+  EXPECT_NE(parseGrab("ball.wrl@L_ARM_JOINT@2:1", flubber).error().str().find("0 <= PICK <= DROP"), std::string::npos);
+  EXPECT_NE(parseGrab("ball.wrl@L_ARM_JOINT@x:1", flubber).error().str().find("must be numbers"), std::string::npos);
 }
 
 // ---- The commands, run as a user would ----

@@ -35,7 +35,7 @@ int main(int argc, char** argv) {
   auto character = Character::fromScene(*scene);
   if (!character) return std::printf("FAIL: %s", character.error().str().c_str()), 1;
   auto images = app::loadTextures(*character);
-  if (!images) return std::printf("FAIL: %s\n", images.error().c_str()), 1;
+  if (!images) return std::printf("FAIL: %s", images.error().str().c_str()), 1;
   const size_t k = size_t(std::atoi(argv[3]));
   if (k >= images->size()) return std::printf("FAIL: no texture %zu\n", k), 1;
   const std::string painted = character->textures()[k].path;

@@ -54,7 +54,7 @@ ExponentialBlend { children [
     ASSERT_TRUE(c.has_value());
     character_ = std::make_unique<Character>(std::move(*c));
     auto images = loadTextures(*character_);
-    ASSERT_TRUE(images.has_value()) << images.error();
+    ASSERT_TRUE(images.has_value()) << images.error().str();
     images_ = std::move(*images);
     SkeletonCache cache(*character_);
     MarchingCubesOptions o;
@@ -139,7 +139,7 @@ TEST_F(PainterTest, SavingWritesThePaintedTexturesUnderNewNamesAndTheSceneReload
   EXPECT_EQ(c->textures()[0].url, "painted_face.png");
   EXPECT_EQ(c->textures()[1].url, "../back.png");  // unpainted: the original file, from the new place
   auto reloaded = loadTextures(*c);
-  ASSERT_TRUE(reloaded.has_value()) << reloaded.error();
+  ASSERT_TRUE(reloaded.has_value()) << reloaded.error().str();
   EXPECT_EQ((*reloaded)[0], images_[0]) << "the saved texture holds the stroke";
   EXPECT_EQ((*reloaded)[1], images_[1]);
   // Painting the saved scene and saving it again: a new file again, the first painted one kept.
@@ -162,7 +162,7 @@ TEST_F(PainterTest, APlainSaveElsewhereKeepsTheImagesReachable) {
   ASSERT_TRUE(c.has_value());
   EXPECT_EQ(c->textures()[0].url, "../face.png");
   auto images = loadTextures(*c);
-  ASSERT_TRUE(images.has_value()) << images.error();
+  ASSERT_TRUE(images.has_value()) << images.error().str();
   EXPECT_EQ(*images, images_);
   ASSERT_EQ(test::failureText(savePaintedScene(scene_, *character_, images_, {}, (dir_ / "same.wrl").string())), "");
   auto same = readSceneFile((dir_ / "same.wrl").string());

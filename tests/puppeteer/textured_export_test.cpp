@@ -48,7 +48,7 @@ Blobs texturedBlobs() {
   EXPECT_TRUE(c.has_value());
   Blobs b{std::move(*c), {}, {}};
   auto images = loadTextures(b.character);
-  EXPECT_TRUE(images.has_value()) << images.error();
+  EXPECT_TRUE(images.has_value()) << images.error().str();
   b.images = std::move(*images);
   SkeletonCache cache(b.character);
   MarchingCubesOptions o;
@@ -85,7 +85,8 @@ TEST_F(TexturedExport, GlbEmbedsTheImagesAndTheGeneratorsCoordinates) {
     const auto& image = gltf["images"][k];
     EXPECT_EQ(image["mimeType"], "image/png");
     const auto& view = gltf["bufferViews"][image["bufferView"].get<size_t>()];
-    const std::string embedded = bytes.substr(binStart + view["byteOffset"].get<size_t>(), view["byteLength"].get<size_t>());
+    const std::string embedded =
+        bytes.substr(binStart + view["byteOffset"].get<size_t>(), view["byteLength"].get<size_t>());
     EXPECT_EQ(embedded, slurp(b.character.textures()[k].path)) << k;
   }
   // Every textured primitive: TEXCOORD_0 is (u, 1 - v) of its texture's generator at the vertex (u up to the

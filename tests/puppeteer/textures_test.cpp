@@ -44,8 +44,9 @@ class TexturesTest : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
   Character character(const std::string& url) {
-    const std::string text = "#VRML V2.0 utf8\nExponentialBlend { children [\n  Metaball { texture ImageTexture { url \"" +
-                             url + "\" } }\n] }\n";
+    const std::string text =
+        "#VRML V2.0 utf8\nExponentialBlend { children [\n  Metaball { texture ImageTexture { url \"" + url +
+        "\" } }\n] }\n";
     auto scene = readScene(text, (dir_ / "s.wrl").string());
     EXPECT_TRUE(scene.has_value());
     auto c = Character::fromScene(*scene);
@@ -59,7 +60,7 @@ TEST_F(TexturesTest, ImagesAreReadRelativeToTheSceneFile) {
   const RgbaImage image = halves(8, 4, {255, 0, 0}, {0, 0, 255});
   ASSERT_EQ(test::failureText(savePng(image.rgba, image.width, image.height, (dir_ / "maps/skin.png").string())), "");
   const auto loaded = loadTextures(character("maps/skin.png"));
-  ASSERT_TRUE(loaded.has_value()) << loaded.error();
+  ASSERT_TRUE(loaded.has_value()) << loaded.error().str();
   ASSERT_EQ(loaded->size(), 1u);
   EXPECT_EQ((*loaded)[0], image);
 }
@@ -68,14 +69,14 @@ TEST_F(TexturesTest, AMissingOrUnreadableImageIsAnErrorNamingTheFileAndItsPlaceI
   const std::string scene = (dir_ / "s.wrl").string();
   auto missing = loadTextures(character("maps/none.png"));
   ASSERT_FALSE(missing.has_value());
-  EXPECT_EQ(missing.error(), scene + ":3:41: error: cannot read texture 'maps/none.png' (" +
-                                 (dir_ / "maps/none.png").string() + "): No such file or directory");
+  EXPECT_EQ(missing.error().str(), scene + ":3:41: error: cannot read texture 'maps/none.png' (" +
+                                       (dir_ / "maps/none.png").string() + "): No such file or directory\n");
   std::ofstream(dir_ / "maps/junk.png") << "not an image";
   auto junk = loadTextures(character("maps/junk.png"));
   ASSERT_FALSE(junk.has_value());
-  EXPECT_NE(junk.error().find(scene + ":3:41: error: cannot read texture 'maps/junk.png' ("), std::string::npos)
-      << junk.error();
-  EXPECT_TRUE(loadTextures(character("maps")).error().ends_with("): Is a directory"));
+  EXPECT_NE(junk.error().str().find(scene + ":3:41: error: cannot read texture 'maps/junk.png' ("), std::string::npos)
+      << junk.error().str();
+  EXPECT_TRUE(loadTextures(character("maps")).error().str().ends_with("): Is a directory\n"));
 }
 
 // Writes `values` (w x h x channels, rows from the top) to `path` through OpenImageIO as `type`.
@@ -130,7 +131,7 @@ TEST_F(TexturesTest, JpegBytesAreKeptAsTheyAre) {
     }
   writeImage(dir_ / "maps/skin.jpg", 32, 32, 3, OIIO::TypeDesc::UINT8, rgb, OIIO::TypeDesc::UINT8);
   const auto loaded = loadTextures(character("maps/skin.jpg"));
-  ASSERT_TRUE(loaded.has_value()) << loaded.error();
+  ASSERT_TRUE(loaded.has_value()) << loaded.error().str();
   const RgbaImage& image = (*loaded)[0];
   ASSERT_EQ(image.width, 32);
   ASSERT_EQ(image.height, 32);
