@@ -26,7 +26,8 @@ using namespace imps;
 
 // The biped and its tesselator options with desiredRadius scaled so that about `particles` particles cover it
 // (2685 at the file's 0.025 m), on `threads` threads; nullopt (and the benchmark skipped) when the file does not read.
-std::optional<std::pair<Character, TesselatorOptions>> scaledBiped(benchmark::State& state, int particles, int threads) {
+std::optional<std::pair<Character, TesselatorOptions>> scaledBiped(benchmark::State& state, int particles,
+                                                                   int threads) {
   auto scene = readSceneFile(std::string(IMPS_SOURCE_DIR) + "/examples/simple_biped.wrl");
   auto ch = scene ? Character::fromScene(*scene) : std::expected<Character, Diagnostics>(std::unexpect);
   if (!ch) {

@@ -120,7 +120,8 @@ std::vector<JointPose> Calibration::apply(const drivers::Sample& sample) const {
   std::vector<double> angles(map_.channels.size(), 0.0);
   for (size_t i = 0; i < map_.channels.size(); ++i) {
     const int ch = map_.channels[i].channel;
-    if (map_.channels[i].device == 0 && usable(sample, ch)) angles[i] = angle(i, sample.counts[static_cast<size_t>(ch)]);
+    if (map_.channels[i].device == 0 && usable(sample, ch))
+      angles[i] = angle(i, sample.counts[static_cast<size_t>(ch)]);
   }
   std::vector<JointPose> pose;
   compose(angles, pose);

@@ -38,8 +38,9 @@ std::expected<std::vector<JointMatch>, Diagnostics> parseJointMap(std::string_vi
   if (const JsonValue* v = r.typed("version", JsonValue::Kind::Number, "a number")) {
     if (!v->integral || v->number < 1) diags.error(v->loc, "'version' must be a positive integer");
     else if (v->number > kJointMapVersion)
-      diags.error(v->loc, "file format version " + detail::integerText(v->number) + " is newer than this program reads (" +
-                              std::to_string(kJointMapVersion) + "); update puppeteer");
+      diags.error(v->loc, "file format version " + detail::integerText(v->number) +
+                              " is newer than this program reads (" + std::to_string(kJointMapVersion) +
+                              "); update puppeteer");
   } else if (!r.get("version")) {
     r.missing("version");
   }

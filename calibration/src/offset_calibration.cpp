@@ -81,9 +81,9 @@ WindowAverage averageWindow(const RigMap& map, std::span<const drivers::Sample> 
                              std::to_string(avg.samples) + " valid readings in the window (need " +
                              std::to_string(options.minSamples) + "); is it connected?");
     } else if (avg.stdDevRadians > options.maxStdDev) {
-      out.problems.push_back(avg.label + " (" + c.joint + " " + toString(c.axis) + ") is too noisy: standard deviation " +
-                             fixed(avg.stdDevRadians / kDegree, 2) + " deg (" + fixed(avg.stdDev, 1) +
-                             " counts) > " + fixed(options.maxStdDev / kDegree, 2) +
+      out.problems.push_back(avg.label + " (" + c.joint + " " + toString(c.axis) +
+                             ") is too noisy: standard deviation " + fixed(avg.stdDevRadians / kDegree, 2) + " deg (" +
+                             fixed(avg.stdDev, 1) + " counts) > " + fixed(options.maxStdDev / kDegree, 2) +
                              " deg; hold the armature still, or check the encoder");
     }
     out.channels.push_back(std::move(avg));

@@ -133,14 +133,16 @@ void checkMap(RigMap& map, const RigMapContext& ctx, Diagnostics& diags) {
     }
     if (found == -1) {
       std::string message = deviceText(static_cast<size_t>(c.device)) + " has no channel named '" + c.channelName + "'";
-      if (devices.size() > 1 && c.deviceLoc.line == 0) message = "no device of the session has a channel named '" + c.channelName + "'";
+      if (devices.size() > 1 && c.deviceLoc.line == 0)
+        message = "no device of the session has a channel named '" + c.channelName + "'";
       std::string guess;
       size_t guessDevice = 0;
       for (size_t d = 0; d < devices.size() && guess.empty(); ++d)
         if (c.deviceLoc.line == 0 || d == static_cast<size_t>(c.device))
           guess = closestMatch(c.channelName, devices[d]->channelNames), guessDevice = d;
       if (!guess.empty())
-        message += "; did you mean '" + guess + "'" + (devices.size() > 1 ? " (" + deviceText(guessDevice) + ")" : "") + "?";
+        message +=
+            "; did you mean '" + guess + "'" + (devices.size() > 1 ? " (" + deviceText(guessDevice) + ")" : "") + "?";
       diags.error(c.loc, message);
     }
     c.channel = found < 0 ? -1 : found;
@@ -180,7 +182,8 @@ void checkMap(RigMap& map, const RigMapContext& ctx, Diagnostics& diags) {
     const JointMap& jm = map.joints[ji];
     if (const auto [first, fresh] = jointEntries.try_emplace(jm.joint, ji); !fresh)
       diags.error(jm.loc, "joint '" + jm.joint + "' is listed twice (first at line " +
-                              std::to_string(map.joints[first->second].loc.line) + "): put all its channels in one entry");
+                              std::to_string(map.joints[first->second].loc.line) +
+                              "): put all its channels in one entry");
     if (ctx.character && ctx.character->findJoint(jm.joint) < 0) {
       std::string message = "unknown joint '" + jm.joint + "'";
       const std::string guess = closestMatch(jm.joint, jointNames);
@@ -462,7 +465,9 @@ bool validateRigMap(RigMap& map, const RigMapContext& context, Diagnostics& diag
     diags.error(map.bitsLoc, "'bits' must be an integer from 1 to 32");
     return false;
   }
-  for (const ChannelMap& c : map.channels) checkChannelValues(c, map.bits, [&](std::string_view) { return c.loc; }, diags);
+  for (const ChannelMap& c : map.channels)
+    checkChannelValues(
+        c, map.bits, [&](std::string_view) { return c.loc; }, diags);
   // The structure the parser guarantees by construction: mappings in range and on their joint, orders that list
   // exactly the driven axes.
   for (const JointMap& jm : map.joints) {

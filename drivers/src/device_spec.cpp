@@ -72,8 +72,8 @@ std::expected<DeviceSpec, Diagnostics> parseDeviceSpec(std::string_view text) {
   const bool barePath = text.starts_with('/');
   const size_t colon = barePath ? size_t(0) : text.find(':');
   if (colon == std::string_view::npos)
-    return fail(0,
-                "expected SCHEME:… where SCHEME is serial, hid, usb, sim or osc.udp, or a device path such as /dev/ttyACM0");
+    return fail(
+        0, "expected SCHEME:… where SCHEME is serial, hid, usb, sim or osc.udp, or a device path such as /dev/ttyACM0");
   const std::string_view scheme = barePath ? "serial" : text.substr(0, colon);
   if (scheme == "serial") spec.kind = DeviceKind::Serial;
   else if (scheme == "hid") spec.kind = DeviceKind::Hid;

@@ -150,7 +150,8 @@ class CharacterBuilder {
   int textureIndex(const ImageTextureNode& t) {
     namespace fs = std::filesystem;
     const fs::path url(t.url);
-    const std::string path = url.is_absolute() ? url.string() : (fs::path(scene_.fileName).parent_path() / url).string();
+    const std::string path =
+        url.is_absolute() ? url.string() : (fs::path(scene_.fileName).parent_path() / url).string();
     for (size_t k = 0; k < c_.textures_.size(); ++k)
       if (c_.textures_[k].path == path) return static_cast<int>(k);
     c_.textures_.push_back({t.url, path, t.loc});
@@ -276,7 +277,9 @@ class CharacterBuilder {
   std::map<std::string, std::vector<int>> jointNames_;
 };
 
-std::expected<Character, Diagnostics> Character::fromScene(const Scene& scene) { return CharacterBuilder(scene).build(); }
+std::expected<Character, Diagnostics> Character::fromScene(const Scene& scene) {
+  return CharacterBuilder(scene).build();
+}
 
 int Character::findJoint(std::string_view name) const {
   for (size_t j = 0; j < joints_.size(); ++j)

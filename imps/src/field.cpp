@@ -161,7 +161,9 @@ void Field::prepareSets(FieldScratch& scratch) const {
     for (uint32_t c : cand) scratch.globalToLocal[c] = -1;
     // Keep a set unless another is equal (and earlier) or, for additive blends, a strict superset.
     const size_t n = offsets.size() - 1;
-    auto set = [&](size_t s) { return std::span<const uint32_t>(members).subspan(offsets[s], offsets[s + 1] - offsets[s]); };
+    auto set = [&](size_t s) {
+      return std::span<const uint32_t>(members).subspan(offsets[s], offsets[s + 1] - offsets[s]);
+    };
     for (size_t a = 0; a < n; ++a) {
       const auto sa = set(a);
       bool drop = false;
@@ -274,9 +276,15 @@ inline float lineSegDistanceGradient(const Primitive& p, float x, float y, float
 inline float kernelDistanceGradient(const Primitive& p, const glm::vec3& x, glm::vec3& gradient) {
   float d = 0.0f;
   switch (p.kind) {
-    case PrimitiveKind::Metaball: d = metaballDistanceGradient(p, x.x, x.y, x.z, gradient.x, gradient.y, gradient.z); break;
-    case PrimitiveKind::Ellipsoid: d = ellipsoidDistanceGradient(p, x.x, x.y, x.z, gradient.x, gradient.y, gradient.z); break;
-    case PrimitiveKind::LineSeg: d = lineSegDistanceGradient(p, x.x, x.y, x.z, gradient.x, gradient.y, gradient.z); break;
+    case PrimitiveKind::Metaball:
+      d = metaballDistanceGradient(p, x.x, x.y, x.z, gradient.x, gradient.y, gradient.z);
+      break;
+    case PrimitiveKind::Ellipsoid:
+      d = ellipsoidDistanceGradient(p, x.x, x.y, x.z, gradient.x, gradient.y, gradient.z);
+      break;
+    case PrimitiveKind::LineSeg:
+      d = lineSegDistanceGradient(p, x.x, x.y, x.z, gradient.x, gradient.y, gradient.z);
+      break;
   }
   return d;
 }
@@ -325,7 +333,8 @@ inline float foldElliptical(float g, float x) {
 #endif
 
 template <float (*Distance)(const Primitive&, float, float, float)>
-IMPS_VECTOR_CLONES void distanceLoop(const Primitive& p, const float* xs, const float* ys, const float* zs, size_t n, float* d) {
+IMPS_VECTOR_CLONES void distanceLoop(const Primitive& p, const float* xs, const float* ys, const float* zs, size_t n,
+                                     float* d) {
   for (size_t i = 0; i < n; ++i) d[i] = Distance(p, xs[i], ys[i], zs[i]);
 }
 
@@ -696,7 +705,8 @@ FieldSample Field::sample(const glm::vec3& x, FieldScratch& scratch) const {
     const uint32_t i = cand[k];
     t[k] = none;
     if (!supportBoxes_[i].contains(x)) continue;
-    const float d = additive ? kernelDistanceGradient(primitives_[i], x, dGrad[k]) : kernelDistance(primitives_[i], x.x, x.y, x.z);
+    const float d =
+        additive ? kernelDistanceGradient(primitives_[i], x, dGrad[k]) : kernelDistance(primitives_[i], x.x, x.y, x.z);
     dist[k] = d;
     if (d <= supportSkip_[i]) t[k] = kernelTerm(blend_, params_[i], d);
   }
@@ -709,7 +719,8 @@ FieldSample Field::sample(const glm::vec3& x, FieldScratch& scratch) const {
       for (uint32_t m = scratch.setOffsets[s]; m < scratch.setOffsets[s + 1]; ++m) v += t[scratch.setMembers[m]];
     } else {
       float g = -1.0f;
-      for (uint32_t m = scratch.setOffsets[s]; m < scratch.setOffsets[s + 1]; ++m) g = foldElliptical(g, t[scratch.setMembers[m]]);
+      for (uint32_t m = scratch.setOffsets[s]; m < scratch.setOffsets[s + 1]; ++m)
+        g = foldElliptical(g, t[scratch.setMembers[m]]);
       v = g > -1.0f ? std::max(1.0f + g, 0.0f) : 0.0f;
     }
     if (v > bestValue) {
@@ -838,13 +849,16 @@ void Field::samples(std::span<const glm::vec3> points, std::span<FieldSample> ou
     const Primitive& prim = primitives_[p];
     switch (prim.kind) {
       case PrimitiveKind::Metaball:
-        distanceGradientLoop<metaballDistanceGradient>(prim, xs, ys, zs, n, d.data(), dgx.data(), dgy.data(), dgz.data());
+        distanceGradientLoop<metaballDistanceGradient>(prim, xs, ys, zs, n, d.data(), dgx.data(), dgy.data(),
+                                                       dgz.data());
         break;
       case PrimitiveKind::Ellipsoid:
-        distanceGradientLoop<ellipsoidDistanceGradient>(prim, xs, ys, zs, n, d.data(), dgx.data(), dgy.data(), dgz.data());
+        distanceGradientLoop<ellipsoidDistanceGradient>(prim, xs, ys, zs, n, d.data(), dgx.data(), dgy.data(),
+                                                        dgz.data());
         break;
       case PrimitiveKind::LineSeg:
-        distanceGradientLoop<lineSegDistanceGradient>(prim, xs, ys, zs, n, d.data(), dgx.data(), dgy.data(), dgz.data());
+        distanceGradientLoop<lineSegDistanceGradient>(prim, xs, ys, zs, n, d.data(), dgx.data(), dgy.data(),
+                                                      dgz.data());
         break;
     }
     const float param = params_[p];

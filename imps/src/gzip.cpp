@@ -12,7 +12,8 @@
 namespace imps {
 
 bool isGzip(std::string_view bytes) {
-  return bytes.size() >= 2 && static_cast<unsigned char>(bytes[0]) == 0x1F && static_cast<unsigned char>(bytes[1]) == 0x8B;
+  return bytes.size() >= 2 && static_cast<unsigned char>(bytes[0]) == 0x1F &&
+         static_cast<unsigned char>(bytes[1]) == 0x8B;
 }
 
 std::expected<std::string, Diagnostics> gunzip(std::string_view bytes, size_t maxBytes) {

@@ -180,8 +180,8 @@ struct CaseTable {
   }
 
   // Contour segments on each face go from an entry crossing (outside -> inside along the cycle) to an exit; chained
-  // across faces they form loops, each triangulated (triangulateLoop). Orientation: counter-clockwise seen from outside.
-  // Returns the number of loop-centre vertices.
+  // across faces they form loops, each triangulated (triangulateLoop). Orientation: counter-clockwise seen from
+  // outside. Returns the number of loop-centre vertices.
   int build(int c, int joined, std::array<uint8_t, 37>& out) const {
     std::array<int, 12> next;
     next.fill(-1);

@@ -121,7 +121,8 @@ MeshTopology analyzeTopology(const Mesh& mesh) {
     if (degenerate[corner / 3]) continue;
     if (corners.find(corner) == corner) ++fans[idx[corner]];
   }
-  topology.nonManifoldVertices = static_cast<size_t>(std::count_if(fans.begin(), fans.end(), [](uint32_t f) { return f > 1; }));
+  topology.nonManifoldVertices =
+      static_cast<size_t>(std::count_if(fans.begin(), fans.end(), [](uint32_t f) { return f > 1; }));
 
   for (uint32_t t = 0; t < triangleCount; ++t) {
     if (!degenerate[t] && triangles.find(t) == t) ++topology.components;

@@ -69,11 +69,13 @@ std::expected<std::vector<uint8_t>, Diagnostics> encodeTexturedGlb(const Mesh& m
     accessors[position]["max"] = {double{box.max.x}, double{box.max.y}, double{box.max.z}};
     attributes["POSITION"] = position;
     if (!m.normals.empty())
-      attributes["NORMAL"] = accessor(bin.view(m.normals.data(), m.normals.size() * 4, kArrayBuffer), m.vertexCount(), "VEC3");
+      attributes["NORMAL"] =
+          accessor(bin.view(m.normals.data(), m.normals.size() * 4, kArrayBuffer), m.vertexCount(), "VEC3");
     if (!m.colors.empty()) {
       std::vector<float> clamped(m.colors);
       for (float& c : clamped) c = std::clamp(c, 0.0f, 1.0f);
-      attributes["COLOR_0"] = accessor(bin.view(clamped.data(), clamped.size() * 4, kArrayBuffer), m.vertexCount(), "VEC3");
+      attributes["COLOR_0"] =
+          accessor(bin.view(clamped.data(), clamped.size() * 4, kArrayBuffer), m.vertexCount(), "VEC3");
     }
     json material = {{"pbrMetallicRoughness", {{"metallicFactor", 0.0}, {"roughnessFactor", 1.0}}},
                      {"doubleSided", true}};
@@ -163,12 +165,14 @@ std::expected<TexturedObj, Diagnostics> encodeTexturedObj(const Mesh& mesh, cons
     if (part.image >= 0) mtl += "map_Kd " + images[size_t(part.image)].name + "\n";
     obj += "g " + name + "\nusemtl " + name + "\n";
     for (size_t v = 0; v < m.vertexCount(); ++v) {
-      obj += "v " + number(m.positions[3 * v]) + " " + number(m.positions[3 * v + 1]) + " " + number(m.positions[3 * v + 2]);
+      obj += "v " + number(m.positions[3 * v]) + " " + number(m.positions[3 * v + 1]) + " " +
+             number(m.positions[3 * v + 2]);
       if (!m.colors.empty())
         for (int k = 0; k < 3; ++k) obj += " " + number(std::clamp(m.colors[3 * v + size_t(k)], 0.0f, 1.0f));
       obj += "\nvt " + number(part.uvs[2 * v]) + " " + number(part.uvs[2 * v + 1]) + "\n";
       if (!m.normals.empty())
-        obj += "vn " + number(m.normals[3 * v]) + " " + number(m.normals[3 * v + 1]) + " " + number(m.normals[3 * v + 2]) + "\n";
+        obj += "vn " + number(m.normals[3 * v]) + " " + number(m.normals[3 * v + 1]) + " " +
+               number(m.normals[3 * v + 2]) + "\n";
     }
     for (size_t t = 0; t < m.triangleCount(); ++t) {
       obj += "f";

@@ -579,7 +579,9 @@ std::string constraintBroken(const FieldSpec& spec, int i, const std::array<floa
     case Constraint::BitsPerDim: rule = "be between 1 and 10"; break;
     case Constraint::UnitInterval: rule = "be between 0 and 1"; break;
     case Constraint::Threads: rule = "be between 0 and " + std::to_string(kMaxThreads) + " (0: all cores)"; break;
-    case Constraint::Resolution: rule = "be between 0 and " + std::to_string(kMaxResolution) + " cells (0: unset)"; break;
+    case Constraint::Resolution:
+      rule = "be between 0 and " + std::to_string(kMaxResolution) + " cells (0: unset)";
+      break;
     case Constraint::None:
     case Constraint::OneString:
     case Constraint::TextureModeName: break;
@@ -613,7 +615,8 @@ void SceneBuilder::storeField(Frame& frame, const FieldSpec& spec, const SourceL
   if (spec.type == FieldType::Node || spec.type == FieldType::Nodes) {
     if (value.bracketed && value.items.empty() && spec.type == FieldType::Nodes) return;  // `children []`
     if (value.bracketed && value.items.empty()) {
-      sink_.error(nameLoc, "field '" + std::string(spec.name) + "' of " + frame.typeName + " holds one node, not a list");
+      sink_.error(nameLoc,
+                  "field '" + std::string(spec.name) + "' of " + frame.typeName + " holds one node, not a list");
       return;
     }
     return mismatch(frame, spec, loc, describe(value.items.front()));
@@ -738,9 +741,11 @@ void SceneBuilder::storeNumbers(Frame& frame, const FieldSpec& spec, const Sourc
   }
   spec.set(frame.data, v);
   // Where the sizes whose cost depends on the character were given, for the polygonizers' limits' messages.
-  if (auto* mc = std::get_if<MarchingCubesNode>(&frame.data); mc && fieldName != "isoValue" && fieldName != "numThreads")
+  if (auto* mc = std::get_if<MarchingCubesNode>(&frame.data);
+      mc && fieldName != "isoValue" && fieldName != "numThreads")
     mc->resolutionLoc = loc;
-  if (auto* t = std::get_if<Tesselator3MPNode>(&frame.data); t && fieldName == "desiredRadius") t->desiredRadiusLoc = loc;
+  if (auto* t = std::get_if<Tesselator3MPNode>(&frame.data); t && fieldName == "desiredRadius")
+    t->desiredRadiusLoc = loc;
 }
 
 void SceneBuilder::deliver(Finished child) {

@@ -42,7 +42,8 @@ class Parser {
  private:
   // Stops the parse. Invalid and BadNumber tokens were reported by the lexer already.
   void fail(const Token& at, std::string message) {
-    if (at.kind != TokenKind::Invalid && at.kind != TokenKind::BadNumber) sink_.error(lexer_.loc(at), std::move(message));
+    if (at.kind != TokenKind::Invalid && at.kind != TokenKind::BadNumber)
+      sink_.error(lexer_.loc(at), std::move(message));
     stopped_ = true;
   }
 
@@ -216,8 +217,9 @@ bool checkHeader(std::string_view text, const std::string& fileName, DiagnosticS
     std::string_view shown = line.substr(0, 40);
     bool printable = firstInvalidUtf8(shown) == shown.size();
     for (char c : shown) printable = printable && (static_cast<unsigned char>(c) >= 0x20 && c != 0x7F);
-    sink.error(start, (printable ? "unsupported header '" + std::string(shown) + "'" : std::string("unsupported header")) +
-                          "; the first line must be '" + std::string(kHeader) + "'");
+    sink.error(start,
+               (printable ? "unsupported header '" + std::string(shown) + "'" : std::string("unsupported header")) +
+                   "; the first line must be '" + std::string(kHeader) + "'");
     return false;
   }
   std::string message = "missing header: the first line must be '" + std::string(kHeader) + "'";

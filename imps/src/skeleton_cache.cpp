@@ -70,7 +70,8 @@ void SkeletonCache::update() {
     world_[j] = now;
   }
   // Joint-less primitives stay bit-identical without a placement (Marching Cubes' hashes do not move).
-  const bool placed = placement_.rotation != glm::quat(1.0f, 0.0f, 0.0f, 0.0f) || placement_.translation != glm::vec3(0.0f);
+  const bool placed =
+      placement_.rotation != glm::quat(1.0f, 0.0f, 0.0f, 0.0f) || placement_.translation != glm::vec3(0.0f);
   std::vector<Primitive> prims(field_.size());
   const auto& cp = character_->primitives();
   for (size_t i = 0; i < prims.size(); ++i) {

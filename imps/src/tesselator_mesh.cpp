@@ -836,7 +836,8 @@ namespace {
 bool windsOutward(const Tesselator::State& s, uint32_t a, uint32_t b, uint32_t c) {
   const glm::vec3 pa = s.vpos[a], face = glm::cross(s.vpos[b] - pa, s.vpos[c] - pa);
   const float near = 0.5f * glm::length(face);
-  if (glm::dot(face, s.nrm[a]) > near && glm::dot(face, s.nrm[b]) > near && glm::dot(face, s.nrm[c]) > near) return true;
+  if (glm::dot(face, s.nrm[a]) > near && glm::dot(face, s.nrm[b]) > near && glm::dot(face, s.nrm[c]) > near)
+    return true;
   if (!s.foldScratchReady) {
     Box box;
     for (const glm::vec3& v : s.vpos) box.extend(v);
@@ -864,7 +865,8 @@ void setHalfEdge(Tesselator::State& s, uint32_t a, uint32_t b, uint32_t c, uint3
 // Removes directed edge a -> b, keeping heTri in step with heTo and heThird.
 void dropHalfEdge(Tesselator::State& s, uint32_t a, uint32_t b) {
   const size_t k = halfEdgeSlot(s, a, b), end = size_t(a) * kMaxHalfEdges + s.heCount[a];
-  std::copy(s.heTri.begin() + std::ptrdiff_t(k + 1), s.heTri.begin() + std::ptrdiff_t(end), s.heTri.begin() + std::ptrdiff_t(k));
+  std::copy(s.heTri.begin() + std::ptrdiff_t(k + 1), s.heTri.begin() + std::ptrdiff_t(end),
+            s.heTri.begin() + std::ptrdiff_t(k));
   removeHalfEdge(s, a, b);
 }
 
@@ -1004,7 +1006,8 @@ size_t unfoldTriangles(Tesselator::State& s) {
   s.foldScratchReady = false;
   s.folded.clear();
   for (uint32_t t = 0; t < triangles; ++t)
-    if (!windsOutward(s, s.tris[3 * size_t(t)], s.tris[3 * size_t(t) + 1], s.tris[3 * size_t(t) + 2])) s.folded.push_back(t);
+    if (!windsOutward(s, s.tris[3 * size_t(t)], s.tris[3 * size_t(t) + 1], s.tris[3 * size_t(t) + 2]))
+      s.folded.push_back(t);
   if (s.folded.empty()) return 0;
   // The triangle of each half-edge out of a fold's corners (the repairs look up no other, but for corners a flip
   // brings in: knowTrianglesAround), in one scan; the repairs keep them up to date.

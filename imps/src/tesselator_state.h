@@ -47,7 +47,8 @@ inline bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfi
 
 // Two unit vectors b0, b1 with b0 x b1 = n (n unit).
 inline void tangentBasis(const glm::vec3& n, glm::vec3& b0, glm::vec3& b1) {
-  const glm::vec3 a = std::fabs(n.x) < 0.6f ? glm::vec3(1, 0, 0) : (std::fabs(n.y) < 0.6f ? glm::vec3(0, 1, 0) : glm::vec3(0, 0, 1));
+  const glm::vec3 a =
+      std::fabs(n.x) < 0.6f ? glm::vec3(1, 0, 0) : (std::fabs(n.y) < 0.6f ? glm::vec3(0, 1, 0) : glm::vec3(0, 0, 1));
   b0 = glm::normalize(glm::cross(a, n));
   b1 = glm::cross(n, b0);
 }
@@ -60,9 +61,10 @@ struct Tesselator::State {
   std::vector<uint64_t> id;
   std::vector<uint8_t> dead;
   // The neighbour list: for each particle every other within max(queryRadius, kFanRadius desiredRadius) (the
-  // kMaxNeighbours nearest in a crowd), in the hash's deterministic visiting order. Built once per particle configuration by findNeighbours() and shared
-  // by the compute phase, the fusion test and the triangulation's fans; nbrValid says it matches the current
-  // positions and particle order (cleared whenever a particle moves, is born or dies).
+  // kMaxNeighbours nearest in a crowd), in the hash's deterministic visiting order. Built once per particle
+  // configuration by findNeighbours() and shared by the compute phase, the fusion test and the triangulation's fans;
+  // nbrValid says it matches the current positions and particle order (cleared whenever a particle moves, is born or
+  // dies).
   std::vector<uint32_t> nbr;
   std::vector<uint8_t> nbrCount;
   bool nbrValid = false;

@@ -129,7 +129,8 @@ int32_t heaviestLayer(const Mesh& mesh, size_t t) {
 }
 
 void copyVertex(const Mesh& from, uint32_t v, Mesh& to) {
-  to.positions.insert(to.positions.end(), {from.positions[3 * v], from.positions[3 * v + 1], from.positions[3 * v + 2]});
+  to.positions.insert(to.positions.end(),
+                      {from.positions[3 * v], from.positions[3 * v + 1], from.positions[3 * v + 2]});
   if (!from.normals.empty())
     to.normals.insert(to.normals.end(), {from.normals[3 * v], from.normals[3 * v + 1], from.normals[3 * v + 2]});
   if (!from.colors.empty())

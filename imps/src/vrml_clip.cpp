@@ -97,11 +97,13 @@ const InterfaceField* findEventField(const NodeInterface& iface, const std::stri
       return nullptr;
     }
     if (out && f.access == Access::EventIn) {
-      d.error(loc, std::string(iface.node) + " " + defName + "." + f.name + " is an eventIn: a ROUTE cannot start there");
+      d.error(loc,
+              std::string(iface.node) + " " + defName + "." + f.name + " is an eventIn: a ROUTE cannot start there");
       return nullptr;
     }
     if (!out && f.access == Access::EventOut) {
-      d.error(loc, std::string(iface.node) + " " + defName + "." + f.name + " is an eventOut: a ROUTE cannot end there");
+      d.error(loc,
+              std::string(iface.node) + " " + defName + "." + f.name + " is an eventOut: a ROUTE cannot end there");
       return nullptr;
     }
     return &f;
@@ -109,7 +111,8 @@ const InterfaceField* findEventField(const NodeInterface& iface, const std::stri
   std::vector<std::string> names;
   for (const InterfaceField& f : iface.fields) {
     names.push_back(f.name);
-    if (f.access == Access::ExposedField) names.push_back(out ? std::string(f.name) + "_changed" : "set_" + std::string(f.name));
+    if (f.access == Access::ExposedField)
+      names.push_back(out ? std::string(f.name) + "_changed" : "set_" + std::string(f.name));
   }
   const std::string guess = closestMatch(written, names);
   d.error(loc, std::string(iface.node) + " " + defName + " has no " + (out ? "eventOut" : "eventIn") + " '" + written +
@@ -327,7 +330,8 @@ std::expected<Clips, Diagnostics> readClips(const VrmlFile& file, Diagnostics* w
       continue;
     }
     const std::string fromType = link.from.node->type;
-    if (fromType == "TimeSensor" && isInterpolator(link.to.node->type) && std::string(link.to.field->name) == "set_fraction")
+    if (fromType == "TimeSensor" && isInterpolator(link.to.node->type) &&
+        std::string(link.to.field->name) == "set_fraction")
       sensorToInterp.push_back(link);
     else if (isInterpolator(fromType) && std::string(link.from.field->name) == "value_changed")
       interpToTarget.push_back(link);
@@ -337,7 +341,8 @@ std::expected<Clips, Diagnostics> readClips(const VrmlFile& file, Diagnostics* w
   std::set<const VrmlNode*> driven;
   for (const Link& s : sensorToInterp) {
     driven.insert(s.to.node);
-    auto clip = std::find_if(result.clips.begin(), result.clips.end(), [&](const Clip& c) { return c.name == s.from.defName; });
+    auto clip =
+        std::find_if(result.clips.begin(), result.clips.end(), [&](const Clip& c) { return c.name == s.from.defName; });
     if (clip == result.clips.end()) {
       Clip c;
       c.name = s.from.defName;

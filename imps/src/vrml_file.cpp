@@ -99,7 +99,8 @@ class Reader {
         break;
       }
       if (parseStatement(0, &file_.roots)) continue;
-      if (!stopped_) fail(lexer_.peek(), "expected a node, PROTO or ROUTE at top level, found " + vrml::describe(lexer_.peek()));
+      if (!stopped_)
+        fail(lexer_.peek(), "expected a node, PROTO or ROUTE at top level, found " + vrml::describe(lexer_.peek()));
     }
     checkRoutes(top);
     file_.routes = std::move(top.routes);
@@ -116,7 +117,8 @@ class Reader {
   };
 
   void fail(const Token& at, std::string message) {
-    if (at.kind != TokenKind::Invalid && at.kind != TokenKind::BadNumber) sink_.error(lexer_.loc(at), std::move(message));
+    if (at.kind != TokenKind::Invalid && at.kind != TokenKind::BadNumber)
+      sink_.error(lexer_.loc(at), std::move(message));
     stopped_ = true;
   }
 
@@ -178,7 +180,8 @@ class Reader {
   bool parseRouteEnd(std::string& node, std::string& field) {
     const Token t = lexer_.next();
     const size_t dot = t.kind == TokenKind::Identifier ? t.text.find('.') : std::string::npos;
-    if (dot == std::string::npos || dot == 0 || dot + 1 == t.text.size() || t.text.find('.', dot + 1) != std::string::npos) {
+    if (dot == std::string::npos || dot == 0 || dot + 1 == t.text.size() ||
+        t.text.find('.', dot + 1) != std::string::npos) {
       fail(t, "expected 'NodeName.fieldName' in ROUTE, found " + vrml::describe(t));
       return false;
     }
@@ -249,8 +252,9 @@ class Reader {
       std::string name;
       if (!expectName("USE", name)) return nullptr;
       if (auto found = scope_->defs.find(name); found != scope_->defs.end()) return found->second;
-      sink_.error(lexer_.loc(first), "USE " + name + ": no node is DEF'd with that name before here" +
-                                         (openDefs_.contains(name) ? " (a node cannot USE itself or an ancestor)" : ""));
+      sink_.error(lexer_.loc(first),
+                  "USE " + name + ": no node is DEF'd with that name before here" +
+                      (openDefs_.contains(name) ? " (a node cannot USE itself or an ancestor)" : ""));
       return nullptr;
     }
     auto node = std::make_shared<VrmlNode>();
@@ -280,7 +284,8 @@ class Reader {
     if (proto == protos_.end() && !isVrml97NodeType(node->type)) {
       const std::string key = node->type + "@" + std::to_string(node->loc.line);
       if (warnedUnknown_.insert(key).second)
-        sink_.warning(node->loc, "unknown node type '" + node->type + "' skipped (not VRML 97 and no PROTO declares it)");
+        sink_.warning(node->loc,
+                      "unknown node type '" + node->type + "' skipped (not VRML 97 and no PROTO declares it)");
       return nullptr;
     }
     if (proto != protos_.end()) instantiate(*proto->second, *node);
@@ -301,7 +306,8 @@ class Reader {
         return;
       }
       if (t.kind == TokenKind::End) {
-        fail(t, "unexpected end of file inside " + node.type + ": its '{' at " + position(node.loc) + " is never closed");
+        fail(t,
+             "unexpected end of file inside " + node.type + ": its '{' at " + position(node.loc) + " is never closed");
         return;
       }
       if (t.kind == TokenKind::Identifier && (t.text == "ROUTE" || t.text == "PROTO" || t.text == "EXTERNPROTO")) {
@@ -326,7 +332,8 @@ class Reader {
     std::string type, name;
     if (!expectName(kind.text.c_str(), type) || !expectName(type.c_str(), name)) return;
     if (kind.text == "field" || kind.text == "exposedField") parseField(node, name, lexer_.loc(kind), depth);
-    else if (lexer_.peek().kind == TokenKind::Identifier && lexer_.peek().text == "IS") parseField(node, name, lexer_.loc(kind), depth);
+    else if (lexer_.peek().kind == TokenKind::Identifier && lexer_.peek().text == "IS")
+      parseField(node, name, lexer_.loc(kind), depth);
   }
 
   void parseField(VrmlNode& node, const std::string& name, const SourceLoc& loc, int depth) {
@@ -351,7 +358,8 @@ class Reader {
     field.name = name;
     field.loc = loc;
     if (!parseValue(field, depth, node.type)) return;
-    const auto same = std::find_if(node.fields.begin(), node.fields.end(), [&](const VrmlField& f) { return f.name == name; });
+    const auto same =
+        std::find_if(node.fields.begin(), node.fields.end(), [&](const VrmlField& f) { return f.name == name; });
     if (same != node.fields.end()) {
       sink_.warning(loc, "field '" + name + "' of " + node.type + " given twice (also at " + position(same->loc) +
                              "); the last value counts");
@@ -383,7 +391,8 @@ class Reader {
       if (close.kind == TokenKind::End)
         fail(close, "unexpected end of file: the '[' at " + position(lexer_.loc(open)) + " is never closed");
       else
-        fail(close, "expected ']' to close the '[' at " + position(lexer_.loc(open)) + ", found " + vrml::describe(close));
+        fail(close,
+             "expected ']' to close the '[' at " + position(lexer_.loc(open)) + ", found " + vrml::describe(close));
       return false;
     }
     if (startsNode(0)) {

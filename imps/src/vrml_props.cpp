@@ -146,7 +146,8 @@ Mesh faceSetMesh(const VrmlNode& g, const glm::vec3& color, Diagnostics& d, bool
     if (ok) {
       // Newell's normal of the polygon, facing the side ccw says is the outside.
       glm::vec3 n(0.0f);
-      for (size_t k = 0; k < face.points.size(); ++k) n += glm::cross(at(face.points[k]), at(face.points[(k + 1) % face.points.size()]));
+      for (size_t k = 0; k < face.points.size(); ++k)
+        n += glm::cross(at(face.points[k]), at(face.points[(k + 1) % face.points.size()]));
       const float length = glm::length(n);
       face.normal = length > 0.0f ? (ccw ? n : -n) / length : glm::vec3(0, 1, 0);
       faces.push_back(std::move(face));
@@ -306,7 +307,8 @@ struct Walker {
       const VrmlField* f = nullptr;
       auto vec = [&](const char* field, glm::vec3 fallback) {
         f = node.field(field);
-        return f != nullptr && f->numbers.size() == 3 ? glm::vec3(f->numbers[0], f->numbers[1], f->numbers[2]) : fallback;
+        return f != nullptr && f->numbers.size() == 3 ? glm::vec3(f->numbers[0], f->numbers[1], f->numbers[2])
+                                                      : fallback;
       };
       auto rot = [&](const char* field) {
         f = node.field(field);

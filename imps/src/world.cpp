@@ -48,7 +48,8 @@ struct Inlined {
 
 class WorldReader {
  public:
-  WorldReader(const VrmlFile& file, Diagnostics& d) : file_(file), d_(d), folder_(fs::path(file.fileName).parent_path()) {}
+  WorldReader(const VrmlFile& file, Diagnostics& d)
+      : file_(file), d_(d), folder_(fs::path(file.fileName).parent_path()) {}
 
   // Walks the world's nodes; every children list's Inlines are resolved together (a clip drives its sibling).
   // `chain_` holds the Transforms above the node (their DEF names and fields), so a world clip can move them.
@@ -216,7 +217,8 @@ class WorldReader {
       Diagnostics inner;
       auto file = readVrml(text, i.path, &inner);
       if (!file) {
-        d_.error(at, "Inline '" + u + "': " + i.path + " is not an IMPS character scene, and does not read as VRML 97:");
+        d_.error(at,
+                 "Inline '" + u + "': " + i.path + " is not an IMPS character scene, and does not read as VRML 97:");
         d_.append(file.error());
         return std::nullopt;
       }

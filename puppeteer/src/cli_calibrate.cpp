@@ -216,8 +216,9 @@ int runCalibrate(const CalibrateArgs& a) {
     std::fprintf(stderr, "Nothing was written. Hold the armature still in the calibration pose and try again.\n");
     return kExitInvalidInput;
   }
-  const auto noisiest = std::max_element(average.channels.begin(), average.channels.end(),
-                                         [](const auto& x, const auto& y) { return x.stdDevRadians < y.stdDevRadians; });
+  const auto noisiest =
+      std::max_element(average.channels.begin(), average.channels.end(),
+                       [](const auto& x, const auto& y) { return x.stdDevRadians < y.stdDevRadians; });
   if (noisiest != average.channels.end()) {
     std::fprintf(talk, "Noise: at most %.3f deg (%s)\n", noisiest->stdDevRadians / kDegree, noisiest->label.c_str());
     report["noiseMaxDeg"] = noisiest->stdDevRadians / kDegree;
@@ -275,7 +276,8 @@ int runCalibrate(const CalibrateArgs& a) {
 
 void addCalibrationCommands(CLI::App& app, Commands& commands) {
   auto args = std::make_shared<CalibrateArgs>();
-  CLI::App* cmd = app.add_subcommand("calibrate", "Calibrate an armature's offsets in the character's calibration pose");
+  CLI::App* cmd =
+      app.add_subcommand("calibrate", "Calibrate an armature's offsets in the character's calibration pose");
   cmd->add_option("--rig", args->rig, "rig map (docs/calibration.md)")->required()->check(inputFile());
   cmd->add_option("--scene", args->scene, "the character's scene file (its pose is the calibration pose)")
       ->required()

@@ -123,7 +123,8 @@ int runInfo(const std::string& path, bool json) {
   }
   for (const sim::SessionCounters& c : s.counters) printCounters(c);
   std::printf("  calibrations: %zu", s.calibrations.size());
-  for (const auto& c : s.calibrations) std::printf(" (from sample %llu)", static_cast<unsigned long long>(c.firstSample));
+  for (const auto& c : s.calibrations)
+    std::printf(" (from sample %llu)", static_cast<unsigned long long>(c.firstSample));
   std::printf("\n  markers: %zu, notes: %zu, skeleton: %s\n", s.markers.size(), s.notes.size(),
               s.skeleton ? "yes (BVH hierarchy)" : "no");
   for (const auto& m : s.markers)

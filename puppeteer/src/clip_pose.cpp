@@ -112,8 +112,8 @@ void ClipPoseSource::describe(HudInfo& info) {
   info.source = "clip: " + name_;
   info.mapping = driver_.describe();
   char state[96];
-  std::snprintf(state, sizeof state, "playing x%.2g, %.2f / %.2f s, loop %llu", speed_, t - cycle * std::floor(t / cycle),
-                cycle, static_cast<unsigned long long>(t / cycle) + 1);
+  std::snprintf(state, sizeof state, "playing x%.2g, %.2f / %.2f s, loop %llu", speed_,
+                t - cycle * std::floor(t / cycle), cycle, static_cast<unsigned long long>(t / cycle) + 1);
   info.state = state;
 }
 

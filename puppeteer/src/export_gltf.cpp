@@ -33,7 +33,8 @@ struct BinaryBuilder {
     const auto* p = static_cast<const uint8_t*>(data);
     bin.insert(bin.end(), p, p + bytes);
     views.push_back(view);
-    json accessor = {{"bufferView", views.size() - 1}, {"componentType", componentType}, {"count", count}, {"type", type}};
+    json accessor = {
+        {"bufferView", views.size() - 1}, {"componentType", componentType}, {"count", count}, {"type", type}};
     accessor.update(extra);
     accessors.push_back(accessor);
     return static_cast<int>(accessors.size()) - 1;
@@ -91,8 +92,9 @@ SkinWeights skinWeights(const Character& character, const Mesh& mesh) {
     }
     std::vector<size_t> order(joints);
     for (size_t j = 0; j < joints; ++j) order[j] = j;
-    std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(std::min<size_t>(4, joints)), order.end(),
-                      [&](size_t a, size_t b) { return perJoint[a] > perJoint[b] || (perJoint[a] == perJoint[b] && a < b); });
+    std::partial_sort(
+        order.begin(), order.begin() + static_cast<std::ptrdiff_t>(std::min<size_t>(4, joints)), order.end(),
+        [&](size_t a, size_t b) { return perJoint[a] > perJoint[b] || (perJoint[a] == perJoint[b] && a < b); });
     std::array<uint16_t, 4> js{0, 0, 0, 0};
     std::array<float, 4> ws{0, 0, 0, 0};
     float sum = 0;
@@ -130,14 +132,17 @@ std::expected<std::vector<uint8_t>, Diagnostics> encodeSkinnedGlb(const Characte
 
   BinaryBuilder b;
   glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
-  for (size_t v = 0; v < mesh.vertexCount(); ++v) lo = glm::min(lo, mesh.position(v)), hi = glm::max(hi, mesh.position(v));
+  for (size_t v = 0; v < mesh.vertexCount(); ++v)
+    lo = glm::min(lo, mesh.position(v)), hi = glm::max(hi, mesh.position(v));
   json attributes;
   attributes["POSITION"] = b.add(mesh.positions.data(), mesh.positions.size() * 4, kFloat, "VEC3", mesh.vertexCount(),
                                  kArrayBuffer, {{"min", {lo.x, lo.y, lo.z}}, {"max", {hi.x, hi.y, hi.z}}});
   if (!mesh.normals.empty())
-    attributes["NORMAL"] = b.add(mesh.normals.data(), mesh.normals.size() * 4, kFloat, "VEC3", mesh.vertexCount(), kArrayBuffer);
+    attributes["NORMAL"] =
+        b.add(mesh.normals.data(), mesh.normals.size() * 4, kFloat, "VEC3", mesh.vertexCount(), kArrayBuffer);
   if (!mesh.colors.empty())
-    attributes["COLOR_0"] = b.add(mesh.colors.data(), mesh.colors.size() * 4, kFloat, "VEC3", mesh.vertexCount(), kArrayBuffer);
+    attributes["COLOR_0"] =
+        b.add(mesh.colors.data(), mesh.colors.size() * 4, kFloat, "VEC3", mesh.vertexCount(), kArrayBuffer);
   attributes["JOINTS_0"] = b.add(weights.joints.data(), weights.joints.size() * 8, kUnsignedShort, "VEC4",
                                  mesh.vertexCount(), kArrayBuffer);
   attributes["WEIGHTS_0"] = b.add(weights.weights.data(), weights.weights.size() * 16, kFloat, "VEC4",
@@ -194,11 +199,13 @@ std::expected<std::vector<uint8_t>, Diagnostics> encodeSkinnedGlb(const Characte
         t.insert(t.end(), {p.x, p.y, p.z});
         moves = moves || glm::length(p - joints[j].rest.translation) > 1e-7f;
       }
-      samplers.push_back({{"input", input}, {"output", b.add(q.data(), q.size() * 4, kFloat, "VEC4", take.frames(), -1)},
+      samplers.push_back({{"input", input},
+                          {"output", b.add(q.data(), q.size() * 4, kFloat, "VEC4", take.frames(), -1)},
                           {"interpolation", "LINEAR"}});
       channels.push_back({{"sampler", samplers.size() - 1}, {"target", {{"node", j}, {"path", "rotation"}}}});
       if (!moves) continue;
-      samplers.push_back({{"input", input}, {"output", b.add(t.data(), t.size() * 4, kFloat, "VEC3", take.frames(), -1)},
+      samplers.push_back({{"input", input},
+                          {"output", b.add(t.data(), t.size() * 4, kFloat, "VEC3", take.frames(), -1)},
                           {"interpolation", "LINEAR"}});
       channels.push_back({{"sampler", samplers.size() - 1}, {"target", {{"node", j}, {"path", "translation"}}}});
     }
@@ -210,9 +217,11 @@ std::expected<std::vector<uint8_t>, Diagnostics> encodeSkinnedGlb(const Characte
   gltf["scenes"] = json::array({json{{"nodes", sceneNodes}}});
   gltf["nodes"] = nodes;
   gltf["meshes"] = json::array(
-      {json{{"name", "implicit skin"}, {"primitives", json::array({json{{"attributes", attributes}, {"indices", indices}, {"mode", 4}}})}}});
+      {json{{"name", "implicit skin"},
+            {"primitives", json::array({json{{"attributes", attributes}, {"indices", indices}, {"mode", 4}}})}}});
   gltf["skins"] = json::array({json{{"joints", skinJoints}, {"inverseBindMatrices", ibmAccessor}}});
-  if (!channels.empty()) gltf["animations"] = json::array({json{{"name", "take"}, {"samplers", samplers}, {"channels", channels}}});
+  if (!channels.empty())
+    gltf["animations"] = json::array({json{{"name", "take"}, {"samplers", samplers}, {"channels", channels}}});
   gltf["accessors"] = b.accessors;
   gltf["bufferViews"] = b.views;
   gltf["buffers"] = json::array({json{{"byteLength", (b.bin.size() + 3) / 4 * 4}}});

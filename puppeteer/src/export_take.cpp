@@ -150,7 +150,8 @@ sim::BvhClip characterClip(const Character& character, const Take& take) {
     if (moves[j]) b.channels = {sim::BvhChannel::Xposition, sim::BvhChannel::Yposition, sim::BvhChannel::Zposition};
     b.channels.insert(b.channels.end(),
                       {sim::BvhChannel::Zrotation, sim::BvhChannel::Xrotation, sim::BvhChannel::Yrotation});
-    const bool leaf = std::none_of(joints.begin(), joints.end(), [&](const Joint& k) { return k.parent == static_cast<int>(j); });
+    const bool leaf =
+        std::none_of(joints.begin(), joints.end(), [&](const Joint& k) { return k.parent == static_cast<int>(j); });
     if (leaf) {
       glm::vec3 end(0.0f, 0.1f, 0.0f);
       float farthest = 0;

@@ -347,13 +347,19 @@ void Renderer::uploadTextures(const std::vector<RgbaImage>& images) {
             std::fill_n(d, 4, uint8_t(255));
             continue;
           }
-          const float sx = std::clamp((float(x) + 0.5f) * float(image.width) / float(width) - 0.5f, 0.0f, float(image.width - 1));
-          const float sy = std::clamp((float(y) + 0.5f) * float(image.height) / float(height) - 0.5f, 0.0f, float(image.height - 1));
-          const int x0 = int(sx), y0 = int(sy), x1 = std::min(x0 + 1, image.width - 1), y1 = std::min(y0 + 1, image.height - 1);
+          const float sx =
+              std::clamp((float(x) + 0.5f) * float(image.width) / float(width) - 0.5f, 0.0f, float(image.width - 1));
+          const float sy =
+              std::clamp((float(y) + 0.5f) * float(image.height) / float(height) - 0.5f, 0.0f, float(image.height - 1));
+          const int x0 = int(sx), y0 = int(sy), x1 = std::min(x0 + 1, image.width - 1),
+                    y1 = std::min(y0 + 1, image.height - 1);
           const float ax = sx - float(x0), ay = sy - float(y0);
           for (int ch = 0; ch < 4; ++ch) {
-            auto p = [&](int i, int j) { return float(image.rgba[(size_t(j) * size_t(image.width) + size_t(i)) * 4 + size_t(ch)]); };
-            const float v = (1 - ay) * ((1 - ax) * p(x0, y0) + ax * p(x1, y0)) + ay * ((1 - ax) * p(x0, y1) + ax * p(x1, y1));
+            auto p = [&](int i, int j) {
+              return float(image.rgba[(size_t(j) * size_t(image.width) + size_t(i)) * 4 + size_t(ch)]);
+            };
+            const float v =
+                (1 - ay) * ((1 - ax) * p(x0, y0) + ax * p(x1, y0)) + ay * ((1 - ax) * p(x0, y1) + ax * p(x1, y1));
             d[ch] = uint8_t(std::clamp(v + 0.5f, 0.0f, 255.0f));
           }
         }

@@ -139,7 +139,8 @@ std::string describeRole(BodyRole role, BodySide side) {
 }
 
 size_t RetargetReport::mapped() const {
-  return static_cast<size_t>(std::count_if(entries.begin(), entries.end(), [](const Entry& e) { return !e.target.empty(); }));
+  return static_cast<size_t>(
+      std::count_if(entries.begin(), entries.end(), [](const Entry& e) { return !e.target.empty(); }));
 }
 
 std::string RetargetReport::str() const {
@@ -196,7 +197,8 @@ std::vector<NameRole> characterRoles(const Character& character) {
 
 // Nearest ancestor of character joint j that has a source, or -1.
 int mappedAncestor(const Character& character, const std::vector<int>& source, int j) {
-  for (int a = character.joints()[static_cast<size_t>(j)].parent; a >= 0; a = character.joints()[static_cast<size_t>(a)].parent)
+  for (int a = character.joints()[static_cast<size_t>(j)].parent; a >= 0;
+       a = character.joints()[static_cast<size_t>(a)].parent)
     if (source[static_cast<size_t>(a)] >= 0) return a;
   return -1;
 }
@@ -322,7 +324,8 @@ std::expected<Retargeter, Diagnostics> Retargeter::create(const sim::BvhClip& cl
         if (character.findJoint(j.name) >= 0) matches.push_back({j.name, j.name, {}});
     for (const calibration::JointMatch& m : matches) {
       const int target = character.findJoint(m.character);
-      auto it = std::find_if(clip.joints.begin(), clip.joints.end(), [&](const sim::BvhJoint& j) { return j.name == m.source; });
+      auto it = std::find_if(clip.joints.begin(), clip.joints.end(),
+                             [&](const sim::BvhJoint& j) { return j.name == m.source; });
       if (target < 0 || it == clip.joints.end())
         return fail("joint map: '" + m.source + "' -> '" + m.character + "' names a joint that is not there");
       const auto c = static_cast<size_t>(it - clip.joints.begin());
@@ -374,7 +377,8 @@ std::expected<Retargeter, Diagnostics> Retargeter::create(const sim::BvhClip& cl
     if (s < 0) continue;
     int child = -1;
     for (size_t k = j + 1; k < n; ++k) {
-      if (r.source_[k] < 0 || mappedAncestor(character, r.source_, static_cast<int>(k)) != static_cast<int>(j)) continue;
+      if (r.source_[k] < 0 || mappedAncestor(character, r.source_, static_cast<int>(k)) != static_cast<int>(j))
+        continue;
       if (!isAncestor(clip, s, r.source_[k]) || r.source_[k] == s) continue;
       // The bone continues the body part: a centre joint's centre child (hips → spine, spine → neck), a side joint's
       // child on that side; a hips with only legs and arms below it has no bone and keeps C = identity.
@@ -385,7 +389,8 @@ std::expected<Retargeter, Diagnostics> Retargeter::create(const sim::BvhClip& cl
     if (child >= 0) {
       // The last link with a length before the child's clip joint.
       int c = r.source_[static_cast<size_t>(child)];
-      while (glm::length(offsetOf(clip.joints[static_cast<size_t>(c)])) < 1e-9 && clip.joints[static_cast<size_t>(c)].parent != s)
+      while (glm::length(offsetOf(clip.joints[static_cast<size_t>(c)])) < 1e-9 &&
+             clip.joints[static_cast<size_t>(c)].parent != s)
         c = clip.joints[static_cast<size_t>(c)].parent;
       const int p = clip.joints[static_cast<size_t>(c)].parent;
       const glm::dvec3 clipDir = clipRest[static_cast<size_t>(p)] * offsetOf(clip.joints[static_cast<size_t>(c)]);
@@ -400,7 +405,8 @@ std::expected<Retargeter, Diagnostics> Retargeter::create(const sim::BvhClip& cl
   // Joints between driven ones (and the driven ones) are in the output.
   for (size_t j = 0; j < n; ++j)
     if (r.source_[j] >= 0)
-      for (int a = static_cast<int>(j); a >= 0 && !r.posed_[static_cast<size_t>(a)]; a = character.joints()[static_cast<size_t>(a)].parent)
+      for (int a = static_cast<int>(j); a >= 0 && !r.posed_[static_cast<size_t>(a)];
+           a = character.joints()[static_cast<size_t>(a)].parent)
         r.posed_[static_cast<size_t>(a)] = true;
 
   // 4. Translation scale: leg length (thigh to foot), else standing height.
@@ -414,12 +420,14 @@ std::expected<Retargeter, Diagnostics> Retargeter::create(const sim::BvhClip& cl
     const int thigh = findRole(BodyRole::Thigh, side), foot = findRole(BodyRole::Foot, side);
     if (thigh < 0 || foot < 0) continue;
     const double charLeg = characterChainLength(character, thigh, foot);
-    const double clipLeg = clipChainLength(clip, r.source_[static_cast<size_t>(thigh)], r.source_[static_cast<size_t>(foot)]);
+    const double clipLeg =
+        clipChainLength(clip, r.source_[static_cast<size_t>(thigh)], r.source_[static_cast<size_t>(foot)]);
     if (charLeg > 0 && clipLeg > 0) {
       r.report_.translationScale = charLeg / clipLeg;
       char text[160];
-      std::snprintf(text, sizeof text, "%s leg %.4g m (%s to %s) / clip leg %.4g units", side == BodySide::Left ? "left" : "right",
-                    charLeg, character.joints()[static_cast<size_t>(thigh)].name.c_str(),
+      std::snprintf(text, sizeof text, "%s leg %.4g m (%s to %s) / clip leg %.4g units",
+                    side == BodySide::Left ? "left" : "right", charLeg,
+                    character.joints()[static_cast<size_t>(thigh)].name.c_str(),
                     character.joints()[static_cast<size_t>(foot)].name.c_str(), clipLeg);
       r.report_.scaleWhy = text;
       break;
@@ -435,7 +443,8 @@ std::expected<Retargeter, Diagnostics> Retargeter::create(const sim::BvhClip& cl
       cLo = c ? std::min(cLo, clipPos[c].y) : clipPos[c].y, cHi = c ? std::max(cHi, clipPos[c].y) : clipPos[c].y;
     }
     for (size_t j = 0; j < n; ++j)
-      kLo = j ? std::min(kLo, restPosition[j].y) : restPosition[j].y, kHi = j ? std::max(kHi, restPosition[j].y) : restPosition[j].y;
+      kLo = j ? std::min(kLo, restPosition[j].y) : restPosition[j].y,
+      kHi = j ? std::max(kHi, restPosition[j].y) : restPosition[j].y;
     if (cHi - cLo > 1e-9 && kHi - kLo > 1e-9) {
       r.report_.translationScale = (kHi - kLo) / (cHi - cLo);
       r.report_.scaleWhy = "no leg mapped: character height / clip height (spread of joint heights at rest)";
@@ -447,7 +456,8 @@ std::expected<Retargeter, Diagnostics> Retargeter::create(const sim::BvhClip& cl
   // its own clip joint has none (3ds-Max Biped: "Bip01" moves, "Bip01 Pelvis" only turns).
   r.translationSource_.assign(n, -1);
   auto hasPositions = [&](int c) {
-    return c >= 0 && std::any_of(clip.joints[static_cast<size_t>(c)].channels.begin(), clip.joints[static_cast<size_t>(c)].channels.end(),
+    return c >= 0 && std::any_of(clip.joints[static_cast<size_t>(c)].channels.begin(),
+                                 clip.joints[static_cast<size_t>(c)].channels.end(),
                                  [](sim::BvhChannel ch) { return !sim::isRotation(ch); });
   };
   for (size_t j = 0; j < n; ++j) {
@@ -498,7 +508,8 @@ void Retargeter::pose(std::span<const float> frame, std::vector<JointPose>& out)
   out.clear();
   for (size_t j = 0; j < joints.size(); ++j) {
     const Joint& joint = joints[j];
-    const glm::dquat parentWorld = joint.parent >= 0 ? world[static_cast<size_t>(joint.parent)] : glm::dquat{1.0, 0.0, 0.0, 0.0};
+    const glm::dquat parentWorld =
+        joint.parent >= 0 ? world[static_cast<size_t>(joint.parent)] : glm::dquat{1.0, 0.0, 0.0, 0.0};
     const Bone& bone = bones_[j];
     world[j] = source_[j] >= 0 ? clipWorld[static_cast<size_t>(bone.source)] * bone.correction * restWorld_[j]
                                : parentWorld * glm::dquat(joint.rest.rotation);
@@ -514,7 +525,8 @@ void Retargeter::pose(std::span<const float> frame, std::vector<JointPose>& out)
       if (moves) {
         const glm::dquat clipParent =
             clipJoint.parent >= 0 ? clipWorld[static_cast<size_t>(clipJoint.parent)] : glm::dquat{1.0, 0.0, 0.0, 0.0};
-        const glm::dvec3 delta = clipParent * (positionChannels(frame, static_cast<size_t>(s)) - reference_[static_cast<size_t>(s)]);
+        const glm::dvec3 delta =
+            clipParent * (positionChannels(frame, static_cast<size_t>(s)) - reference_[static_cast<size_t>(s)]);
         p.hasTranslation = true;
         p.translation = joint.rest.translation +
                         glm::vec3(glm::inverse(parentWorld) * (report_.translationScale * delta));

@@ -23,7 +23,21 @@
 namespace imps::app {
 
 // The body parts the name rules know.
-enum class BodyRole : uint8_t { None, Hips, Spine, Neck, Head, Clavicle, UpperArm, Forearm, Hand, Thigh, Calf, Foot, Toe };
+enum class BodyRole : uint8_t {
+  None,
+  Hips,
+  Spine,
+  Neck,
+  Head,
+  Clavicle,
+  UpperArm,
+  Forearm,
+  Hand,
+  Thigh,
+  Calf,
+  Foot,
+  Toe
+};
 enum class BodySide : uint8_t { Centre, Left, Right };
 
 // What a joint's name says, before the hierarchy is consulted.

@@ -79,7 +79,8 @@ std::filesystem::path newTakePath(const std::filesystem::path& dir, std::time_t 
   char stamp[32];
   std::strftime(stamp, sizeof stamp, "take-%Y%m%d-%H%M%S", &tm);
   std::filesystem::path path = dir / (std::string(stamp) + ".session");
-  for (int n = 2; std::filesystem::exists(path); ++n) path = dir / (std::string(stamp) + "-" + std::to_string(n) + ".session");
+  for (int n = 2; std::filesystem::exists(path); ++n)
+    path = dir / (std::string(stamp) + "-" + std::to_string(n) + ".session");
   return path;
 }
 

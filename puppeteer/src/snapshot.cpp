@@ -134,7 +134,8 @@ std::vector<uint8_t> renderMesh(const Mesh& mesh, const SnapshotOptions& options
     const glm::vec3 p0 = mesh.position(i0);
     glm::vec3 faceNormal = glm::cross(mesh.position(i1) - p0, mesh.position(i2) - p0);
     float facing = glm::dot(faceNormal, frame.eye - p0) >= 0.0f ? 1.0f : -1.0f;
-    if (hasNormals && glm::dot(faceNormal, mesh.normal(i0) + mesh.normal(i1) + mesh.normal(i2)) < 0.0f) facing = -facing;
+    if (hasNormals && glm::dot(faceNormal, mesh.normal(i0) + mesh.normal(i1) + mesh.normal(i2)) < 0.0f)
+      facing = -facing;
     const float faceLength = glm::length(faceNormal);
     faceNormal = faceLength > 0.0f ? faceNormal / faceLength : -frame.forward;
     if (glm::dot(faceNormal, frame.eye - p0) < 0.0f) faceNormal = -faceNormal;  // the side the camera sees

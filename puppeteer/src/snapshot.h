@@ -44,9 +44,9 @@ struct SnapshotOptions {
 // drawn two-sided (back faces are lit as if they faced the camera), with perspective-correct interpolation of the
 // vertex normals and colours (face normals when the mesh has none). A textured mesh's colours are modulated by its
 // layers' textures: (1 - sum of weights) + sum of weight * texel, each layer's weight interpolated and its (u, v)
-// taken from its generator at the corners (unwrapped across a sphere's seam). Triangles reaching behind the camera's near
-// plane are skipped, not clipped. An empty mesh gives just the background. Thread-safe (no shared state).
-// Returns an empty vector when width, height or supersampling are not positive.
+// taken from its generator at the corners (unwrapped across a sphere's seam). Triangles reaching behind the camera's
+// near plane are skipped, not clipped. An empty mesh gives just the background. Thread-safe (no shared state). Returns
+// an empty vector when width, height or supersampling are not positive.
 std::vector<uint8_t> renderMesh(const Mesh& mesh, const SnapshotOptions& options);
 
 // Renders as renderMesh() and saves an RGBA8 PNG (OpenImageIO) to `path`, which must end in ".png", atomically

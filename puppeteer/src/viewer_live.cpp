@@ -158,7 +158,8 @@ std::string LivePoseSource::recalibrate() {
     return "re-calibration: nowhere to save it: pass --calibration-out FILE";
   flow_.start(steadyNowNs());
   char buf[96];
-  std::snprintf(buf, sizeof buf, "re-calibrating: hold the calibration pose still (averaging %.0f ms in %.1fs; k cancels)",
+  std::snprintf(buf, sizeof buf,
+                "re-calibrating: hold the calibration pose still (averaging %.0f ms in %.1fs; k cancels)",
                 live_.calibrate.windowMs, live_.calibrate.delayMs * 1e-3);
   return buf;
 }

@@ -24,7 +24,8 @@ ChannelPoseMap::ChannelPoseMap(const sim::Session& session, const Character& cha
       const std::string name = c < static_cast<int>(info.channelNames.size()) ? info.channelNames[size_t(c)] : "";
       // "<joint>:<channel>"; joint names may themselves contain ':' (mixamorig:Hips), so split at the last one.
       const size_t colon = name.rfind(':');
-      const std::string_view channel = colon == std::string::npos ? std::string_view{} : std::string_view(name).substr(colon + 1);
+      const std::string_view channel =
+          colon == std::string::npos ? std::string_view{} : std::string_view(name).substr(colon + 1);
       const int axis = channel == "Xrotation" ? 0 : channel == "Yrotation" ? 1 : channel == "Zrotation" ? 2 : -1;
       const int joint = axis < 0 ? -1 : character.findJoint(std::string_view(name).substr(0, colon));
       if (joint < 0) {

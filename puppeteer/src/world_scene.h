@@ -39,10 +39,10 @@ struct WorldObject {
 };
 
 // Every character posed at `seconds` by its clip (its --drive clip, else the clip inlined beside it; none: rest
-// pose), polygonized by Marching Cubes with `options` (each character its own grid around its own surface), then the world's props. `sources` as driveSources
-// gives them; a source that is not a clip is refused ("render/mesh sample clips only; view plays sessions and
-// devices"). Character meshes keep their texture layers, the images' indices offset into `textures` (all the
-// characters' images, in order), which this fills. Prints errors; nullopt on failure.
+// pose), polygonized by Marching Cubes with `options` (each character its own grid around its own surface), then the
+// world's props. `sources` as driveSources gives them; a source that is not a clip is refused ("render/mesh sample
+// clips only; view plays sessions and devices"). Character meshes keep their texture layers, the images' indices offset
+// into `textures` (all the characters' images, in order), which this fills. Prints errors; nullopt on failure.
 std::optional<std::vector<WorldObject>> poseWorld(const World& world, const std::vector<std::string>& sources,
                                                   double seconds, const MarchingCubesOptions& options,
                                                   std::vector<RgbaImage>* textures, const char* command);

@@ -140,7 +140,8 @@ class Parser {
 
   std::expected<BvhClip, Diagnostics> parse() {
     Token t = lex_.next();
-    if (!iequals(t.text, "HIERARCHY")) return fail(t, "expected 'HIERARCHY' at the start of the file, found " + quoted(t.text));
+    if (!iequals(t.text, "HIERARCHY"))
+      return fail(t, "expected 'HIERARCHY' at the start of the file, found " + quoted(t.text));
     for (;;) {
       t = lex_.next();
       if (iequals(t.text, "ROOT")) {
@@ -192,7 +193,8 @@ class Parser {
     }
     if (name.empty()) return fail(lex_.here(), "expected a joint name after " + quoted(keyword.text));
     Token brace = lex_.next();
-    if (brace.text != "{") return fail(brace, "expected '{' after joint name '" + name + "', found " + quoted(brace.text));
+    if (brace.text != "{")
+      return fail(brace, "expected '{' after joint name '" + name + "', found " + quoted(brace.text));
 
     if (depth_ >= kMaxDepth) return fail(brace, "joints nested more than " + std::to_string(kMaxDepth) + " deep");
     const int index = static_cast<int>(clip_.joints.size());
@@ -212,7 +214,8 @@ class Parser {
         hasChannels = true;
         Token c = lex_.next();
         auto n = parseNumber<int>(c.text);
-        if (!n || *n < 0 || *n > 6) return fail(c, "expected a channel count 0..6 after 'CHANNELS', found " + quoted(c.text));
+        if (!n || *n < 0 || *n > 6)
+          return fail(c, "expected a channel count 0..6 after 'CHANNELS', found " + quoted(c.text));
         for (int i = 0; i < *n; ++i) {
           Token ch = lex_.next();
           std::optional<BvhChannel> found;
@@ -259,7 +262,8 @@ class Parser {
 
   // Consumes a label such as "Frames:" or "Frame Time:" given as words; the colon may be glued or separate, and
   // the value may be glued to the colon ("Frames:2"). Returns the value token.
-  std::expected<Token, Diagnostics> labelledValue(std::initializer_list<std::string_view> words, std::string_view shown) {
+  std::expected<Token, Diagnostics> labelledValue(std::initializer_list<std::string_view> words,
+                                                  std::string_view shown) {
     size_t i = 0;
     for (std::string_view w : words) {
       Token t = lex_.next();
@@ -294,7 +298,8 @@ class Parser {
     if (!frameTime || *frameTime < 0)
       return fail(ft, "expected a frame time in seconds after 'Frame Time:', found " + quoted(ft.text));
     if (*frameTime > kMaxFrameTime)
-      return fail(ft, "frame time " + std::string(ft.text) + " s is longer than the " + std::to_string(int(kMaxFrameTime)) +
+      return fail(ft, "frame time " + std::string(ft.text) + " s is longer than the " +
+                          std::to_string(int(kMaxFrameTime)) +
                           " s this program accepts (a BVH frame time is a fraction of a second, e.g. 0.0083333)");
     clip_.frameTime = *frameTime;
     if (!lex_.atLineEnd()) {

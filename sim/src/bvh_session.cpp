@@ -224,7 +224,8 @@ std::expected<BvhClip, Diagnostics> sessionToBvh(const Session& session, Session
     for (const auto& joint : clip.joints)
       for (BvhChannel c : joint.channels) {
         const std::string expected = joint.name + ":" + std::string(bvhChannelName(c));
-        if (names[i] != expected) return fail("channel " + std::to_string(i) + " is '" + names[i] + "', the skeleton says '" + expected + "'");
+        if (names[i] != expected)
+          return fail("channel " + std::to_string(i) + " is '" + names[i] + "', the skeleton says '" + expected + "'");
         ++i;
       }
   } else {
@@ -277,7 +278,8 @@ std::expected<BvhClip, Diagnostics> sessionToBvh(const Session& session, Session
   // Frames: hold each channel's last valid count; emit a frame when device 0 starts the next one.
   std::vector<uint32_t> counts(names.size());
   for (size_t i = 0; i < names.size(); ++i) {
-    const size_t d = static_cast<size_t>(std::upper_bound(deviceFirst.begin(), deviceFirst.end(), i) - deviceFirst.begin()) - 1;
+    const size_t d =
+        static_cast<size_t>(std::upper_bound(deviceFirst.begin(), deviceFirst.end(), i) - deviceFirst.begin()) - 1;
     counts[i] = static_cast<uint32_t>(halfScale(session.devices[d].bitsPerChannel));
   }
   std::vector<double> previousValue(names.size(), 0.0);
@@ -285,7 +287,8 @@ std::expected<BvhClip, Diagnostics> sessionToBvh(const Session& session, Session
   auto emit = [&]() {
     std::vector<float> frame(names.size());
     for (size_t i = 0; i < names.size(); ++i) {
-      const size_t d = static_cast<size_t>(std::upper_bound(deviceFirst.begin(), deviceFirst.end(), i) - deviceFirst.begin()) - 1;
+      const size_t d =
+          static_cast<size_t>(std::upper_bound(deviceFirst.begin(), deviceFirst.end(), i) - deviceFirst.begin()) - 1;
       const int bits = session.devices[d].bitsPerChannel;
       double v;
       if (rotation[i]) {

@@ -635,8 +635,8 @@ std::expected<Session, Diagnostics> readSessionBytes(std::span<const uint8_t> by
     if (end) {
       rec.closedCleanly = true;
       if (pos < bytes.size())
-        rec.message = file + ": warning: " + std::to_string(bytes.size() - pos) + " bytes after the END record at byte " +
-                      std::to_string(recordStart) + " ignored";
+        rec.message = file + ": warning: " + std::to_string(bytes.size() - pos) +
+                      " bytes after the END record at byte " + std::to_string(recordStart) + " ignored";
       break;
     }
   }

@@ -44,7 +44,8 @@ SessionLink analyzeSessionLink(const Session& session, size_t device) {
   link.spanNs = difference(first, arrival(samples.size() - 1));
   link.spanSeconds = (double(arrival(samples.size() - 1)) - double(first)) * 1e-9;  // exact for any two
   for (size_t i = 1; i < samples.size(); ++i) {
-    const uint32_t delta = session.samples.sequence(samples[i]) - session.samples.sequence(samples[i - 1]);  // wrapping is not a gap
+    const uint32_t delta =
+        session.samples.sequence(samples[i]) - session.samples.sequence(samples[i - 1]);  // wrapping is not a gap
     uint64_t missing = 0;
     if (delta == 0 || delta > 0x80000000u)
       ++link.restarts;

@@ -91,9 +91,12 @@ std::expected<ArmatureOptions, Diagnostics> armatureOptionsFromSpec(const driver
     if (key == "channels") ok = parseValue(value, channels) && channels >= 1 && channels <= drivers::kMaxChannels;
     else if (key == "bits") ok = parseValue(value, bits) && bits >= 1 && bits <= 32;
     else if (key == "noise") ok = parseValue(value, o.noiseCounts) && o.noiseCounts >= 0;
-    else if (key == "dropout") ok = parseValue(value, o.dropoutProbability) && o.dropoutProbability >= 0 && o.dropoutProbability <= 1;
-    else if (key == "garbage") ok = parseValue(value, o.garbageProbability) && o.garbageProbability >= 0 && o.garbageProbability <= 1;
-    else if (key == "corrupt") ok = parseValue(value, o.corruptProbability) && o.corruptProbability >= 0 && o.corruptProbability <= 1;
+    else if (key == "dropout")
+      ok = parseValue(value, o.dropoutProbability) && o.dropoutProbability >= 0 && o.dropoutProbability <= 1;
+    else if (key == "garbage")
+      ok = parseValue(value, o.garbageProbability) && o.garbageProbability >= 0 && o.garbageProbability <= 1;
+    else if (key == "corrupt")
+      ok = parseValue(value, o.corruptProbability) && o.corruptProbability >= 0 && o.corruptProbability <= 1;
     else if (key == "motion") ok = parseMotion(value, o.motion);
     else if (key == "period_s") ok = parseValue(value, o.motionPeriodS) && o.motionPeriodS > 0;
     else if (key == "seed") ok = parseValue(value, o.seed);
@@ -292,7 +295,8 @@ void SimulatedArmature::emitSample(int64_t deviceTimeNs, bool reply, std::vector
   }
   if (options_.corruptProbability > 0 && unit(rng_) < options_.corruptProbability) {
     const size_t size = out.size() - begin;
-    const size_t at = begin + static_cast<size_t>(rng_() % (options_.protocol == WireProtocol::Binary ? size : size - 2));
+    const size_t at =
+        begin + static_cast<size_t>(rng_() % (options_.protocol == WireProtocol::Binary ? size : size - 2));
     // Binary: flip one bit (the CRC must catch it). Lines: a letter makes the line malformed, never another number.
     if (options_.protocol == WireProtocol::Binary) out[at] ^= static_cast<uint8_t>(1u << (rng_() % 8));
     else out[at] = 'x';
@@ -393,7 +397,8 @@ void SimulatedArmature::produce(int64_t nowNs, std::vector<uint8_t>& out) {
 
 void SimulatedArmature::emitDueSamples(int64_t nowNs, std::vector<uint8_t>& out) {
   while (streaming_ && streamRateHz_ > 0) {
-    const int64_t due = streamStartNs_ + static_cast<int64_t>(std::llround(static_cast<double>(streamIndex_) * 1e9 / streamRateHz_));
+    const int64_t due =
+        streamStartNs_ + static_cast<int64_t>(std::llround(static_cast<double>(streamIndex_) * 1e9 / streamRateHz_));
     if (due > nowNs) break;
     emitSample(due - powerOnNs_, false, out);
     ++streamIndex_;

@@ -180,7 +180,8 @@ TEST(Calibration, TranslationChannelsMoveTheJointFromItsRestTranslation) {
   EXPECT_NEAR(pose[0].translation.x, 0.5f, 1e-6f);
   EXPECT_NEAR(pose[0].translation.y, 1.0f + 0.150f, 1e-6f);
   EXPECT_NEAR(pose[0].translation.z, 0.0f, 1e-6f);
-  const glm::dquat expected = glm::angleAxis(kPi / 2, glm::dvec3(0, 0, 1)) * glm::angleAxis(kPi / 2, glm::dvec3(1, 0, 0));
+  const glm::dquat expected =
+      glm::angleAxis(kPi / 2, glm::dvec3(0, 0, 1)) * glm::angleAxis(kPi / 2, glm::dvec3(1, 0, 0));
   EXPECT_NEAR(glm::length(glm::dvec3(pose[0].rotation * glm::vec3(0, 1, 0)) - expected * glm::dvec3(0, 1, 0)), 0, 1e-6);
   // Limits are metres.
   EXPECT_NEAR(cal->apply(sample({2048, 1000 - 900}))[0].translation.y, 1.25f, 1e-6f);

@@ -34,15 +34,17 @@ TEST(JointMap, EveryProblemHasALocation) {
             "map.json:2:3: error: unknown clip joint 'LeftArn'; did you mean 'LeftArm'?\n"
             "map.json:3:18: error: unknown character joint 'L_Forarm'; did you mean 'L_Forearm'?\n"
             "map.json:5:11: error: the character joint for 'Hips' must be a string, not a number\n");
-  EXPECT_EQ(errors("{\"version\": 1, \"joints\": {\"LeftArm\": \"L_UpperArm\",\n \"RightArm\": \"L_UpperArm\"}}"),
-            "map.json:2:14: error: character joint 'L_UpperArm' is already driven by 'LeftArm' (line 1): one clip joint "
-            "per joint\n");
+  EXPECT_EQ(
+      errors("{\"version\": 1, \"joints\": {\"LeftArm\": \"L_UpperArm\",\n \"RightArm\": \"L_UpperArm\"}}"),
+      "map.json:2:14: error: character joint 'L_UpperArm' is already driven by 'LeftArm' (line 1): one clip joint "
+      "per joint\n");
   EXPECT_EQ(errors("{\"version\": 2, \"joints\": {}}"),
             "map.json:1:13: error: file format version 2 is newer than this program reads (1); update puppeteer\n");
   EXPECT_EQ(errors("{\"version\": 1, \"joint\": {}}"),
             "map.json:1:16: error: unknown field 'joint' in the joint map; did you mean 'joints'?\n"
             "map.json:1:1: error: missing field 'joints' in the joint map\n");
-  EXPECT_EQ(errors("{\"version\": 1, \"joints\": {},}"), "map.json:1:29: error: expected a key after ',' (JSON has no trailing commas)\n");
+  EXPECT_EQ(errors("{\"version\": 1, \"joints\": {},}"),
+            "map.json:1:29: error: expected a key after ',' (JSON has no trailing commas)\n");
   EXPECT_FALSE(readJointMapFile("/nonexistent/map.json").has_value());
 }
 

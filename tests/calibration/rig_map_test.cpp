@@ -162,9 +162,10 @@ TEST(RigMap, TranslationAxesReadMetresAndRoundTrip) {
 }
 
 TEST(RigMap, TranslationAxesRefuseDegreesAndNeedAScale) {
-  EXPECT_EQ(errors(oneChannel(R"({"channel": 0, "axis": "tz", "sign": 1})")),
-            "rig.json:6:7: error: missing field 'metres_per_count' (a translation axis has no natural full scale)' in a "
-            "channel of joint 'L_Forearm'\n");
+  EXPECT_EQ(
+      errors(oneChannel(R"({"channel": 0, "axis": "tz", "sign": 1})")),
+      "rig.json:6:7: error: missing field 'metres_per_count' (a translation axis has no natural full scale)' in a "
+      "channel of joint 'L_Forearm'\n");
   EXPECT_EQ(errors(oneChannel(R"({"channel": 0, "axis": "tz", "sign": 1, "metres_per_count": 0.01, "max_deg": 5})")),
             "rig.json:6:84: error: 'max_deg' is for rotation axes: a translation axis takes 'metres_per_count' and "
             "'min'/'max'/'deadband' in metres\n");
@@ -185,7 +186,8 @@ TEST(RigMap, ChannelsOfEveryDeviceOfASession) {
   devices[1].channelNames[3] = "RightHand:Zrotation";
   const std::string text =
       "{\"version\": 1, \"bits\": 12, \"joints\": [\n"
-      "  {\"joint\": \"R_Hand\", \"channels\": [{\"channel\": \"RightHand:Zrotation\", \"axis\": \"z\", \"sign\": 1}]},\n"
+      "  {\"joint\": \"R_Hand\", \"channels\": [{\"channel\": \"RightHand:Zrotation\", \"axis\": \"z\", \"sign\": "
+      "1}]},\n"
       "  {\"joint\": \"L_Hand\", \"channels\": [{\"channel\": 4, \"device\": 1, \"axis\": \"z\", \"sign\": 1}]},\n"
       "  {\"joint\": \"Head\", \"channels\": [{\"channel\": 3, \"axis\": \"z\", \"sign\": 1}]}\n"
       "]}\n";
@@ -300,7 +302,8 @@ TEST(RigMap, SyntaxErrorsHaveLocations) {
             "rig.json:4:1: error: expected a key after ',' (JSON has no trailing commas)\n");
   EXPECT_EQ(errors("{\"version\": 1, \"version\": 1}"),
             "rig.json:1:16: error: duplicate key 'version' (first at line 1)\n");
-  EXPECT_EQ(errors("{\"version\": 1, \"bits\": 12, \"joints\": [\n"), "rig.json:2:1: error: unexpected end of file: expected a value\n");
+  EXPECT_EQ(errors("{\"version\": 1, \"bits\": 12, \"joints\": [\n"),
+            "rig.json:2:1: error: unexpected end of file: expected a value\n");
 }
 
 TEST(RigMap, TextThatIsNotUtf8IsRefusedAtItsFirstBadByte) {
@@ -334,7 +337,8 @@ TEST(RigMap, HugeFilesAreCheckedInLinearTimeAndTheReportIsCapped) {
   for (int k = 0; k < 200000; ++k) text += " \"k" + std::to_string(k) + "\": 0,";
   text += " \"joints\": [\n";
   for (int j = 0; j < 100000; ++j)
-    text += std::string(j ? "," : "") + "{\"joint\": \"Head\", \"channels\": [{\"channel\": 3, \"axis\": \"x\", \"sign\": 1}]}\n";
+    text += std::string(j ? "," : "") +
+            "{\"joint\": \"Head\", \"channels\": [{\"channel\": 3, \"axis\": \"x\", \"sign\": 1}]}\n";
   text += "]}\n";
   auto r = parseRigMap(text, "big.json", {&biped()});
   ASSERT_FALSE(r.has_value());
@@ -362,8 +366,10 @@ TEST(RigMap, WriteThenReadReproducesTheMap) {
       "{\"version\": 1, \"bits\": 14, \"device\": \"Rig \\\"A\\\"\", \"info\": {\"who\": \"tech\", \"n\": [1, 2]},\n"
       " \"joints\": [\n"
       "  {\"joint\": \"L_UpperArm\", \"order\": \"zxy\", \"channels\": [\n"
-      "    {\"channel\": 7, \"axis\": \"x\", \"sign\": -1, \"gain\": 2000.5, \"offset\": 16383.25, \"min\": -1, \"max\": 1.5},\n"
-      "    {\"channel\": 8, \"axis\": \"y\", \"sign\": 1, \"encoder\": \"linear\", \"range_deg\": 270, \"deadband\": 0.01},\n"
+      "    {\"channel\": 7, \"axis\": \"x\", \"sign\": -1, \"gain\": 2000.5, \"offset\": 16383.25, \"min\": -1, "
+      "\"max\": 1.5},\n"
+      "    {\"channel\": 8, \"axis\": \"y\", \"sign\": 1, \"encoder\": \"linear\", \"range_deg\": 270, \"deadband\": "
+      "0.01},\n"
       "    {\"channel\": 9, \"axis\": \"z\", \"sign\": 1, \"smoothing_ms\": 12.5}]}\n"
       "]}\n";
   auto a = parseRigMap(text, "a.json", {&biped()});

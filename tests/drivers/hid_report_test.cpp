@@ -238,7 +238,8 @@ TEST(HidReportCodec, ArmatureRoundTripsAtEveryWidth) {
         s.sequence = 1234;
         s.deviceTimeNs = o.deviceTime ? 987'654'000 : 0;
         const uint32_t max = static_cast<uint32_t>((uint64_t{1} << bits) - 2);
-        for (int i = 0; i < channels; ++i) s.counts[i] = static_cast<uint32_t>((static_cast<uint64_t>(i) * 2654435761u) % max);
+        for (int i = 0; i < channels; ++i)
+          s.counts[i] = static_cast<uint32_t>((static_cast<uint64_t>(i) * 2654435761u) % max);
         s.counts[channels - 1] = max;
         if (channels > 2) s.flags[1] = ChannelFlag::NotConnected;
         auto report = encodeHidInputReport(l, s);

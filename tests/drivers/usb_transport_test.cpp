@@ -520,8 +520,8 @@ TEST(UsbSession, SampleLatencyThroughTheEmulatedBus) {
   for (const Sample& s : samples) ages.push_back(s.arrivalTimeNs - (dev->poweredOnAtNs() + s.deviceTimeNs));
   std::ranges::sort(ages);
   const int64_t median = ages[ages.size() / 2], p99 = ages[ages.size() * 99 / 100];
-  std::printf("[ latency ] 1 kHz x 64 channels, %zu samples: median %.3f ms, p99 %.3f ms, dropped %llu\n",
-              ages.size(), double(median) / 1e6, double(p99) / 1e6, static_cast<unsigned long long>(session.stats().samplesDropped));
+  std::printf("[ latency ] 1 kHz x 64 channels, %zu samples: median %.3f ms, p99 %.3f ms, dropped %llu\n", ages.size(),
+              double(median) / 1e6, double(p99) / 1e6, static_cast<unsigned long long>(session.stats().samplesDropped));
   EXPECT_EQ(session.stats().samplesDropped, 0u);
   EXPECT_LT(median, 20'000'000);
 }

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
-// libFuzzer target for readVrml and readClips: any bytes (plain or gzip) give a file or diagnostics, never a crash or hang; a file
-// that reads has no errors, its ROUTEs name DEF'd nodes, and its node graph is acyclic (PROTO bodies included).
+// libFuzzer target for readVrml and readClips: any bytes (plain or gzip) give a file or diagnostics, never a crash or
+// hang; a file that reads has no errors, its ROUTEs name DEF'd nodes, and its node graph is acyclic (PROTO bodies
+// included).
 #include <cstdint>
 #include <set>
 #include <string>

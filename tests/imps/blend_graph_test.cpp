@@ -113,7 +113,8 @@ size_t primitiveNamed(const Character& c, const std::string& name) {
 bool inOneSet(const Character& c, size_t a, size_t b) {
   for (size_t s = 0; s < c.blendSets().count(); ++s) {
     const auto set = c.blendSets().set(s);
-    if (std::binary_search(set.begin(), set.end(), uint32_t(a)) && std::binary_search(set.begin(), set.end(), uint32_t(b)))
+    if (std::binary_search(set.begin(), set.end(), uint32_t(a)) &&
+        std::binary_search(set.begin(), set.end(), uint32_t(b)))
       return true;
   }
   return false;
@@ -247,7 +248,8 @@ TEST(BlendGraph, FieldIsTheBruteForceMaximumOverPairwiseBlendingCliques) {
     for (int k = 0; k < 150; ++k) {
       const glm::vec3 x(u(rng), u(rng), u(rng));
       const float want = bruteForceValue(field, reference, x);
-      EXPECT_NEAR(field.value(x), want, 2e-5f * std::max(1.0f, want)) << blend << (flat ? " flat\n" : " tree\n") << text;
+      EXPECT_NEAR(field.value(x), want, 2e-5f * std::max(1.0f, want))
+          << blend << (flat ? " flat\n" : " tree\n") << text;
     }
   }
 }

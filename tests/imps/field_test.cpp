@@ -47,7 +47,8 @@ TEST(Field, LoneMetaballSurfaceIsItsRadiusForEveryBlend) {
 
 TEST(Field, ExponentialBlendAddsContributions) {
   BlendFunction blend;  // Exponential, B = -1
-  const Field two = makeField({Primitive::metaball({-0.5f, 0, 0}, 0.6f), Primitive::metaball({0.5f, 0, 0}, 0.6f)}, blend);
+  const Field two =
+      makeField({Primitive::metaball({-0.5f, 0, 0}, 0.6f), Primitive::metaball({0.5f, 0, 0}, 0.6f)}, blend);
   const Field one = makeField({Primitive::metaball({-0.5f, 0, 0}, 0.6f)}, blend);
   const glm::vec3 mid(0, 0, 0);
   EXPECT_NEAR(two.value(mid), 2.0f * one.value(mid), 1e-6f);
@@ -59,7 +60,8 @@ TEST(Field, HardnessReducesBlancSchlickBlending) {
   soft.kind = hard.kind = BlendKind::BlancSchlick;
   soft.defaultParam = 0.3f;
   hard.defaultParam = 3.0f;
-  const std::vector<Primitive> prims = {Primitive::metaball({-0.55f, 0, 0}, 0.5f), Primitive::metaball({0.55f, 0, 0}, 0.5f)};
+  const std::vector<Primitive> prims = {Primitive::metaball({-0.55f, 0, 0}, 0.5f),
+                                        Primitive::metaball({0.55f, 0, 0}, 0.5f)};
   EXPECT_GT(makeField(prims, soft).value({0, 0, 0}), 1.0f);
   EXPECT_LT(makeField(prims, hard).value({0, 0, 0}), 1.0f);
 }
@@ -72,7 +74,8 @@ TEST(Field, EllipticalBlendIsAUnionAwayFromTheJoin) {
   EXPECT_NEAR(f.value({-1.5f, 0, 0}), 1.0f, 1e-5f);  // far side of the left ball: its own surface
   EXPECT_NEAR(f.value({1, 0.5f, 0}), 1.0f, 1e-5f);
   // Close together, the rounded union fills the crease.
-  const Field close = makeField({Primitive::metaball({-0.45f, 0, 0}, 0.5f), Primitive::metaball({0.45f, 0, 0}, 0.5f)}, blend);
+  const Field close =
+      makeField({Primitive::metaball({-0.45f, 0, 0}, 0.5f), Primitive::metaball({0.45f, 0, 0}, 0.5f)}, blend);
   EXPECT_GT(close.value({0, 0.25f, 0}), 1.0f);
 }
 
@@ -81,7 +84,8 @@ TEST(Field, BatchedValuesAreBitIdenticalToPointValues) {
   std::uniform_real_distribution<float> u(-1.5f, 1.5f), r(0.1f, 0.3f);
   std::vector<Primitive> prims;
   for (int i = 0; i < 40; ++i) prims.push_back(Primitive::metaball({u(rng), u(rng), u(rng)}, r(rng)));
-  for (int i = 0; i < 10; ++i) prims.push_back(Primitive::lineSeg({u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, r(rng), r(rng)));
+  for (int i = 0; i < 10; ++i)
+    prims.push_back(Primitive::lineSeg({u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, r(rng), r(rng)));
   BlendFunction blend;
   blend.defaultParam = -3.0f;
   const Field f = makeField(prims, blend);
@@ -93,7 +97,8 @@ TEST(Field, BatchedValuesAreBitIdenticalToPointValues) {
     f.prepare(region, scratch);
     std::vector<glm::vec3> points;
     for (int k = 0; k < 64; ++k)
-      points.push_back(region.lo + region.size() * glm::vec3(float(k % 4) / 3, float((k / 4) % 4) / 3, float(k / 16) / 3));
+      points.push_back(region.lo +
+                       region.size() * glm::vec3(float(k % 4) / 3, float((k / 4) % 4) / 3, float(k / 16) / 3));
     std::vector<float> batched(points.size());
     f.values(points, batched, scratch);
     for (size_t k = 0; k < points.size(); ++k) EXPECT_EQ(batched[k], f.value(points[k]));
@@ -107,7 +112,8 @@ TEST(Field, LatticeValuesAreBitIdenticalToPointValues) {
   std::uniform_real_distribution<float> u(-1.0f, 1.0f), r(0.05f, 0.3f);
   std::vector<Primitive> prims;
   for (int i = 0; i < 20; ++i) prims.push_back(Primitive::metaball({u(rng), u(rng), u(rng)}, r(rng)));
-  for (int i = 0; i < 6; ++i) prims.push_back(Primitive::lineSeg({u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, r(rng), r(rng)));
+  for (int i = 0; i < 6; ++i)
+    prims.push_back(Primitive::lineSeg({u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, r(rng), r(rng)));
   BlendSets sets;
   for (uint32_t first = 0; first < prims.size(); first += 4) {
     std::vector<uint32_t> members;
@@ -207,7 +213,8 @@ TEST(Field, BoxBoundsHoldAtEveryPointOfTheirBox) {
 TEST(Field, GradientMatchesFiniteDifferencesAndColoursBlend) {
   BlendFunction blend;
   blend.defaultParam = -2.0f;
-  const Field f = makeField({Primitive::metaball({-0.4f, 0, 0}, 0.5f), Primitive::lineSeg({0.3f, 0, 0}, {1, 0.4f, 0}, 0.3f, 0.2f)}, blend);
+  const Field f = makeField(
+      {Primitive::metaball({-0.4f, 0, 0}, 0.5f), Primitive::lineSeg({0.3f, 0, 0}, {1, 0.4f, 0}, 0.3f, 0.2f)}, blend);
   const glm::vec3 x(0.05f, 0.3f, 0.1f);
   const FieldSample s = f.sample(x);
   const float h = 1e-3f;
@@ -227,7 +234,8 @@ TEST(Field, GradientMatchesFiniteDifferencesAndColoursBlend) {
 TEST(Field, BlendSetsPreventUnwantedBlending) {
   BlendFunction blend;
   blend.defaultParam = -1.0f;
-  const std::vector<Primitive> prims = {Primitive::metaball({-0.6f, 0, 0}, 0.5f), Primitive::metaball({0.6f, 0, 0}, 0.5f)};
+  const std::vector<Primitive> prims = {Primitive::metaball({-0.6f, 0, 0}, 0.5f),
+                                        Primitive::metaball({0.6f, 0, 0}, 0.5f)};
   BlendSets separate;
   separate.add(std::vector<uint32_t>{0});
   separate.add(std::vector<uint32_t>{1});

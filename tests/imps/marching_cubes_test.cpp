@@ -84,8 +84,9 @@ TEST(MarchingCubes, LineSegWithUnequalRadiiMeshesToTheConeSphereHull) {
 }
 
 TEST(MarchingCubes, EllipsoidMeshesToItsEllipsoid) {
-  expectOnSurface(Primitive::ellipsoid({0, 0, 0}, glm::angleAxis(0.6f, glm::normalize(glm::vec3(1, 1, 0))), {0.3f, 0.6f, 0.45f}),
-                  0.04f, 0.01f);
+  expectOnSurface(
+      Primitive::ellipsoid({0, 0, 0}, glm::angleAxis(0.6f, glm::normalize(glm::vec3(1, 1, 0))), {0.3f, 0.6f, 0.45f}),
+      0.04f, 0.01f);
 }
 
 TEST(MarchingCubes, SwarmsAreClosedManifoldsAtManyResolutions) {
@@ -186,7 +187,8 @@ TEST(MarchingCubes, EmptySpaceIsSkipped) {
 // closed tube connected to the body, reaching to the hand.
 TEST(MarchingCubes, ThinLimbsDoNotVanishAtCoarseCells) {
   BlendSets sets = BlendSets::all(2);
-  const Field f = makeField({Primitive::metaball({0, 0, 0}, 0.3f), Primitive::lineSeg({0.2f, 0.013f, 0.021f}, {1.0f, 0.037f, 0.029f}, 0.025f, 0.025f)},
+  const Field f = makeField({Primitive::metaball({0, 0, 0}, 0.3f),
+                             Primitive::lineSeg({0.2f, 0.013f, 0.021f}, {1.0f, 0.037f, 0.029f}, 0.025f, 0.025f)},
                             -4.0f, sets);
   MarchingCubesOptions o;
   o.cellSize = 0.1f;

@@ -34,8 +34,8 @@ Mesh grid(uint32_t n) {
   Mesh mesh;
   for (uint32_t y = 0; y <= n; ++y) {
     for (uint32_t x = 0; x <= n; ++x) {
-      mesh.positions.insert(mesh.positions.end(),
-                            {static_cast<float>(x) / static_cast<float>(n), static_cast<float>(y) / static_cast<float>(n), 0.0f});
+      mesh.positions.insert(mesh.positions.end(), {static_cast<float>(x) / static_cast<float>(n),
+                                                   static_cast<float>(y) / static_cast<float>(n), 0.0f});
     }
   }
   for (uint32_t y = 0; y < n; ++y) {

@@ -269,7 +269,8 @@ TEST(SceneReaderErrors, FileEndsMidNode) {
   EXPECT_EQ(errorsOf(kHeader + "Metaball {"),
             "t.wrl:2:11: error: unexpected end of file inside Metaball: the '{' at 2:10 is never closed\n");
   EXPECT_EQ(errorsOf(kHeader + "DEF"), "t.wrl:2:4: error: expected a name after DEF, found end of file\n");
-  EXPECT_EQ(errorsOf(kHeader + "BlendGroup { members \"A"), "t.wrl:2:22: error: unterminated string (it starts here)\n");
+  EXPECT_EQ(errorsOf(kHeader + "BlendGroup { members \"A"),
+            "t.wrl:2:22: error: unterminated string (it starts here)\n");
 }
 
 TEST(SceneReaderErrors, BadNumbers) {
@@ -395,7 +396,8 @@ TEST(SceneReader, TexGenAndImageTextureOnEveryShape) {
 TEST(SceneReaderErrors, UnreadableFile) {
   auto missing = readSceneFile("/nonexistent/scene.wrl");
   ASSERT_FALSE(missing.has_value());
-  EXPECT_EQ(missing.error().str(), "/nonexistent/scene.wrl: error: cannot read scene file: No such file or directory\n");
+  EXPECT_EQ(missing.error().str(),
+            "/nonexistent/scene.wrl: error: cannot read scene file: No such file or directory\n");
   auto directory = readSceneFile(std::string(IMPS_SOURCE_DIR) + "/tests/data/scenes");
   ASSERT_FALSE(directory.has_value());
   EXPECT_EQ(directory.error().str(), std::string(IMPS_SOURCE_DIR) +

@@ -29,7 +29,8 @@ Character arm() {
 }
 
 void expectNear(const glm::vec3& a, const glm::vec3& b, float tolerance = 1e-5f) {
-  EXPECT_NEAR(glm::length(a - b), 0.0f, tolerance) << a.x << " " << a.y << " " << a.z << " vs " << b.x << " " << b.y << " " << b.z;
+  EXPECT_NEAR(glm::length(a - b), 0.0f, tolerance)
+      << a.x << " " << a.y << " " << a.z << " vs " << b.x << " " << b.y << " " << b.z;
 }
 
 TEST(SkeletonCache, RestPoseMatchesTheFile) {

@@ -45,7 +45,8 @@ Example load(const std::string& name) {
   auto c = Character::fromScene(e.scene);
   if (!c) ADD_FAILURE() << c.error().str();
   e.character = std::move(*c);
-  if (const auto* node = std::get_if<Tesselator3MPNode>(&e.scene.polygonizer)) e.options = TesselatorOptions::fromNode(*node);
+  if (const auto* node = std::get_if<Tesselator3MPNode>(&e.scene.polygonizer))
+    e.options = TesselatorOptions::fromNode(*node);
   return e;
 }
 
@@ -266,7 +267,8 @@ Tesselator3MP { desiredRadius 0.03 queryRadius 0.072 numThreads 2
     ] }
   ] }
 ] } }
-)", "chain.wrl");
+)",
+                         "chain.wrl");
   ASSERT_TRUE(scene.has_value()) << scene.error().str();
   auto ch = Character::fromScene(*scene);
   ASSERT_TRUE(ch.has_value()) << ch.error().str();
@@ -666,7 +668,8 @@ TEST(Tesselator, SixHundredRendersAtTheFilesFidelityAndThirtyHertz) {
     if (angle > 45.0f) angle = 90.0f - angle, direction = -1.0f;
     if (angle < -45.0f) angle = -90.0f - angle, direction = 1.0f;
     for (size_t k = 0; k < ids.size(); ++k)
-      skel.setRotation(ids[k], rest[k] * glm::angleAxis(glm::radians(angle) * (k % 2 ? -1.0f : 1.0f), glm::vec3(0, 0, 1)));
+      skel.setRotation(ids[k],
+                       rest[k] * glm::angleAxis(glm::radians(angle) * (k % 2 ? -1.0f : 1.0f), glm::vec3(0, 0, 1)));
     skel.update();
     tess.frame(skel, mesh);
     const MeshTopology t = analyzeTopology(mesh);

@@ -39,7 +39,8 @@ TEST(TexGen, SphereGivesTheClosestPointsCoordinatesWhateverTheDistance) {
   TexGen g;
   g.origin = {1, 2, 3};
   for (const glm::vec3 d : {glm::vec3(0.3f, -0.5f, 0.8f), glm::vec3(-2, 1, 0.1f), glm::vec3(0, 0, -1)})
-    for (float scale : {0.01f, 1.0f, 50.0f}) expectUv(g.map(g.origin + scale * d), g.map(g.origin + d).x, g.map(g.origin + d).y, 1e-5f);
+    for (float scale : {0.01f, 1.0f, 50.0f})
+      expectUv(g.map(g.origin + scale * d), g.map(g.origin + d).x, g.map(g.origin + d).y, 1e-5f);
 }
 
 TEST(TexGen, SphereFollowsItsRotationAndTranslation) {

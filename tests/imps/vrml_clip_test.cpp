@@ -70,7 +70,8 @@ TEST(Interpolators, EqualKeysMakeAStep) {
 
 TEST(Interpolators, OrientationIsSlerp) {
   const std::vector<float> keys = {0.0f, 1.0f};
-  const std::vector<glm::quat> values = {glm::angleAxis(0.0f, glm::vec3(0, 0, 1)), glm::angleAxis(kPi / 2, glm::vec3(0, 0, 1))};
+  const std::vector<glm::quat> values = {glm::angleAxis(0.0f, glm::vec3(0, 0, 1)),
+                                         glm::angleAxis(kPi / 2, glm::vec3(0, 0, 1))};
   // Slerp at a quarter: a quarter of the angle about the same axis (a lerp of quaternions would not be).
   expectSameRotation(interpolateOrientation(keys, values, 0.25f), glm::angleAxis(kPi / 8, glm::vec3(0, 0, 1)));
   expectSameRotation(interpolateOrientation(keys, values, 0.5f), glm::angleAxis(kPi / 4, glm::vec3(0, 0, 1)));
@@ -202,9 +203,10 @@ TEST(Clips, AnInterpolatorNoTimeSensorDrivesIsAWarning) {
 }
 
 TEST(Clips, ScalarInterpolatorsAreListedNotPlayed) {
-  const Clips clips = clipsOf(kHeader + "DEF M Material { } DEF S TimeSensor { }\n"
-                                        "DEF F ScalarInterpolator { key [0 1] keyValue [0 1] }\n"
-                                        "ROUTE S.fraction_changed TO F.set_fraction ROUTE F.value_changed TO M.transparency");
+  const Clips clips = clipsOf(kHeader +
+                              "DEF M Material { } DEF S TimeSensor { }\n"
+                              "DEF F ScalarInterpolator { key [0 1] keyValue [0 1] }\n"
+                              "ROUTE S.fraction_changed TO F.set_fraction ROUTE F.value_changed TO M.transparency");
   EXPECT_TRUE(clips.clips.empty());
   ASSERT_EQ(clips.scalars.size(), 1u);
   EXPECT_EQ(clips.scalars[0].target, "M");

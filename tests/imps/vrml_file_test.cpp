@@ -132,7 +132,8 @@ TEST(VrmlFile, ProtoInstanceExpandsItsBodyWithIsSubstituted) {
   // A ROUTE to the instance's `translation` reaches the body's Transform.
   bool linked = false;
   for (const VrmlIsLink& link : instance.isLinks)
-    linked = linked || (link.interfaceField == "translation" && link.bodyNode.get() == &body && link.bodyField == "translation");
+    linked = linked ||
+             (link.interfaceField == "translation" && link.bodyNode.get() == &body && link.bodyField == "translation");
   EXPECT_TRUE(linked);
 }
 
@@ -189,7 +190,8 @@ TEST(VrmlFile, GzippedFileReadsLikeThePlainOne) {
   ASSERT_EQ(zipped.roots.size(), plain.roots.size());
   EXPECT_EQ(zipped.routes.size(), plain.routes.size());
   EXPECT_EQ(zipped.defs.size(), plain.defs.size());
-  EXPECT_EQ(zipped.defs.at("Box01-COORD")->field("point")->numbers, plain.defs.at("Box01-COORD")->field("point")->numbers);
+  EXPECT_EQ(zipped.defs.at("Box01-COORD")->field("point")->numbers,
+            plain.defs.at("Box01-COORD")->field("point")->numbers);
 }
 
 TEST(VrmlFile, TruncatedOrCorruptGzipIsAnError) {
@@ -221,7 +223,8 @@ TEST(VrmlFile, ErrorsSayWhereAndWhat) {
             "ancestor)\n");
   EXPECT_EQ(errorsOf(kHeader + "DEF Timer TimeSensor { }\nROUTE Timr.fraction_changed TO Timer.x"),
             "w.wrl:3:1: error: ROUTE names 'Timr', which no node is DEF'd as (did you mean 'Timer'?)\n");
-  EXPECT_EQ(errorsOf(kHeader + "ROUTE A TO B.c"), "w.wrl:2:7: error: expected 'NodeName.fieldName' in ROUTE, found 'A'\n");
+  EXPECT_EQ(errorsOf(kHeader + "ROUTE A TO B.c"),
+            "w.wrl:2:7: error: expected 'NodeName.fieldName' in ROUTE, found 'A'\n");
   EXPECT_EQ(errorsOf(kHeader + "Transform { translation IS t }"),
             "w.wrl:2:13: error: 'translation IS t' outside a PROTO body\n");
   EXPECT_EQ(errorsOf(kHeader + "PROTO P [ field SFFloat a 1 ] { Transform { translation IS b } }"),

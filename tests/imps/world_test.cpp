@@ -26,14 +26,15 @@ class WorldFiles : public ::testing::Test {
                                         ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::create_directories(dir_);
     write("ball.wrl", "#VRML V2.0 utf8\nDEF ROOT RigidTransform { children [ Metaball { radius 0.3 } ] }\n");
-    write("bob.wrl",
-          "#VRML V2.0 utf8\nDEF ROOT Transform { translation 0 0.5 0 }\n"
-          "DEF UP TimeSensor { cycleInterval 2 loop TRUE }\n"
-          "DEF UP_POS PositionInterpolator { key [ 0 1 ] keyValue [ 0 0 0, 0 1 0 ] }\n"
-          "ROUTE UP.fraction_changed TO UP_POS.set_fraction\nROUTE UP_POS.value_changed TO ROOT.set_translation\n"
-          "DEF DOWN TimeSensor { cycleInterval 1 }\n"
-          "DEF DOWN_POS PositionInterpolator { key [ 0 1 ] keyValue [ 0 0 0, 0 -1 0 ] }\n"
-          "ROUTE DOWN.fraction_changed TO DOWN_POS.set_fraction\nROUTE DOWN_POS.value_changed TO ROOT.set_translation\n");
+    write(
+        "bob.wrl",
+        "#VRML V2.0 utf8\nDEF ROOT Transform { translation 0 0.5 0 }\n"
+        "DEF UP TimeSensor { cycleInterval 2 loop TRUE }\n"
+        "DEF UP_POS PositionInterpolator { key [ 0 1 ] keyValue [ 0 0 0, 0 1 0 ] }\n"
+        "ROUTE UP.fraction_changed TO UP_POS.set_fraction\nROUTE UP_POS.value_changed TO ROOT.set_translation\n"
+        "DEF DOWN TimeSensor { cycleInterval 1 }\n"
+        "DEF DOWN_POS PositionInterpolator { key [ 0 1 ] keyValue [ 0 0 0, 0 -1 0 ] }\n"
+        "ROUTE DOWN.fraction_changed TO DOWN_POS.set_fraction\nROUTE DOWN_POS.value_changed TO ROOT.set_translation\n");
     write("table.wrl", "#VRML V2.0 utf8\nShape { geometry Box { size 1 0.1 1 } }\n");
   }
   void TearDown() override { fs::remove_all(dir_); }
@@ -45,17 +46,18 @@ class WorldFiles : public ::testing::Test {
 };
 
 TEST_F(WorldFiles, InlinesPlaceCharactersWithTheirClipsAndProps) {
-  const std::string world = write("w.wrl",
-                                  "#VRML V2.0 utf8\n"
-                                  "DEF LEFT Transform { translation -2 0 0 children [\n"
-                                  "  Inline { url \"ball.wrl\" }\n"
-                                  "  Inline { url [ \"missing.wrl\" \"bob.wrl#DOWN\" ] }\n"
-                                  "] }\n"
-                                  "DEF RIGHT Transform { translation 2 0 0 rotation 0 1 0 1.5708 children [\n"
-                                  "  Transform { translation 0 1 0 children [ DEF HERO Inline { url \"ball.wrl\" } ] }\n"
-                                  "  Inline { url \"table.wrl\" }\n"
-                                  "] }\n"
-                                  "Shape { geometry Sphere { radius 0.1 } }\n");
+  const std::string world =
+      write("w.wrl",
+            "#VRML V2.0 utf8\n"
+            "DEF LEFT Transform { translation -2 0 0 children [\n"
+            "  Inline { url \"ball.wrl\" }\n"
+            "  Inline { url [ \"missing.wrl\" \"bob.wrl#DOWN\" ] }\n"
+            "] }\n"
+            "DEF RIGHT Transform { translation 2 0 0 rotation 0 1 0 1.5708 children [\n"
+            "  Transform { translation 0 1 0 children [ DEF HERO Inline { url \"ball.wrl\" } ] }\n"
+            "  Inline { url \"table.wrl\" }\n"
+            "] }\n"
+            "Shape { geometry Sphere { radius 0.1 } }\n");
   Diagnostics warnings;
   auto w = readWorldFile(world, &warnings);
   ASSERT_TRUE(w.has_value()) << w.error().str();
@@ -129,16 +131,17 @@ TEST_F(WorldFiles, ErrorsPointIntoTheWorld) {
 // The world's own clip moves the Transforms it drives: a character's placement and a prop below them follow, the
 // rest stays; at 0 s the pose is the file's.
 TEST_F(WorldFiles, TheWorldsOwnClipsMovePlacementsAndProps) {
-  const std::string world = write("w.wrl",
-                                  "#VRML V2.0 utf8\n"
-                                  "DEF CART Transform { translation 1 0 0 children [\n"
-                                  "  DEF RIDER Transform { translation 0 1 0 children [ Inline { url \"ball.wrl\" } ] }\n"
-                                  "  Shape { geometry Box { size 0.1 0.1 0.1 } }\n"
-                                  "] }\n"
-                                  "DEF STILL Transform { children [ Inline { url \"ball.wrl\" } ] }\n"
-                                  "DEF T TimeSensor { cycleInterval 2 loop TRUE }\n"
-                                  "DEF P PositionInterpolator { key [ 0 1 ] keyValue [ 1 0 0, 5 0 0 ] }\n"
-                                  "ROUTE T.fraction_changed TO P.set_fraction\nROUTE P.value_changed TO CART.set_translation\n");
+  const std::string world =
+      write("w.wrl",
+            "#VRML V2.0 utf8\n"
+            "DEF CART Transform { translation 1 0 0 children [\n"
+            "  DEF RIDER Transform { translation 0 1 0 children [ Inline { url \"ball.wrl\" } ] }\n"
+            "  Shape { geometry Box { size 0.1 0.1 0.1 } }\n"
+            "] }\n"
+            "DEF STILL Transform { children [ Inline { url \"ball.wrl\" } ] }\n"
+            "DEF T TimeSensor { cycleInterval 2 loop TRUE }\n"
+            "DEF P PositionInterpolator { key [ 0 1 ] keyValue [ 1 0 0, 5 0 0 ] }\n"
+            "ROUTE T.fraction_changed TO P.set_fraction\nROUTE P.value_changed TO CART.set_translation\n");
   auto w = readWorldFile(world);
   ASSERT_TRUE(w.has_value()) << w.error().str();
   ASSERT_EQ(w->clips.size(), 1u);

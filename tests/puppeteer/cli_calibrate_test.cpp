@@ -55,7 +55,10 @@ drivers::DeviceInfo device32() {
 }
 
 // Channel mounting: counts at the T-pose (several near the wrap).
-double mount(size_t ch) { return ch % 5 == 0 ? std::fmod(4094.0 + static_cast<double>(ch % 4), 4096.0) : 300.0 + 111.0 * static_cast<double>(ch); }
+double mount(size_t ch) {
+  return ch % 5 == 0 ? std::fmod(4094.0 + static_cast<double>(ch % 4), 4096.0)
+                     : 300.0 + 111.0 * static_cast<double>(ch);
+}
 
 uint32_t countFor(size_t ch, double angle, int sign = 1) {
   double c = std::fmod(std::round(mount(ch) + sign * angle * kGain12), 4096.0);

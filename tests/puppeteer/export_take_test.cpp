@@ -215,7 +215,8 @@ TEST(Export, SkinnedGlbWeightsAreNormalisedAndTheSkinFollowsTheSurface) {
       glm::mat4 inv;
       std::memcpy(&inv[0][0], &ibm[16 * j], 64);
       const Rigid& w = skeleton.world(static_cast<int>(j));
-      const glm::vec3 local = glm::vec3(inv * glm::vec4(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2], 1));
+      const glm::vec3 local =
+          glm::vec3(inv * glm::vec4(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2], 1));
       x += weights[4 * v + size_t(k)] * w.apply(local);
     }
     const FieldSample fs = skeleton.field().sample(x);

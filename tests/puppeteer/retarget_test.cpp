@@ -84,7 +84,8 @@ TestClip makeClip(const Naming& n) {
     j.parent = parent;
     j.offset = {offset.x, offset.y, offset.z};
     if (moves) j.channels = {BvhChannel::Xposition, BvhChannel::Yposition, BvhChannel::Zposition};
-    if (n.zyx) j.channels.insert(j.channels.end(), {BvhChannel::Zrotation, BvhChannel::Yrotation, BvhChannel::Xrotation});
+    if (n.zyx)
+      j.channels.insert(j.channels.end(), {BvhChannel::Zrotation, BvhChannel::Yrotation, BvhChannel::Xrotation});
     else j.channels.insert(j.channels.end(), {BvhChannel::Zrotation, BvhChannel::Xrotation, BvhChannel::Yrotation});
     t.clip.joints.push_back(j);
     t.index[key] = static_cast<int>(t.clip.joints.size()) - 1;
@@ -242,7 +243,8 @@ TEST_P(EachNaming, LimbsHandsAndFeetPointWhereTheClipsDo) {
     }
     // Root motion: the clip's root displacement, scaled.
     const int rootKey = t.index.count("root") ? t.index.at("root") : t.index.at("hips");
-    const glm::dvec3 expected = r->translationScale() * (cp[static_cast<size_t>(rootKey)] - cp0[static_cast<size_t>(rootKey)]);
+    const glm::dvec3 expected =
+        r->translationScale() * (cp[static_cast<size_t>(rootKey)] - cp0[static_cast<size_t>(rootKey)]);
     const glm::dvec3 moved = glm::dvec3(skeleton.world(pelvis).translation - pelvisRest);
     EXPECT_LT(glm::length(moved - expected), 1e-4) << "frame " << f;
   }

@@ -169,11 +169,13 @@ TEST(Snapshot, VertexColoursAreInterpolated) {
 TEST(Snapshot, BackFacesAreLitLikeFrontFaces) {
   const Mesh sphere = icosphere(3, 1.0f, glm::vec3(0.0f), kRed);
   Mesh insideOut = sphere;
-  for (size_t t = 0; t < insideOut.triangleCount(); ++t) std::swap(insideOut.indices[3 * t + 1], insideOut.indices[3 * t + 2]);
+  for (size_t t = 0; t < insideOut.triangleCount(); ++t)
+    std::swap(insideOut.indices[3 * t + 1], insideOut.indices[3 * t + 2]);
   for (float& n : insideOut.normals) n = -n;
   // Winding that disagrees with the vertex normals: the normals say which side is out.
   Mesh rewound = sphere;
-  for (size_t t = 0; t < rewound.triangleCount(); ++t) std::swap(rewound.indices[3 * t + 1], rewound.indices[3 * t + 2]);
+  for (size_t t = 0; t < rewound.triangleCount(); ++t)
+    std::swap(rewound.indices[3 * t + 1], rewound.indices[3 * t + 2]);
   const Image front = render(sphere, frontView(64)), back = render(insideOut, frontView(64));
   const Image reversed = render(rewound, frontView(64));
   for (const auto& [x, y] : {std::pair{32, 32}, {24, 24}, {40, 44}}) {
@@ -228,8 +230,8 @@ TEST(Snapshot, BadSizeGivesNoPixels) {
 class SnapshotFileTest : public testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("imps_snapshot_" + std::to_string(::getpid()) + "_" + testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = fs::temp_directory_path() / ("imps_snapshot_" + std::to_string(::getpid()) + "_" +
+                                        testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }

@@ -4,7 +4,8 @@
 // right half (the character's left arm seen from the front three-quarter camera), not in the legs.
 // Usage: viewer_shot_check REST.png POSED.png [LEGS]: LEGS (default 0.02) is the largest fraction of the differing
 // pixels allowed in the bottom 40% of the image (the particle tesselator's triangulation there varies a little with
-// the number of settling updates, Marching Cubes' does not). Exit 0 when every check passes; prints what failed otherwise.
+// the number of settling updates, Marching Cubes' does not). Exit 0 when every check passes; prints what failed
+// otherwise.
 #include <OpenImageIO/imageio.h>
 
 #include <cstdio>
@@ -74,7 +75,8 @@ int main(int argc, char** argv) {
   if (failures) return 1;
   const double fgRest = foreground(rest), fgPosed = foreground(posed);
   check(fgRest > 0.02 && fgRest < 0.6, "rest shot shows a character: " + std::to_string(100 * fgRest) + "% foreground");
-  check(fgPosed > 0.02 && fgPosed < 0.6, "posed shot shows a character: " + std::to_string(100 * fgPosed) + "% foreground");
+  check(fgPosed > 0.02 && fgPosed < 0.6,
+        "posed shot shows a character: " + std::to_string(100 * fgPosed) + "% foreground");
 
   // Where the two differ.
   size_t diff = 0, legs = 0;
@@ -93,7 +95,8 @@ int main(int argc, char** argv) {
     check(cx > 0.5 * rest.width && cy < 0.6 * rest.height,
           "the difference is centred on the upper right (the moved left arm): centroid " + std::to_string(int(cx)) +
               "," + std::to_string(int(cy)));
-    check(double(legs) <= legsAllowed * double(diff), "the legs did not change: " + std::to_string(legs) + " pixels below 60%");
+    check(double(legs) <= legsAllowed * double(diff),
+          "the legs did not change: " + std::to_string(legs) + " pixels below 60%");
   }
   return failures == 0 ? 0 : 1;
 }

@@ -162,7 +162,8 @@ TEST_F(WorldCli, DrivePosesOneCharacterAndAnInlinedClipPlaysByItself) {
   EXPECT_NE(typo.err.find("w.wrl: error: --drive BLEU="), std::string::npos) << typo.err;
   EXPECT_NE(typo.err.find("the world places no character 'BLEU' (did you mean 'BLUE'?)"), std::string::npos)
       << typo.err;
-  const auto session = render(w, path("never.png"), {"--drive", "BLUE=" + kSource + "/examples/simple_biped_wave.session"});
+  const auto session =
+      render(w, path("never.png"), {"--drive", "BLUE=" + kSource + "/examples/simple_biped_wave.session"});
   EXPECT_EQ(session.exitCode, 1);
   EXPECT_NE(session.err.find("samples VRML clips only"), std::string::npos) << session.err;
   const auto twice = render(w, path("never.png"), {"--drive", "BLUE=" + path("lift.wrl"), "--drive",
@@ -174,10 +175,11 @@ TEST_F(WorldCli, DrivePosesOneCharacterAndAnInlinedClipPlaysByItself) {
 // A prop on a character's joint (a Transform named after the joint, beside the character) moves with the joint
 // when the character's clip lifts it; a prop of the world stays.
 TEST_F(WorldCli, PropsOnAJointFollowItsClip) {
-  const std::string w = write("w.wrl", "#VRML V2.0 utf8\nDEF BLUE Transform { translation 1 0 0 children [\n"
-                                       "  Inline { url \"blue.wrl\" } Inline { url \"lift.wrl\" }\n"
-                                       "  DEF ROOT Transform { children [ Shape { geometry Box { size 0.2 0.2 0.2 } } ] } ] }\n"
-                                       "Shape { geometry Sphere { radius 0.1 } }\n");
+  const std::string w = write("w.wrl",
+                              "#VRML V2.0 utf8\nDEF BLUE Transform { translation 1 0 0 children [\n"
+                              "  Inline { url \"blue.wrl\" } Inline { url \"lift.wrl\" }\n"
+                              "  DEF ROOT Transform { children [ Shape { geometry Box { size 0.2 0.2 0.2 } } ] } ] }\n"
+                              "Shape { geometry Sphere { radius 0.1 } }\n");
   auto world = readWorldFile(w);
   ASSERT_TRUE(world.has_value()) << world.error().str();
   MarchingCubesOptions options;
@@ -200,7 +202,8 @@ TEST_F(WorldCli, PropsOnAJointFollowItsClip) {
 }
 
 TEST_F(WorldCli, BadWorldsFailWithTheirPosition) {
-  const std::string missing = write("m.wrl", "#VRML V2.0 utf8\nTransform {\n  children [ Inline { url \"gone.wrl\" } ] }\n");
+  const std::string missing =
+      write("m.wrl", "#VRML V2.0 utf8\nTransform {\n  children [ Inline { url \"gone.wrl\" } ] }\n");
   const std::string notScene = write("n.wrl", "#VRML V2.0 utf8\nInline { url \"red.png\" }\n");
   write("red.png", "\x89PNG not really");
   for (const std::string command : {"render", "mesh", "check"}) {

@@ -145,9 +145,15 @@ TEST(BvhToSession, RoundTripThroughASessionFile) {
 TEST(BvhToSession, MoreThan64ChannelsSpanSeveralDevices) {
   BvhClip clip;
   clip.frameTime = 1.0 / 120;
-  clip.joints.push_back({"Hips", -1, {0, 0, 0}, {C::Xposition, C::Yposition, C::Zposition, C::Zrotation, C::Yrotation, C::Xrotation}, false, {}});
+  clip.joints.push_back({"Hips",
+                         -1,
+                         {0, 0, 0},
+                         {C::Xposition, C::Yposition, C::Zposition, C::Zrotation, C::Yrotation, C::Xrotation},
+                         false,
+                         {}});
   for (int j = 0; j < 40; ++j)
-    clip.joints.push_back({"J" + std::to_string(j), j, {0, 1, 0}, {C::Zrotation, C::Xrotation, C::Yrotation}, j == 39, {0, 1, 0}});
+    clip.joints.push_back(
+        {"J" + std::to_string(j), j, {0, 1, 0}, {C::Zrotation, C::Xrotation, C::Yrotation}, j == 39, {0, 1, 0}});
   const size_t channels = clip.channelCount();
   ASSERT_EQ(channels, 126u);
   for (int f = 0; f < 50; ++f) {
@@ -177,7 +183,8 @@ TEST(SessionToBvh, UnwrapReproducesTracksCrossing180) {
   clip.frameTime = 0.01;
   clip.joints.push_back({"Arm", -1, {0, 0, 0}, {C::Zrotation, C::Xrotation}, true, {1, 0, 0}});
   for (int f = 0; f < 40; ++f)
-    clip.frames.push_back({static_cast<float>(160 + 2.5 * f), static_cast<float>(-150 - 4.25 * f)});  // to 257.5, -315.75
+    clip.frames.push_back(
+        {static_cast<float>(160 + 2.5 * f), static_cast<float>(-150 - 4.25 * f)});  // to 257.5, -315.75
   auto session = bvhToSession(clip, "spin.bvh");
   ASSERT_TRUE(session);
   auto unwrapped = sessionToBvh(*session);

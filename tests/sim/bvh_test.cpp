@@ -170,10 +170,12 @@ TEST(BvhRead, InlineErrors) {
   expectError("", "t.bvh:1:1: error: expected 'HIERARCHY' at the start of the file, found end of file");
   expectError("HIERARCHY\nMOTION\n", "t.bvh:2:1: error: expected 'ROOT', found 'MOTION'");
   expectError("HIERARCHY\nROOT\n{\n", "t.bvh:2:5: error: expected a joint name after 'ROOT'");
-  expectError("HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\nCHANNELS 7\n", "t.bvh:5:10: error: expected a channel count 0..6 after 'CHANNELS', found '7'");
+  expectError("HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\nCHANNELS 7\n",
+              "t.bvh:5:10: error: expected a channel count 0..6 after 'CHANNELS', found '7'");
   expectError("HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\nCHANNELS 2 Xrotation Xrotation\n",
               "t.bvh:5:22: error: channel 'Xrotation' repeated in joint 'A'");
-  expectError("HIERARCHY\nROOT A\n{\nOFFSET 0 zero 0\n", "t.bvh:4:10: error: expected 3 numbers after 'OFFSET', found 'zero'");
+  expectError("HIERARCHY\nROOT A\n{\nOFFSET 0 zero 0\n",
+              "t.bvh:4:10: error: expected 3 numbers after 'OFFSET', found 'zero'");
   expectError("HIERARCHY\nROOT A\n{\nCHANNELS 0\n}\n", "t.bvh:5:1: error: joint 'A' has no OFFSET");
   expectError("HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\n}\nMOTION\nFrames: 1\nFrame Time: 0.1 x\n",
               "t.bvh:8:17: error: unexpected 'x' after the frame time");

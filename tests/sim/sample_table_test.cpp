@@ -95,7 +95,8 @@ TEST(SampleTable, ReadSessionTakesAboutItsFileSize) {
   ASSERT_TRUE(session.has_value()) << session.error().firstError();
   ASSERT_EQ(session->samples.size(), 100000u);
   EXPECT_EQ(session->samples[99999].counts[2], (99999u * 13) & 4095);
-  EXPECT_LE(session->samples.bytes(), fileBytes * 3 / 2) << "bytes per sample: " << double(session->samples.bytes()) / 1e5;
+  EXPECT_LE(session->samples.bytes(), fileBytes * 3 / 2)
+      << "bytes per sample: " << double(session->samples.bytes()) / 1e5;
   EXPECT_LT(session->samples.bytes() * 5, 100000 * sizeof(Sample));  // what a vector<Sample> took, 5x over
 }
 

@@ -22,8 +22,8 @@ using drivers::ChannelFlag;
 // A fresh, empty directory per test.
 fs::path tempDir() {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  fs::path dir = fs::temp_directory_path() /
-                 ("imps_session_test_" + std::to_string(::getpid()) + "_" + info->test_suite_name() + "_" + info->name());
+  fs::path dir = fs::temp_directory_path() / ("imps_session_test_" + std::to_string(::getpid()) + "_" +
+                                              info->test_suite_name() + "_" + info->name());
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
@@ -264,8 +264,9 @@ TEST(SessionFile, CrashedWriterReadsBackToLastFlush) {
   EXPECT_EQ(session->samples.back().sequence, 9u);
   EXPECT_FALSE(session->recovery.closedCleanly);
   EXPECT_FALSE(session->recovery.truncated);
-  EXPECT_EQ(session->recovery.message, (dir / "snapshot.session").string() +
-                                           ": warning: no END record: the recording was not closed (10 samples recovered)");
+  EXPECT_EQ(session->recovery.message,
+            (dir / "snapshot.session").string() +
+                ": warning: no END record: the recording was not closed (10 samples recovered)");
   // Earlier bytes are never rewritten: the final file starts with the snapshot.
   ASSERT_TRUE(writer->close());
   const auto snapshot = fileBytes(dir / "snapshot.session");

@@ -343,7 +343,8 @@ bool readGlb(const std::string& path, Mesh* mesh, std::string* error, std::strin
   if (primitive.indices < 0) return fail(error, path + ": no indices");
   if (!readAccessor(model, primitive.indices, 1, &values, error)) return false;
   mesh->indices.resize(values.size());
-  std::transform(values.begin(), values.end(), mesh->indices.begin(), [](double v) { return static_cast<uint32_t>(v); });
+  std::transform(values.begin(), values.end(), mesh->indices.begin(),
+                 [](double v) { return static_cast<uint32_t>(v); });
   return true;
 }
 

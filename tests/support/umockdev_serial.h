@@ -94,7 +94,8 @@ class UmockdevSerial {
   int replugAcmNode() {
     const std::string root = rootDir();
     if (ptySlave_.empty() || ::symlink(ptySlave_.c_str(), (root + "/dev/ttyACM0").c_str()) != 0 ||
-        ::symlink("../../devices/pci0000:00/usb1/1-1/1-1:1.0/tty/ttyACM0", (root + "/sys/class/tty/ttyACM0").c_str()) != 0)
+        ::symlink("../../devices/pci0000:00/usb1/1-1/1-1:1.0/tty/ttyACM0", (root + "/sys/class/tty/ttyACM0").c_str()) !=
+            0)
       return -1;
     return umockdev_testbed_get_dev_fd(testbed_, "/dev/ttyACM0");
   }

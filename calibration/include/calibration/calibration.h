@@ -61,11 +61,11 @@ class Calibration {
   // rawAngle clamped to the mapping's limits.
   double angle(size_t i, double count) const;
 
-  // The pose for one sample of device 0 (channels of other devices read as the calibration pose): every driven joint, rotation = rest * calibrated rotation; a joint with translation
-  // channels also gets translation = rest translation + the channels' metres along their axes of the parent's
-  // frame (hasTranslation), the others none. A channel
-  // that is beyond the sample's channelCount or flagged NotConnected / Outlier reads as the calibration pose
-  // (angle 0; Calibrator holds the previous angle instead). Deadband and smoothing are not applied here.
+  // The pose for one sample of device 0 (channels of other devices read as the calibration pose): every driven joint,
+  // rotation = rest * calibrated rotation; a joint with translation channels also gets translation = rest translation +
+  // the channels' metres along their axes of the parent's frame (hasTranslation), the others none. A channel that is
+  // beyond the sample's channelCount or flagged NotConnected / Outlier reads as the calibration pose (angle 0;
+  // Calibrator holds the previous angle instead). Deadband and smoothing are not applied here.
   std::vector<JointPose> apply(const drivers::Sample& sample) const;
   // The pose for per-mapping angles (radians, one per rigMap().channels entry), written into `out` (resized).
   void compose(std::span<const double> angles, std::vector<JointPose>& out) const;
@@ -80,10 +80,10 @@ class Calibration {
 
 // Stateful conversion across a stream of samples, for the frame loop. Per mapping: clamp, then deadband (the output
 // moves only once the clamped angle is more than `deadband` from the value held, and then takes the new angle whole,
-// so jitter within the deadband never reaches the character and nothing lags), then a one-pole low-pass with time constant smoothingMs using
-// the samples' timestamps (device time when it advances, else arrival time; 1 ms when neither advances). Channels
-// flagged NotConnected / Outlier, or missing from the sample, keep their previous angle (0 before the first good
-// reading). The first good reading of a channel is taken as is. Not thread-safe: one owner.
+// so jitter within the deadband never reaches the character and nothing lags), then a one-pole low-pass with time
+// constant smoothingMs using the samples' timestamps (device time when it advances, else arrival time; 1 ms when
+// neither advances). Channels flagged NotConnected / Outlier, or missing from the sample, keep their previous angle (0
+// before the first good reading). The first good reading of a channel is taken as is. Not thread-safe: one owner.
 class Calibrator {
  public:
   explicit Calibrator(Calibration calibration);

@@ -60,7 +60,8 @@ inline float expAccurate(float x) {
 // relative error; the thesis's fast exponential.
 inline float expFast(float x) {
   x = std::min(std::max(x, -87.0f), 88.0f);
-  const int32_t bits = static_cast<int32_t>(12102203.0f * x) + 1064866808;  // 2^23/ln2; 127*2^23 - 486408 (Schraudolph's c)
+  const int32_t bits =
+      static_cast<int32_t>(12102203.0f * x) + 1064866808;  // 2^23/ln2; 127*2^23 - 486408 (Schraudolph's c)
   float y;
   std::memcpy(&y, &bits, sizeof y);
   return y;

@@ -4,7 +4,8 @@
 //
 // F(x) = max over blend sets S of blend(S)(x). A flat scene has one set holding every primitive. A hierarchical one
 // has the maximal cliques of its blend graph (blend_graph.h), so two primitives blend only if they are blend
-// neighbours: a hand that touches a hip is unioned with it, never blended. The field convention (F >= 0, surface at iso, inside larger) is in blend.h.
+// neighbours: a hand that touches a hip is unioned with it, never blended. The field convention (F >= 0, surface at
+// iso, inside larger) is in blend.h.
 #pragma once
 
 #include <cstdint>

@@ -29,7 +29,9 @@ class SampleTable {
     drivers::Sample operator*() const { return (*table_)[index_]; }
     const_iterator& operator++() { return ++index_, *this; }
     const_iterator operator++(int) { auto old = *this; ++index_; return old; }
-    difference_type operator-(const const_iterator& o) const { return difference_type(index_) - difference_type(o.index_); }
+    difference_type operator-(const const_iterator& o) const {
+      return difference_type(index_) - difference_type(o.index_);
+    }
     bool operator==(const const_iterator& o) const { return index_ == o.index_; }
    private:
     const SampleTable* table_ = nullptr;

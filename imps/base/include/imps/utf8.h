@@ -14,7 +14,8 @@ namespace imps {
 size_t firstInvalidUtf8(std::string_view text);
 
 // `text` with each ill-formed sequence (a lead byte and the continuation bytes after it, or a stray byte) replaced by
-// U+FFFD, the replacement character; well-formed text is returned unchanged. For strings from devices and files on their way into JSON, which must be UTF-8.
+// U+FFFD, the replacement character; well-formed text is returned unchanged. For strings from devices and files on
+// their way into JSON, which must be UTF-8.
 std::string toValidUtf8(std::string_view text);
 
 }  // namespace imps
