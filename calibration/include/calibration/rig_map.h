@@ -48,8 +48,8 @@ struct ChannelMap {
   // Limits after the offset, radians (translation: metres), min <= max.
   double minAngle = -std::numeric_limits<double>::infinity();
   double maxAngle = std::numeric_limits<double>::infinity();
-  double deadband =
-      0;  // radians (translation: metres), >= 0: changes smaller than this are ignored (hysteresis; Calibrator only)
+  // Radians (translation: metres), >= 0: changes smaller than this are ignored (hysteresis; Calibrator only).
+  double deadband = 0;
   double smoothingMs = 0;  // one-pole low-pass time constant in ms, >= 0 (0: none; Calibrator only)
   EncoderKind encoder = EncoderKind::Absolute;  // translation channels default to Linear
   SourceLoc loc;  // where the file names the channel (its "channel" value)
