@@ -71,6 +71,63 @@ size_t foldedTriangles(const Field& field, const Mesh& mesh) {
   return folded;
 }
 
+// worstSurfaceError over the vertices some triangle uses (a particle mesh keeps one vertex per particle, and those no
+// triangle uses may be off the surface).
+float worstUsedVertexError(const Field& field, const Mesh& mesh) {
+  std::vector<uint8_t> used(mesh.vertexCount(), 0);
+  for (uint32_t v : mesh.indices) used[v] = 1;
+  float worst = 0.0f;
+  for (uint32_t v = 0; v < used.size(); ++v) {
+    if (!used[v]) continue;
+    const FieldSample fs = field.sample(mesh.position(v));
+    worst = std::max(worst, std::fabs(fs.value - field.iso()) / glm::length(fs.gradient));
+  }
+  return worst;
+}
+
+// The biped's sizes scaled so that about `particles` particles cover it (the file's ~2685 at scale 1).
+void scaleToParticles(TesselatorOptions& options, float particles) {
+  const float scale = std::sqrt(2685.0f / particles);
+  options.desiredRadius *= scale;
+  options.queryRadius *= scale;
+  options.cubeSize *= scale;
+}
+
+// Upper arms and thighs (and forearms with `forearms`) swinging about z, left and right in opposite senses, as a
+// triangle wave between -45 and +45 degrees (`puppeteer bench --motion swing:DEG`).
+class LimbSwing {
+ public:
+  LimbSwing(const Character& character, SkeletonCache& skeleton, bool forearms) : skeleton_(skeleton) {
+    std::vector<const char*> names = {"L_UpperArm", "R_UpperArm", "L_Thigh", "R_Thigh"};
+    if (forearms) names.insert(names.end(), {"L_Forearm", "R_Forearm"});
+    for (const char* name : names) {
+      ids_.push_back(character.findJoint(name));
+      rest_.push_back(skeleton.local(ids_.back()).rotation);
+    }
+  }
+  // Poses the limbs at `degrees` (left side; the right the opposite) and updates the skeleton.
+  void pose(float degrees) {
+    for (size_t k = 0; k < ids_.size(); ++k) {
+      const float a = glm::radians(degrees) * (k % 2 ? -1.0f : 1.0f);
+      skeleton_.setRotation(ids_[k], rest_[k] * glm::angleAxis(a, glm::vec3(0, 0, 1)));
+    }
+    skeleton_.update();
+  }
+  // Advances the triangle wave by `degrees` and poses the limbs there.
+  void advance(float degrees) {
+    angle_ += direction_ * degrees;
+    if (angle_ > 45.0f) angle_ = 90.0f - angle_, direction_ = -1.0f;
+    if (angle_ < -45.0f) angle_ = -90.0f - angle_, direction_ = 1.0f;
+    pose(angle_);
+  }
+
+ private:
+  SkeletonCache& skeleton_;
+  std::vector<int> ids_;
+  std::vector<glm::quat> rest_;
+  float angle_ = 0.0f, direction_ = 1.0f;
+};
+
 // Max over points of |F - iso| / |grad F| (metres).
 float worstSurfaceDistance(const Field& field, std::span<const glm::vec3> points) {
   float worst = 0.0f;
@@ -177,10 +234,7 @@ class SwingingBiped : public ::testing::TestWithParam<FoldCase> {};
 
 TEST_P(SwingingBiped, StaysClosedAndHardlyFolds) {
   Example e = load("simple_biped.wrl");
-  const float scale = std::sqrt(2685.0f / GetParam().particles);
-  e.options.desiredRadius *= scale;
-  e.options.queryRadius *= scale;
-  e.options.cubeSize *= scale;
+  scaleToParticles(e.options, GetParam().particles);
   SkeletonCache skel(*e.character);
   Tesselator tess(e.options);
   Mesh mesh;
@@ -546,33 +600,16 @@ class FastSwingAtThesisFidelity : public ::testing::TestWithParam<float> {};
 
 TEST_P(FastSwingAtThesisFidelity, EveryRenderIsClosedAndManifold) {
   Example e = load("simple_biped.wrl");
-  const float scale = std::sqrt(2685.0f / 900.0f);
-  e.options.desiredRadius *= scale;
-  e.options.queryRadius *= scale;
-  e.options.cubeSize *= scale;
-  const Character& ch = *e.character;
-  SkeletonCache skel(ch);
+  scaleToParticles(e.options, 900.0f);
+  SkeletonCache skel(*e.character);
   Tesselator tess(e.options);
   Mesh mesh;
   tess.settle(skel, mesh, 200);
-  std::vector<int> ids;
-  std::vector<glm::quat> rest;
-  for (const char* name : {"L_UpperArm", "R_UpperArm", "L_Thigh", "R_Thigh", "L_Forearm", "R_Forearm"}) {
-    ids.push_back(ch.findJoint(name));
-    rest.push_back(skel.local(ids.back()).rotation);
-  }
+  LimbSwing swing(*e.character, skel, true);
   const int renders = 90;
-  float angle = 0.0f, direction = 1.0f;
   size_t fallbacks = 0, pinched = 0;
   for (int f = 0; f < renders; ++f) {
-    angle += direction * GetParam() / 60.0f;
-    if (angle > 45.0f) angle = 90.0f - angle, direction = -1.0f;
-    if (angle < -45.0f) angle = -90.0f - angle, direction = 1.0f;
-    for (size_t k = 0; k < ids.size(); ++k) {
-      const float a = glm::radians(angle) * (k % 2 ? -1.0f : 1.0f);
-      skel.setRotation(ids[k], rest[k] * glm::angleAxis(a, glm::vec3(0, 0, 1)));
-    }
-    skel.update();
+    swing.advance(GetParam() / 60.0f);
     tess.frame(skel, mesh);
     const MeshTopology t = analyzeTopology(mesh);
     ASSERT_TRUE(t.closedManifold()) << "render " << f << ": " << t.boundaryEdges << " boundary edges, "
@@ -584,12 +621,7 @@ TEST_P(FastSwingAtThesisFidelity, EveryRenderIsClosedAndManifold) {
       EXPECT_EQ(mesh.vertexCount(), tess.particles().size());
     }
     // Every vertex a triangle uses is on the surface: |F - iso| / |grad F| within 0.02 desiredRadius.
-    float worst = 0.0f;
-    for (uint32_t v : mesh.indices) {
-      const FieldSample fs = skel.field().sample(mesh.position(v));
-      worst = std::max(worst, std::fabs(fs.value - skel.field().iso()) / glm::length(fs.gradient));
-    }
-    EXPECT_LT(worst, 0.02f * e.options.desiredRadius) << "render " << f;
+    EXPECT_LT(worstUsedVertexError(skel.field(), mesh), 0.02f * e.options.desiredRadius) << "render " << f;
     pinched += tess.stats().pinchedVertices;
     fallbacks += tess.stats().fallback ? 1 : 0;
   }
@@ -607,27 +639,15 @@ TEST(Tesselator, FoldsAreRepairedAndTheMeshStaysClosed) {
   size_t folds[2] = {0, 0};
   for (bool unfold : {false, true}) {
     Example e = load("simple_biped.wrl");
-    const float scale = std::sqrt(2685.0f / 900.0f);
-    e.options.desiredRadius *= scale;
-    e.options.queryRadius *= scale;
-    e.options.cubeSize *= scale;
+    scaleToParticles(e.options, 900.0f);
     e.options.unfold = unfold;
-    const Character& ch = *e.character;
-    SkeletonCache skel(ch);
+    SkeletonCache skel(*e.character);
     Tesselator tess(e.options);
     Mesh mesh;
     tess.settle(skel, mesh, 200);
-    std::vector<int> ids;
-    std::vector<glm::quat> rest;
-    for (const char* name : {"L_UpperArm", "R_UpperArm", "L_Thigh", "R_Thigh"}) {
-      ids.push_back(ch.findJoint(name));
-      rest.push_back(skel.local(ids.back()).rotation);
-    }
+    LimbSwing swing(*e.character, skel, false);
     for (int f = 0; f < 90; ++f) {
-      const float angle = glm::radians(45.0f) * std::sin(float(f) * 0.1f);
-      for (size_t k = 0; k < ids.size(); ++k)
-        skel.setRotation(ids[k], rest[k] * glm::angleAxis(k % 2 ? -angle : angle, glm::vec3(0, 0, 1)));
-      skel.update();
+      swing.pose(45.0f * std::sin(float(f) * 0.1f));
       tess.frame(skel, mesh);
       ASSERT_TRUE(analyzeTopology(mesh).closedManifold()) << "render " << f << (unfold ? " with" : " without") << " H";
       const size_t measured = foldedTriangles(skel.field(), mesh);
@@ -649,28 +669,15 @@ TEST(Tesselator, FoldsAreRepairedAndTheMeshStaysClosed) {
 // folded triangles (docs/tesselator.md, "Every render checked").
 TEST(Tesselator, SixHundredRendersAtTheFilesFidelityAndThirtyHertz) {
   Example e = load("simple_biped.wrl");
-  const Character& ch = *e.character;
-  SkeletonCache skel(ch);
+  SkeletonCache skel(*e.character);
   Tesselator tess(e.options);
   Mesh mesh;
   tess.settle(skel, mesh, 200);
-  std::vector<int> ids;
-  std::vector<glm::quat> rest;
-  for (const char* name : {"L_UpperArm", "R_UpperArm", "L_Thigh", "R_Thigh", "L_Forearm", "R_Forearm"}) {
-    ids.push_back(ch.findJoint(name));
-    rest.push_back(skel.local(ids.back()).rotation);
-  }
-  float angle = 0.0f, direction = 1.0f;
+  LimbSwing swing(*e.character, skel, true);
   size_t fallbacks = 0, worstFolds = 0;
   float worstOffset = 0.0f;
   for (int f = 0; f < 600; ++f) {
-    angle += direction * 360.0f / 30.0f;
-    if (angle > 45.0f) angle = 90.0f - angle, direction = -1.0f;
-    if (angle < -45.0f) angle = -90.0f - angle, direction = 1.0f;
-    for (size_t k = 0; k < ids.size(); ++k)
-      skel.setRotation(ids[k],
-                       rest[k] * glm::angleAxis(glm::radians(angle) * (k % 2 ? -1.0f : 1.0f), glm::vec3(0, 0, 1)));
-    skel.update();
+    swing.advance(360.0f / 30.0f);
     tess.frame(skel, mesh);
     const MeshTopology t = analyzeTopology(mesh);
     ASSERT_TRUE(t.closedManifold()) << "render " << f << ": " << t.boundaryEdges << " boundary edges, "
@@ -678,14 +685,7 @@ TEST(Tesselator, SixHundredRendersAtTheFilesFidelityAndThirtyHertz) {
                                     << " non-manifold vertices";
     fallbacks += tess.stats().fallback ? 1 : 0;
     worstFolds = std::max(worstFolds, foldedTriangles(skel.field(), mesh));
-    if (tess.stats().fallback) continue;
-    std::vector<uint8_t> used(mesh.vertexCount(), 0);
-    for (uint32_t v : mesh.indices) used[v] = 1;
-    for (uint32_t v = 0; v < used.size(); ++v) {
-      if (!used[v]) continue;
-      const FieldSample fs = skel.field().sample(mesh.position(v));
-      worstOffset = std::max(worstOffset, std::fabs(fs.value - skel.field().iso()) / glm::length(fs.gradient));
-    }
+    if (!tess.stats().fallback) worstOffset = std::max(worstOffset, worstUsedVertexError(skel.field(), mesh));
   }
   std::printf("600 renders: %zu fell back, at most %zu folded, worst vertex %.4f desiredRadius off\n", fallbacks,
               worstFolds, double(worstOffset / e.options.desiredRadius));
@@ -731,10 +731,8 @@ TEST(Tesselator, AnOpenTriangulationFallsBackToMarchingCubes) {
 TEST(Tesselator, AStillBipedComesToRestAndWakesWhenALimbMoves) {
   for (float particles : {900.0f, 2650.0f}) {
     Example e = load("simple_biped.wrl");
-    const float scale = std::sqrt(2685.0f / particles), h = e.options.desiredRadius * scale;
-    e.options.desiredRadius *= scale;
-    e.options.queryRadius *= scale;
-    e.options.cubeSize *= scale;
+    scaleToParticles(e.options, particles);
+    const float h = e.options.desiredRadius;
     SkeletonCache skel(*e.character);
     Tesselator tess(e.options);
     Mesh mesh, previous;
