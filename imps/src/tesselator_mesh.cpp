@@ -833,7 +833,7 @@ namespace {
 
 // Whether triangle (a, b, c) winds with the surface: its normal agrees with the field's outward normal at its
 // centroid. Where it agrees within 60 degrees with each corner's normal (almost everywhere), the field is not asked.
-bool windsOutward(const Tesselator::State& s, uint32_t a, uint32_t b, uint32_t c) {
+bool windsOutward(Tesselator::State& s, uint32_t a, uint32_t b, uint32_t c) {
   const glm::vec3 pa = s.vpos[a], face = glm::cross(s.vpos[b] - pa, s.vpos[c] - pa);
   const float near = 0.5f * glm::length(face);
   if (glm::dot(face, s.nrm[a]) > near && glm::dot(face, s.nrm[b]) > near && glm::dot(face, s.nrm[c]) > near)
@@ -911,7 +911,7 @@ bool flipToUnfold(Tesselator::State& s, uint32_t t, int k) {
 // A triangulation of ring[0..m) (a counter-clockwise loop) into `ears` whose triangles all wind with the surface and
 // whose new edges are no edges yet: the fan from the ring vertex with the shortest diagonals. Returns the triangle
 // count, m - 2, or 0 if no fan will do.
-size_t fanRing(const Tesselator::State& s, const uint32_t* ring, size_t m, uint32_t* ears) {
+size_t fanRing(Tesselator::State& s, const uint32_t* ring, size_t m, uint32_t* ears) {
   size_t best = m;
   float bestLength = 1e30f;
   for (size_t j = 0; j < m; ++j) {
@@ -935,7 +935,7 @@ size_t fanRing(const Tesselator::State& s, const uint32_t* ring, size_t m, uint3
 
 // The same by ear clipping: each time the ear with the shortest new edge among those that wind with the surface and
 // whose new edge is no edge yet. Returns m - 2, or 0 if it gets stuck.
-size_t clipRing(const Tesselator::State& s, const uint32_t* ring, size_t m, uint32_t* ears) {
+size_t clipRing(Tesselator::State& s, const uint32_t* ring, size_t m, uint32_t* ears) {
   uint32_t left[kMaxHalfEdges];
   std::copy_n(ring, m, left);
   size_t n = m, count = 0;

@@ -137,8 +137,8 @@ struct Tesselator::State {
   std::vector<uint32_t> heTri;   // unfoldTriangles: per half-edge slot the index of its triangle in s.tris / 3
   std::vector<uint8_t> heTriKnown;  // unfoldTriangles: per vertex, heTri is valid for its half-edges
   std::vector<uint32_t> folded;  // unfoldTriangles: the triangles winding against their corners' normals
-  mutable FieldScratch foldScratch;      // unfoldTriangles: the field prepared over the vertices' box, on first use
-  mutable bool foldScratchReady = false;
+  FieldScratch foldScratch;      // unfoldTriangles: the field prepared over the vertices' box, on first use
+  bool foldScratchReady = false;
   std::vector<size_t> chunkUnanimous;  // voteTriangles: per chunk its emitted unanimous triangles, then offsets
   std::vector<size_t> chunkOpen;       // assembleTriangles: per chunk its open directed edges
   // Per-update scratch (step's phases).
