@@ -529,6 +529,53 @@ void Field::values(std::span<const glm::vec3> points, std::span<float> out, Fiel
 
 namespace {
 
+// Metaballs under the exponential blend with B >= -kSeparableHardness are evaluated on lattices separably: e^{-B} is
+// then well inside float's range and no factor of a term above the cutoff is subnormal.
+constexpr float kSeparableHardness = 40.0f;
+
+// The products (a[q] * s >= cutoff ? a[q] * s : 0) added to acc[q], q in [0, n): one run of a metaball's terms.
+IMPS_VECTOR_CLONES void addScaledTerms(const float* __restrict a, float s, size_t n, float* __restrict acc) {
+  for (size_t q = 0; q < n; ++q) {
+    const float c = a[q] * s;
+    acc[q] += c >= kExponentialCutoff ? c : 0.0f;
+  }
+}
+
+// latticeValues()' pass for one such metaball: its term e^{B (d - 1)}, d = (vx^2 + vy^2 + vz^2) / r^2, is the product
+// (ex[i] ey[j]) ez[k] of per-axis exponentials ex = e^{B vx^2 / r^2}, ey likewise (both <= 1; ex is 0 outside
+// [i0, i1), where the support box ends) and ez = e^{B vz^2 / r^2 - B}: a multiply per point instead of an exponential.
+// Adds the terms (0 below the cutoff, as exponentialTerm() has it) to acc at the rows j in [j0, j1) of the slices k in
+// [k0, k1) that `rows` (null: all) wants, a whole slice's rows as one run. Rows whose ey ez is below the cutoff are
+// trimmed from both ends: ex ey <= ey, so each of their products is too. exy: scratch of nx ny floats. The result
+// depends only on the point and the primitive, never on the lattice around it.
+void addSeparableMetaball(const float* ex, const float* ey, size_t j0, size_t j1, const float* ez, size_t k0,
+                          size_t k1, size_t nx, size_t ny, const uint8_t* rows, const uint8_t* wholeSlice, float* exy,
+                          float* acc) {
+  for (size_t j = j0; j < j1; ++j)
+    for (size_t i = 0; i < nx; ++i) exy[i + nx * j] = ex[i] * ey[j];
+  for (size_t k = k0; k < k1; ++k) {
+    size_t ja = j0, jb = j1;
+    while (ja < jb && ey[ja] * ez[k] < kExponentialCutoff) ++ja;
+    while (jb > ja && ey[jb - 1] * ez[k] < kExponentialCutoff) --jb;
+    float* slice = acc + nx * ny * k;
+    if (!rows || wholeSlice[k]) {
+      addScaledTerms(exy + nx * ja, ez[k], nx * (jb - ja), slice + nx * ja);
+      continue;
+    }
+    for (size_t j = ja; j < jb; ++j)
+      if (rows[j + ny * k]) addScaledTerms(exy + nx * j, ez[k], nx, slice + nx * j);
+  }
+}
+
+// e^{scale v^2 + offset} for v = axis[q] - centre, q in [q0, q1), into out[q].
+IMPS_VECTOR_CLONES void axisExponentials(const float* axis, size_t q0, size_t q1, float centre, float scale,
+                                         float offset, float* __restrict out) {
+  for (size_t q = q0; q < q1; ++q) {
+    const float v = axis[q] - centre;
+    out[q] = expAccurate(scale * (v * v) + offset);
+  }
+}
+
 }  // namespace
 
 void Field::latticeValues(std::span<const float> xs, std::span<const float> ys, std::span<const float> zs,
@@ -572,6 +619,8 @@ void Field::latticeValues(std::span<const float> xs, std::span<const float> ys, 
   for (size_t z = 0; z < nz && !rows.empty(); ++z)
     for (size_t j = 0; j < ny; ++j)
       if (rows[j + ny * z] == 0) wholeSlice[z] = 0;
+  const bool separable = blend_.kind == BlendKind::Exponential && !blend_.fastExp;
+  atLeast(scratch.axisTerms, nx + ny + nz + nx * ny);
   for (size_t k = 0; k < scratch.candidates.size(); ++k) {
     const uint32_t first = scratch.memberOffsets[k], last = scratch.memberOffsets[k + 1];
     if (first == last) continue;
@@ -584,6 +633,20 @@ void Field::latticeValues(std::span<const float> xs, std::span<const float> ys, 
     if (i0 >= i1 || j0 >= j1 || z0 >= z1) continue;
     const bool single = additive && last - first == 1;
     float* acc0 = scratch.acc.data() + size_t(scratch.memberSets[first]) * n;
+    if (separable && prim.kind == PrimitiveKind::Metaball && params_[p] >= -kSeparableHardness) {
+      const float scale = params_[p] / (prim.radius * prim.radius);
+      float* ex = scratch.axisTerms.data();
+      float* ey = ex + nx;
+      float* ez = ey + ny;
+      std::fill_n(ex, nx, 0.0f);
+      axisExponentials(xs.data(), i0, i1, prim.center.x, scale, 0.0f, ex);
+      axisExponentials(ys.data(), j0, j1, prim.center.y, scale, 0.0f, ey);
+      axisExponentials(zs.data(), z0, z1, prim.center.z, scale, -params_[p], ez);
+      for (uint32_t m = first; m < last; ++m)
+        addSeparableMetaball(ex, ey, j0, j1, ez, z0, z1, nx, ny, rows.empty() ? nullptr : rows.data(),
+                             wholeSlice.data(), ez + nz, scratch.acc.data() + size_t(scratch.memberSets[m]) * n);
+      continue;
+    }
     // Points [begin, end) take the candidate's terms.
     auto evaluate = [&](size_t begin, size_t end) {
       if (single) {  // the common case: one set takes the terms, in one pass

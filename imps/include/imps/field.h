@@ -54,6 +54,7 @@ struct FieldScratch {
   std::vector<uint8_t> setStarted;               // accumulate(): which sets hold a value yet
   std::vector<uint8_t> wholeSlice;               // latticeValues(): the slices whose every row is wanted
   std::vector<float> rowReach;                   // latticeValues(): a metaball's squared y offset of each row
+  std::vector<float> axisTerms;                  // latticeValues(): a metaball's per-axis exponentials
   std::vector<int32_t> globalToLocal;
   // Working storage of single calls, kept here so a worker reuses it from call to call (no allocation once grown)
   // and no two workers share it. Each belongs to one function: calls that nest (samples() -> sample()) never alias.
@@ -100,8 +101,8 @@ class Field {
 
   // Batched evaluation over a region. prepare() collects the primitives whose support box overlaps `region`;
   // the other calls then evaluate points inside `region` using only those. Values are bit-identical to value(x)
-  // for every point in the region, whatever the region: this is what lets polygonizers split space into blocks
-  // and threads and still agree exactly on shared samples.
+  // for every point in the region, whatever the region (latticeValues(): a function of the point alone, see there):
+  // this is what lets polygonizers split space into blocks and threads and still agree exactly on shared samples.
   void prepare(const Box& region, FieldScratch& scratch) const;
   void prepare(std::span<const uint32_t> candidates, FieldScratch& scratch) const;
   void values(std::span<const glm::vec3> points, std::span<float> out, FieldScratch& scratch) const;
@@ -109,7 +110,10 @@ class Field {
   // (xs[i], ys[j], zs[k]), the axis coordinates ascending, out.size() == nx ny nz. Each candidate is evaluated only
   // on the lattice rows its support box (a metaball's: its support ball) reaches (its term is exactly nothing
   // elsewhere), which is much cheaper than values() when the primitives are small against the lattice.
-  // Bit-identical to value().
+  // Bit-identical to value(), but for metaballs under the exponential blend (B >= -40): their terms are products of
+  // per-axis exponentials, within a relative 1e-5 of value()'s and the same where the cutoff falls, to rounding.
+  // Either way each value is a function of the point alone (its coordinates and the primitives whose support reaches
+  // it), so lattices that share points agree on them bit for bit, whatever their extent and candidates.
   // `rows`, when not empty (ny nz entries), says which rows along x are wanted: rows[j + ny k] == 0 leaves row
   // (ys[j], zs[k]) out, its values 0 (not F), for callers that know the field there by other means.
   void latticeValues(std::span<const float> xs, std::span<const float> ys, std::span<const float> zs,
