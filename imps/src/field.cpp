@@ -381,6 +381,64 @@ IMPS_VECTOR_CLONES void accumulateGradientColour(size_t n, const uint8_t* __rest
   }
 }
 
+// dc/dd given d and the term c (kernelTermSlope()'s arithmetic, one function per additive blend for the kernels).
+inline float exponentialSlope(float param, float, float c) { return param * c; }
+inline float blancSchlickSlope(float param, float d, float) {
+  const float u = std::max(1.0f + 1.0f / param - d, 0.0f) * param;
+  return -2.0f * u * param;
+}
+
+// samples()' one-pass step for a field of one additive blend set: one candidate's term, gradient, colour, weight
+// and ownership at every point, in one loop (one distance and one term per point, nothing stored between passes).
+// Per point this is sample()'s arithmetic in its order (the set's sum, then each positive term's slope x distance
+// gradient, colour and weight), so the same bits; beyond the support the term is exactly 0 and adds nothing.
+template <float (*DistanceGradient)(const Primitive&, float, float, float, float&, float&, float&),
+          float (*Term)(float, float), float (*Slope)(float, float, float)>
+IMPS_VECTOR_CLONES void addSampleTerms(const Primitive& p, float param, glm::vec3 c, int32_t candidate, size_t n,
+                                       const float* __restrict xs, const float* __restrict ys,
+                                       const float* __restrict zs, float* __restrict value, float* __restrict gx,
+                                       float* __restrict gy, float* __restrict gz, float* __restrict cr,
+                                       float* __restrict cg, float* __restrict cb, float* __restrict weight,
+                                       float* __restrict bestWeight, int32_t* __restrict owner) {
+  const Primitive local = p;  // a local copy: the stores below cannot alias its fields, so the loop vectorises
+  for (size_t i = 0; i < n; ++i) {
+    float dx, dy, dz;
+    const float d = DistanceGradient(local, xs[i], ys[i], zs[i], dx, dy, dz);
+    const float t = Term(param, d);
+    const float slope = Slope(param, d, t);
+    value[i] += t;
+    const bool u = t > 0.0f;
+    gx[i] = u ? gx[i] + slope * dx : gx[i];
+    gy[i] = u ? gy[i] + slope * dy : gy[i];
+    gz[i] = u ? gz[i] + slope * dz : gz[i];
+    cr[i] = u ? cr[i] + t * c.x : cr[i];
+    cg[i] = u ? cg[i] + t * c.y : cg[i];
+    cb[i] = u ? cb[i] + t * c.z : cb[i];
+    weight[i] = u ? weight[i] + t : weight[i];
+    const bool better = u & (t > bestWeight[i]);
+    bestWeight[i] = better ? t : bestWeight[i];
+    owner[i] = better ? candidate : owner[i];
+  }
+}
+
+template <float (*DistanceGradient)(const Primitive&, float, float, float, float&, float&, float&)>
+void addSampleTermsOfKind(const BlendFunction& blend, const Primitive& p, float param, glm::vec3 c, int32_t candidate,
+                          size_t n, const float* xs, const float* ys, const float* zs, FieldScratch::Lanes& l) {
+  auto run = [&]<float (*Term)(float, float), float (*Slope)(float, float, float)>() {
+    addSampleTerms<DistanceGradient, Term, Slope>(p, param, c, candidate, n, xs, ys, zs, l.d.data(), l.gx.data(),
+                                                  l.gy.data(), l.gz.data(), l.cr.data(), l.cg.data(), l.cb.data(),
+                                                  l.weight.data(), l.bestWeight.data(), l.owner.data());
+  };
+  switch (blend.kind) {
+    case BlendKind::Exponential:
+      if (blend.fastExp) run.template operator()<fastExponentialTerm, exponentialSlope>();
+      else run.template operator()<exponentialTerm, exponentialSlope>();
+      break;
+    case BlendKind::BlancSchlick: run.template operator()<blancSchlickTerm, blancSchlickSlope>(); break;
+    case BlendKind::Elliptical: IMPS_CHECK(false); break;  // not additive: sample() per point instead
+  }
+}
+
 }  // namespace
 
 void Field::terms(size_t i, size_t first, size_t n, FieldScratch& scratch) const {
@@ -578,6 +636,15 @@ IMPS_VECTOR_CLONES void axisExponentials(const float* axis, size_t q0, size_t q1
 
 }  // namespace
 
+bool Field::separableOnLattice(uint32_t p) const {
+  return blend_.kind == BlendKind::Exponential && !blend_.fastExp && primitives_[p].kind == PrimitiveKind::Metaball &&
+         params_[p] >= -kSeparableHardness;
+}
+
+bool Field::separableOnLattice(const FieldScratch& scratch) const {
+  return std::ranges::all_of(scratch.candidates, [&](uint32_t p) { return separableOnLattice(p); });
+}
+
 void Field::latticeValues(std::span<const float> xs, std::span<const float> ys, std::span<const float> zs,
                           std::span<float> out, FieldScratch& scratch, std::span<const uint8_t> rows) const {
   const size_t nx = xs.size(), ny = ys.size(), nz = zs.size(), n = nx * ny * nz;
@@ -619,7 +686,6 @@ void Field::latticeValues(std::span<const float> xs, std::span<const float> ys, 
   for (size_t z = 0; z < nz && !rows.empty(); ++z)
     for (size_t j = 0; j < ny; ++j)
       if (rows[j + ny * z] == 0) wholeSlice[z] = 0;
-  const bool separable = blend_.kind == BlendKind::Exponential && !blend_.fastExp;
   atLeast(scratch.axisTerms, nx + ny + nz + nx * ny);
   for (size_t k = 0; k < scratch.candidates.size(); ++k) {
     const uint32_t first = scratch.memberOffsets[k], last = scratch.memberOffsets[k + 1];
@@ -633,7 +699,7 @@ void Field::latticeValues(std::span<const float> xs, std::span<const float> ys, 
     if (i0 >= i1 || j0 >= j1 || z0 >= z1) continue;
     const bool single = additive && last - first == 1;
     float* acc0 = scratch.acc.data() + size_t(scratch.memberSets[first]) * n;
-    if (separable && prim.kind == PrimitiveKind::Metaball && params_[p] >= -kSeparableHardness) {
+    if (separableOnLattice(p)) {
       const float scale = params_[p] / (prim.radius * prim.radius);
       float* ex = scratch.axisTerms.data();
       float* ey = ex + nx;
@@ -859,6 +925,50 @@ void Field::contributions(const glm::vec3& x, FieldScratch& scratch,
   std::sort(out.begin(), out.end());
 }
 
+void Field::samplesOfOneSet(std::span<const glm::vec3> points, std::span<FieldSample> out,
+                            FieldScratch& scratch) const {
+  const size_t n = points.size();
+  atLeast(scratch.xs, n);
+  atLeast(scratch.ys, n);
+  atLeast(scratch.zs, n);
+  for (size_t i = 0; i < n; ++i) {
+    scratch.xs[i] = points[i].x;
+    scratch.ys[i] = points[i].y;
+    scratch.zs[i] = points[i].z;
+  }
+  FieldScratch::Lanes& l = scratch.lanes;
+  for (auto* v : {&l.d, &l.gx, &l.gy, &l.gz, &l.cr, &l.cg, &l.cb, &l.weight}) v->assign(n, 0.0f);  // d: the value
+  l.bestWeight.assign(n, -1.0f);
+  l.owner.assign(n, -1);
+  const float *xs = scratch.xs.data(), *ys = scratch.ys.data(), *zs = scratch.zs.data();
+  for (size_t k = 0; k < scratch.candidates.size(); ++k) {
+    if (scratch.memberOffsets[k] == scratch.memberOffsets[k + 1]) continue;
+    const uint32_t p = scratch.candidates[k];
+    const Primitive& prim = primitives_[p];
+    const int32_t candidate = int32_t(p);
+    switch (prim.kind) {
+      case PrimitiveKind::Metaball:
+        addSampleTermsOfKind<metaballDistanceGradient>(blend_, prim, params_[p], colors_[p], candidate, n, xs, ys, zs,
+                                                       l);
+        break;
+      case PrimitiveKind::Ellipsoid:
+        addSampleTermsOfKind<ellipsoidDistanceGradient>(blend_, prim, params_[p], colors_[p], candidate, n, xs, ys,
+                                                        zs, l);
+        break;
+      case PrimitiveKind::LineSeg:
+        addSampleTermsOfKind<lineSegDistanceGradient>(blend_, prim, params_[p], colors_[p], candidate, n, xs, ys, zs,
+                                                      l);
+        break;
+    }
+  }
+  for (size_t i = 0; i < n; ++i) {
+    out[i].value = std::max(l.d[i], 0.0f);
+    out[i].gradient = glm::vec3(l.gx[i], l.gy[i], l.gz[i]);
+    out[i].color = l.weight[i] > 0.0f ? glm::vec3(l.cr[i], l.cg[i], l.cb[i]) / l.weight[i] : glm::vec3(0.8f);
+    out[i].owner = l.owner[i];
+  }
+}
+
 void Field::samples(std::span<const glm::vec3> points, std::span<FieldSample> out, FieldScratch& scratch) const {
   IMPS_CHECK_EQ(points.size(), out.size());
   const size_t n = points.size();
@@ -870,6 +980,10 @@ void Field::samples(std::span<const glm::vec3> points, std::span<FieldSample> ou
   const size_t sets = scratch.setCount();
   for (size_t i = 0; i < n; ++i) out[i] = FieldSample{};
   if (sets == 0) return;
+  if (sets == 1) {
+    samplesOfOneSet(points, out, scratch);
+    return;
+  }
   // Pass 1: every candidate's terms, accumulated per set exactly as values() does.
   accumulate(points, scratch, /*keepTerms=*/true);
   // The winning set of each point (the first maximum, as sample() picks it) and the value.

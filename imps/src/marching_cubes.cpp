@@ -609,8 +609,9 @@ bool cullSubBlocks(const Field& field, const Grid& g, glm::ivec3 block, bool for
     boxes[size_t(s)].lo = g.vertex(lo.x, lo.y, lo.z);
     boxes[size_t(s)].hi = g.vertex(lo.x + kSubBlock, lo.y + kSubBlock, lo.z + kSubBlock);
   }
-  // With few candidates the samples are cheaper than the bounds (the biped: about three per block).
-  forced |= ws.field.candidates.size() < kSubBlockMinCandidates;
+  // With few candidates the samples are cheaper than the bounds (the biped: about three per block), and so they are
+  // when every candidate is separable on the lattice (metaballs under the exponential blend).
+  forced |= ws.field.candidates.size() < kSubBlockMinCandidates || field.separableOnLattice(ws.field);
   std::array<float, kSubBlocks> lower, upper;
   if (!forced) field.boxBounds(boxes, lower, upper, ws.field);
   bool anyLive = false;

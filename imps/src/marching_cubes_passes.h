@@ -182,8 +182,9 @@ bool cullBlock(const Field& field, const Grid& g, size_t b, std::span<const uint
 // 4b. Sub-blocks (kSubBlock^3 cells, sub-block (x, y, z) at index x + 2 y + 4 z) whose conservative field bounds
 // lie entirely below (kOutside) or above (kInside) iso, 1e-3 relative margin, hold no surface cell, so the samples
 // only they hold need no field value, only their side. ws.subBlocks gets each sub-block's class, ws.rows (j + 9 k) a
-// 1 for every row of samples some kLive sub-block's closed vertex range meets. A forced block, or one with fewer than
-// kSubBlockMinCandidates candidates, keeps every sub-block live. Returns whether any is live: if none is, the block
+// 1 for every row of samples some kLive sub-block's closed vertex range meets. A forced block, one with fewer than
+// kSubBlockMinCandidates candidates or one whose candidates are all separable on the lattice (cheaper to sample
+// than to bound) keeps every sub-block live. Returns whether any is live: if none is, the block
 // holds no surface. ws.field must be prepared for the block.
 bool cullSubBlocks(const Field& field, const Grid& g, glm::ivec3 block, bool forced, WorkerScratch& ws);
 

@@ -105,12 +105,66 @@ TEST(Field, BatchedValuesAreBitIdenticalToPointValues) {
   }
 }
 
-// Lattice evaluation skips each candidate where its support box misses the lattice: the values must still be
-// exactly value()'s, for every blend and with several blend sets (sums, folds and the maximum over sets).
-// latticeValues() is value() at every lattice point: bit for bit, but for metaballs under the exponential blend,
-// which are evaluated separably (within a relative 1e-5 and one cutoff term). And it is a function of the point
-// alone: two lattices that share points, prepared for different regions (so with different candidates), agree on
-// them bit for bit, which is what lets blocks agree on their shared faces.
+// samples() is sample() at every point, bit for bit (value, gradient, colour, owner): for every additive blend, every
+// primitive kind, one blend set (its one-pass path) and several, points inside, outside and beyond every support.
+TEST(Field, BatchedSamplesAreBitIdenticalToPointSamples) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f), r(0.1f, 0.3f);
+  std::vector<Primitive> prims;
+  for (int i = 0; i < 24; ++i) prims.push_back(Primitive::metaball({u(rng), u(rng), u(rng)}, r(rng)));
+  for (int i = 0; i < 6; ++i)
+    prims.push_back(Primitive::lineSeg({u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, r(rng), r(rng)));
+  for (int i = 0; i < 6; ++i)
+    prims.push_back(Primitive::ellipsoid({u(rng), u(rng), u(rng)},
+                                         glm::angleAxis(u(rng) * 3.0f, glm::normalize(glm::vec3(u(rng), u(rng), 1))),
+                                         {r(rng), r(rng), r(rng)}));
+  BlendSets sets;
+  for (uint32_t first = 0; first < prims.size(); first += 5) {
+    std::vector<uint32_t> members;
+    for (uint32_t i = first; i < std::min<uint32_t>(first + 8, uint32_t(prims.size())); ++i) members.push_back(i);
+    sets.add(members);
+  }
+  size_t inside = 0, owned = 0;
+  for (BlendKind kind : {BlendKind::Exponential, BlendKind::BlancSchlick})
+    for (bool fastExp : {false, true})
+      for (bool flat : {true, false}) {
+        if (fastExp && kind != BlendKind::Exponential) continue;
+        BlendFunction blend;
+        blend.kind = kind;
+        blend.fastExp = fastExp;
+        blend.defaultParam = kind == BlendKind::Exponential ? -3.0f : 0.7f;
+        const Field f = makeField(prims, blend, flat ? BlendSets::all(prims.size()) : sets);
+        FieldScratch scratch;
+        for (int n = 0; n < 20; ++n) {
+          Box region;
+          region.extend({1.3f * u(rng), 1.3f * u(rng), 1.3f * u(rng)});
+          region.extend(region.lo + glm::vec3(0.5f));
+          f.prepare(region, scratch);
+          std::vector<glm::vec3> points;
+          for (int k = 0; k < 37; ++k)  // not a multiple of the vector width
+            points.push_back(region.lo + region.size() * (glm::vec3(u(rng), u(rng), u(rng)) + 1.0f) / 2.0f);
+          std::vector<FieldSample> batched(points.size());
+          f.samples(points, batched, scratch);
+          for (size_t k = 0; k < points.size(); ++k) {
+            const FieldSample one = f.sample(points[k]);
+            ASSERT_EQ(batched[k].value, one.value) << int(kind) << flat << " point " << k;
+            ASSERT_EQ(batched[k].gradient, one.gradient) << int(kind) << flat << " point " << k;
+            ASSERT_EQ(batched[k].color, one.color) << int(kind) << flat << " point " << k;
+            ASSERT_EQ(batched[k].owner, one.owner) << int(kind) << flat << " point " << k;
+            inside += one.value >= f.iso();
+            owned += one.owner >= 0;
+          }
+        }
+      }
+  EXPECT_GT(inside, 100u) << "some points are inside";
+  EXPECT_GT(owned, inside + 100) << "some points are outside the surface but within a support";
+}
+
+// latticeValues() skips each candidate where its support misses the lattice and is value() at every lattice point,
+// for every blend and with several blend sets (sums, folds and the maximum over sets): bit for bit, but for metaballs
+// under the exponential blend, which are evaluated separably (within a relative 1e-5 and one cutoff term). And it is
+// a function of the point alone: two lattices that share points, prepared for different regions (so with different
+// candidates), agree on them bit for bit, which is what lets blocks agree on their shared faces.
 TEST(Field, LatticeValuesArePointValuesAndAFunctionOfThePointAlone) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f), r(0.05f, 0.3f);

@@ -118,6 +118,9 @@ class Field {
   // (ys[j], zs[k]) out, its values 0 (not F), for callers that know the field there by other means.
   void latticeValues(std::span<const float> xs, std::span<const float> ys, std::span<const float> zs,
                      std::span<float> out, FieldScratch& scratch, std::span<const uint8_t> rows = {}) const;
+  // Whether latticeValues() evaluates every prepared candidate separably: a lattice then costs a multiply per point
+  // and candidate, about what bounding parts of it would.
+  bool separableOnLattice(const FieldScratch& scratch) const;
   float value(const glm::vec3& x, FieldScratch& scratch) const;
   FieldSample sample(const glm::vec3& x, FieldScratch& scratch) const;
   // The blend weights at x that sample() blends colours with: every member of the winning set with a positive
@@ -143,6 +146,9 @@ class Field {
 
  private:
   void prepareSets(FieldScratch& scratch) const;
+  bool separableOnLattice(uint32_t primitive) const;
+  // samples() for an additive blend with one local set (a flat scene): one pass per candidate over the points.
+  void samplesOfOneSet(std::span<const glm::vec3> points, std::span<FieldSample> out, FieldScratch& scratch) const;
   // Terms of primitive i at scratch.xs/ys/zs[first, first + n) into scratch.term[first, first + n).
   void terms(size_t i, size_t first, size_t n, FieldScratch& scratch) const;
   // Every candidate's terms at the points, combined per local set into scratch.acc (sets x points); with
