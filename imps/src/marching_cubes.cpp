@@ -697,8 +697,18 @@ bool classifyBlock(float iso, int rootIterations, const BlockAxes& axes, BlockRe
       }
     return {axes.xs[size_t(i)], axes.ys[size_t(j)], axes.zs[size_t(k)]};
   };
+  // F at the sample `step` samples along `axis` from (i, j, k) (-1 or 2: just outside an edge's ends), or -1 where
+  // that is no sample of the field on the edge's line: off the block, on a row left out, or in a block with moved
+  // vertices.
+  auto outerSample = [&](int i, int j, int k, int axis, int step) -> float {
+    glm::ivec3 v(i, j, k);
+    v[axis] += step;
+    if (!r.moved.empty() || v[axis] < 0 || v[axis] > kBlock || !ws.rows[size_t(v.y + kBlockVerts * v.z)]) return -1.0f;
+    return r.samples[size_t(sampleIndex(v.x, v.y, v.z))];
+  };
   ws.edges.clear();
   ws.ends.clear();
+  ws.outer.clear();
   r.cells.clear();
   r.edgeVertex.assign(kBlockEdges, -1);
   for (int k = 0; k < kBlock; ++k)
@@ -728,6 +738,8 @@ bool classifyBlock(float iso, int rootIterations, const BlockAxes& axes, BlockRe
           e.pb = samplePosition(i + (axis == 0), j + (axis == 1), k + (axis == 2), moved);
           ws.ends.push_back(r.samples[size_t(s0)]);
           ws.ends.push_back(r.samples[size_t(s1)]);
+          ws.outer.push_back(outerSample(i, j, k, axis, -1));
+          ws.outer.push_back(outerSample(i, j, k, axis, 2));
           // Edges from a vertex moved onto a thin limb span a much steeper field: give them more steps.
           e.iterations = moved ? std::max(rootIterations, 10) : rootIterations;
           ws.edges.push_back(e);
@@ -754,16 +766,53 @@ RootTransform::RootTransform(const Field& field)
   return (lnF - logIso) / std::max(rootIso + std::sqrt(std::max(1.0f + lnF * invB, 0.0f)), 1e-6f);
 }
 
+namespace {
+
+// Outer samples below this (near the cutoff, where the transform clamps) say nothing about g's shape.
+constexpr float kOuterMin = 4.0f * kExponentialCutoff;
+
+// An edge's first root estimate from g at its ends (ga at 0, gb at 1) and, where known (not NaN), just outside them
+// (gm at -1, gp at 2): the root in (0, 1) of the polynomial through the known values (cubic, quadratic or the line),
+// by Newton steps from the line's root; the line's root if those leave (0, 1). Curvature costs a cubic little, so
+// the first evaluation is mostly already within tolerance.
+float firstEstimate(float gm, float ga, float gb, float gp) {
+  const float linear = ga / (ga - gb);
+  float c1, c2, c3 = 0.0f;
+  const bool before = gm == gm, after = gp == gp;
+  if (before && after) {
+    c1 = -gm / 3.0f - ga / 2.0f + gb - gp / 6.0f;
+    c2 = gm / 2.0f - ga + gb / 2.0f;
+    c3 = -gm / 6.0f + ga / 2.0f - gb / 2.0f + gp / 6.0f;
+  } else if (before) {
+    c1 = (gb - gm) / 2.0f;
+    c2 = (gb + gm) / 2.0f - ga;
+  } else if (after) {
+    c2 = (ga - 2.0f * gb + gp) / 2.0f;
+    c1 = gb - ga - c2;
+  } else {
+    return linear;
+  }
+  float t = linear;
+  for (int step = 0; step < 3; ++step) {
+    const float p = ga + t * (c1 + t * (c2 + t * c3)), slope = c1 + t * (2.0f * c2 + t * 3.0f * c3);
+    t -= p / slope;
+  }
+  return t > 0.0f && t < 1.0f ? t : linear;  // (also the line's when a step divided by 0: NaN fails both tests)
+}
+
+}  // namespace
+
 void findEdgeRoots(const Field& field, RootTransform tf, WorkerScratch& ws) {
   // (tf is a by-value copy: a reference could alias the values it transforms, which would keep its loops scalar.)
   std::vector<EdgeRoot>& edges = ws.edges;
-  // The ends' transformed values in one vectorised pass, then each edge's first interpolation.
+  // The ends' (and outer samples') transformed values in one vectorised pass, then each edge's first estimate.
   for (float& v : ws.ends) v = tf(v);
+  for (float& v : ws.outer) v = v > kOuterMin && v < FLT_MAX ? tf(v) : NAN;
   for (size_t q = 0; q < edges.size(); ++q) {
     EdgeRoot& e = edges[q];
     e.ga = ws.ends[2 * q];
     e.gb = ws.ends[2 * q + 1];
-    e.t = e.ga / (e.ga - e.gb);
+    e.t = firstEstimate(ws.outer[2 * q], e.ga, e.gb, ws.outer[2 * q + 1]);
     // Scale-free stopping rule: |g| below 5e-4 of its change along the edge puts the vertex within about
     // 5e-4 of an edge of the root where g is near linear, which the transform makes it.
     e.tolerance = 5e-4f * std::abs(e.ga - e.gb);

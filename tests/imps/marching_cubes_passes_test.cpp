@@ -187,6 +187,9 @@ TEST(MarchingCubesPasses, FindEdgeRootsPutsEveryVertexOnTheSurface) {
       ws.edges.push_back(e);
       ws.ends.push_back(field.value(e.pa));
       ws.ends.push_back(field.value(e.pb));
+      // The samples just outside the ends: known for some edges (a cubic or quadratic first estimate), not others.
+      ws.outer.push_back(q % 3 == 0 ? -1.0f : field.value(e.pa - (e.pb - e.pa)));
+      ws.outer.push_back(q % 4 == 0 ? -1.0f : field.value(e.pb + (e.pb - e.pa)));
     }
     findEdgeRoots(field, RootTransform(field), ws);
     float worstF = 0.0f;
