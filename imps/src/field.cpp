@@ -650,31 +650,36 @@ void Field::latticeValues(std::span<const float> xs, std::span<const float> ys, 
   const size_t nx = xs.size(), ny = ys.size(), nz = zs.size(), n = nx * ny * nz;
   IMPS_CHECK_EQ(out.size(), n);
   IMPS_CHECK(rows.empty() || rows.size() == ny * nz);
-  atLeast(scratch.xs, n);
-  atLeast(scratch.ys, n);
-  atLeast(scratch.zs, n);
-  atLeast(scratch.term, n);
-  // The points in SoA form: the first z slice's x and y element by element, then whole slices copied (a few long
-  // copies instead of one short copy per row).
-  const size_t slice = nx * ny;
-  for (size_t j = 0; j < ny; ++j)
-    for (size_t i = 0; i < nx; ++i) {
-      scratch.xs[i + nx * j] = xs[i];
-      scratch.ys[i + nx * j] = ys[j];
+  // The points in SoA form, for the candidates not evaluated separably: the first z slice's x and y element by
+  // element, then whole slices copied (a few long copies instead of one short copy per row).
+  if (!separableOnLattice(scratch)) {
+    atLeast(scratch.xs, n);
+    atLeast(scratch.ys, n);
+    atLeast(scratch.zs, n);
+    atLeast(scratch.term, n);
+    const size_t slice = nx * ny;
+    for (size_t j = 0; j < ny; ++j)
+      for (size_t i = 0; i < nx; ++i) {
+        scratch.xs[i + nx * j] = xs[i];
+        scratch.ys[i + nx * j] = ys[j];
+      }
+    for (size_t k = 0; k < nz; ++k) {
+      if (k > 0) {
+        std::copy_n(scratch.xs.begin(), slice, scratch.xs.begin() + long(slice * k));
+        std::copy_n(scratch.ys.begin(), slice, scratch.ys.begin() + long(slice * k));
+      }
+      std::fill_n(scratch.zs.begin() + long(slice * k), slice, zs[k]);
     }
-  for (size_t k = 0; k < nz; ++k) {
-    if (k > 0) {
-      std::copy_n(scratch.xs.begin(), slice, scratch.xs.begin() + long(slice * k));
-      std::copy_n(scratch.ys.begin(), slice, scratch.ys.begin() + long(slice * k));
-    }
-    std::fill_n(scratch.zs.begin() + long(slice * k), slice, zs[k]);
   }
   const bool additive = blend_.additive();
   const size_t sets = scratch.setCount();
-  atLeast(scratch.acc, sets * n);
   // Every set starts at "nothing" (0, or -1 for the elliptical fold) and takes each term by value()'s arithmetic,
   // candidates ascending; a point a candidate's support box misses would only have taken an exact "nothing" from it.
-  std::fill_n(scratch.acc.begin(), sets * n, additive ? 0.0f : -1.0f);
+  // One additive set sums straight into `out`: its sums of terms >= 0 from +0 are what max(0, sum) would give.
+  const bool direct = additive && sets == 1;
+  if (!direct) atLeast(scratch.acc, sets * n);
+  float* accs = direct ? out.data() : scratch.acc.data();
+  std::fill_n(accs, sets * n, additive ? 0.0f : -1.0f);
   // The half-open index range of the axis coordinates in [lo, hi] (Box::contains' test).
   auto inside = [](std::span<const float> axis, float lo, float hi) {
     return std::pair{size_t(std::lower_bound(axis.begin(), axis.end(), lo) - axis.begin()),
@@ -698,7 +703,7 @@ void Field::latticeValues(std::span<const float> xs, std::span<const float> ys, 
     const auto [z0, z1] = inside(zs, box.lo.z, box.hi.z);
     if (i0 >= i1 || j0 >= j1 || z0 >= z1) continue;
     const bool single = additive && last - first == 1;
-    float* acc0 = scratch.acc.data() + size_t(scratch.memberSets[first]) * n;
+    float* acc0 = accs + size_t(scratch.memberSets[first]) * n;
     if (separableOnLattice(p)) {
       const float scale = params_[p] / (prim.radius * prim.radius);
       float* ex = scratch.axisTerms.data();
@@ -710,7 +715,7 @@ void Field::latticeValues(std::span<const float> xs, std::span<const float> ys, 
       axisExponentials(zs.data(), z0, z1, prim.center.z, scale, -params_[p], ez);
       for (uint32_t m = first; m < last; ++m)
         addSeparableMetaball(ex, ey, j0, j1, ez, z0, z1, nx, ny, rows.empty() ? nullptr : rows.data(),
-                             wholeSlice.data(), ez + nz, scratch.acc.data() + size_t(scratch.memberSets[m]) * n);
+                             wholeSlice.data(), ez + nz, accs + size_t(scratch.memberSets[m]) * n);
       continue;
     }
     // Points [begin, end) take the candidate's terms.
@@ -723,7 +728,7 @@ void Field::latticeValues(std::span<const float> xs, std::span<const float> ys, 
       terms(p, begin, end - begin, scratch);
       const float* t = scratch.term.data() + begin;
       for (uint32_t m = first; m < last; ++m) {
-        float* acc = scratch.acc.data() + size_t(scratch.memberSets[m]) * n + begin;
+        float* acc = accs + size_t(scratch.memberSets[m]) * n + begin;
         if (additive) {
           for (size_t i = 0; i < end - begin; ++i) acc[i] += t[i];
         } else {
@@ -783,7 +788,7 @@ void Field::latticeValues(std::span<const float> xs, std::span<const float> ys, 
     }
     if (pending) evaluate(i0 + nx * runFirst, i1 + nx * runLast);
   }
-  maxOverSets(additive, sets, n, scratch.acc.data(), out.data());
+  if (!direct) maxOverSets(additive, sets, n, accs, out.data());
 }
 
 float Field::value(const glm::vec3& x, FieldScratch& scratch) const {
