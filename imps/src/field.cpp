@@ -358,7 +358,10 @@ IMPS_VECTOR_CLONES void distanceGradientLoop(const Primitive& p, const float* __
 }
 
 // samples()' per-candidate step: the points flagged in `use` add the candidate's gradient (slope x distance
-// gradient), colour and weight, and take it as owner where its term is the largest so far. Selects, not branches.
+// gradient), colour and weight, and take it as owner where its term is the largest so far. Arithmetic masks, not
+// branches or selects into memory, which GCC compiles to masked stores (slow: most of this loop's time once): the
+// other points add +-0, which changes nothing, the sums never being -0 (they start at +0, and x + y is -0 only for
+// -0 + -0), so the bits are sample()'s.
 IMPS_VECTOR_CLONES void accumulateGradientColour(size_t n, const uint8_t* __restrict use, const float* __restrict t,
                                                  const float* __restrict slope, const float* __restrict dgx,
                                                  const float* __restrict dgy, const float* __restrict dgz,
@@ -367,17 +370,19 @@ IMPS_VECTOR_CLONES void accumulateGradientColour(size_t n, const uint8_t* __rest
                                                  float* __restrict cg, float* __restrict cb, float* __restrict weight,
                                                  float* __restrict bestWeight, int32_t* __restrict owner) {
   for (size_t i = 0; i < n; ++i) {
-    const bool u = use[i] != 0;
-    gx[i] = u ? gx[i] + slope[i] * dgx[i] : gx[i];
-    gy[i] = u ? gy[i] + slope[i] * dgy[i] : gy[i];
-    gz[i] = u ? gz[i] + slope[i] * dgz[i] : gz[i];
-    cr[i] = u ? cr[i] + t[i] * c.x : cr[i];
-    cg[i] = u ? cg[i] + t[i] * c.y : cg[i];
-    cb[i] = u ? cb[i] + t[i] * c.z : cb[i];
-    weight[i] = u ? weight[i] + t[i] : weight[i];
-    const bool better = u & (t[i] > bestWeight[i]);
-    bestWeight[i] = better ? t[i] : bestWeight[i];
-    owner[i] = better ? candidate : owner[i];
+    const float m = use[i] != 0 ? 1.0f : 0.0f;  // x * m is x or +-0, every x here being finite
+    gx[i] += slope[i] * dgx[i] * m;
+    gy[i] += slope[i] * dgy[i] * m;
+    gz[i] += slope[i] * dgz[i] * m;
+    cr[i] += t[i] * c.x * m;
+    cg[i] += t[i] * c.y * m;
+    cb[i] += t[i] * c.z * m;
+    weight[i] += t[i] * m;
+    const float best = bestWeight[i];
+    const bool better = (use[i] != 0) & (t[i] > best);
+    bestWeight[i] = better ? t[i] : best;
+    const int32_t o = owner[i];
+    owner[i] = better ? candidate : o;
   }
 }
 
@@ -406,18 +411,21 @@ IMPS_VECTOR_CLONES void addSampleTerms(const Primitive& p, float param, glm::vec
     const float d = DistanceGradient(local, xs[i], ys[i], zs[i], dx, dy, dz);
     const float t = Term(param, d);
     const float slope = Slope(param, d, t);
+    // Where the term is 0 so is the slope (+-0): those points add +-0, which changes nothing (the sums are never -0,
+    // see accumulateGradientColour), so no select is needed but for the owner.
     value[i] += t;
-    const bool u = t > 0.0f;
-    gx[i] = u ? gx[i] + slope * dx : gx[i];
-    gy[i] = u ? gy[i] + slope * dy : gy[i];
-    gz[i] = u ? gz[i] + slope * dz : gz[i];
-    cr[i] = u ? cr[i] + t * c.x : cr[i];
-    cg[i] = u ? cg[i] + t * c.y : cg[i];
-    cb[i] = u ? cb[i] + t * c.z : cb[i];
-    weight[i] = u ? weight[i] + t : weight[i];
-    const bool better = u & (t > bestWeight[i]);
-    bestWeight[i] = better ? t : bestWeight[i];
-    owner[i] = better ? candidate : owner[i];
+    gx[i] += slope * dx;
+    gy[i] += slope * dy;
+    gz[i] += slope * dz;
+    cr[i] += t * c.x;
+    cg[i] += t * c.y;
+    cb[i] += t * c.z;
+    weight[i] += t;
+    // The owner changes where the term beats 0 and every earlier term (bestWeight starts at 0 here).
+    const float best = bestWeight[i];
+    const int32_t o = owner[i];
+    owner[i] = t > best ? candidate : o;
+    bestWeight[i] = std::max(best, t);
   }
 }
 
@@ -942,8 +950,8 @@ void Field::samplesOfOneSet(std::span<const glm::vec3> points, std::span<FieldSa
     scratch.zs[i] = points[i].z;
   }
   FieldScratch::Lanes& l = scratch.lanes;
-  for (auto* v : {&l.d, &l.gx, &l.gy, &l.gz, &l.cr, &l.cg, &l.cb, &l.weight}) v->assign(n, 0.0f);  // d: the value
-  l.bestWeight.assign(n, -1.0f);
+  for (auto* v : {&l.d, &l.gx, &l.gy, &l.gz, &l.cr, &l.cg, &l.cb, &l.weight, &l.bestWeight}) v->assign(n, 0.0f);
+  // (l.d: the value; l.bestWeight from 0: only positive terms own a point)
   l.owner.assign(n, -1);
   const float *xs = scratch.xs.data(), *ys = scratch.ys.data(), *zs = scratch.zs.data();
   for (size_t k = 0; k < scratch.candidates.size(); ++k) {
