@@ -580,6 +580,7 @@ bool cullBlock(const Field& field, const Grid& g, size_t b, std::span<const uint
   // set's sum from above (float addition of non-negative terms is monotone): most empty blocks stop here,
   // before the blend sets are prepared for the tighter upperBound().
   float largestTermsSum = 0.0f;
+  bool anyAboveIso = false;
   for (uint32_t i : cand) {
     const Primitive& p = field.primitive(i);
     const float skip = field.supportDistance(i) * (1.0f + 1e-3f) + 1e-3f;
@@ -591,13 +592,20 @@ bool cullBlock(const Field& field, const Grid& g, size_t b, std::span<const uint
     if (d > skip) continue;
     ws.reaching.push_back(i);
     ws.reachingDistances.push_back(d);
-    largestTermsSum += field.blend().term(d, field.param(i));
+    const float largest = field.blend().term(d, field.param(i));
+    largestTermsSum += largest;
+    anyAboveIso |= largest > iso * (1.0f + 1e-3f);
   }
   if (ws.reaching.empty()) return false;
-  if (field.blend().additive() && largestTermsSum < iso * (1.0f - 1e-3f)) return false;
+  const bool additive = field.blend().additive();
+  if (additive && largestTermsSum < iso * (1.0f - 1e-3f)) return false;
   field.prepare(ws.reaching, ws.field);
-  if (field.upperBound(ws.reachingDistances, ws.field) < iso * (1.0f - 1e-3f)) return false;
-  if (field.lowerBound(box, ws.field) > iso * (1.0f + 1e-3f)) return false;
+  // With one blend set that sum is upperBound() itself (the same terms added in the same order).
+  if ((!additive || ws.field.setCount() > 1) && field.upperBound(ws.reachingDistances, ws.field) < iso * (1.0f - 1e-3f))
+    return false;
+  // The additive lower bound is the largest term at a candidate's farthest point in the block, never above its
+  // largest term: only when one of those is above iso can the block lie wholly inside.
+  if ((!additive || anyAboveIso) && field.lowerBound(box, ws.field) > iso * (1.0f + 1e-3f)) return false;
   return true;
 }
 
