@@ -600,7 +600,7 @@ namespace {
 constexpr float kSeparableHardness = 40.0f;
 
 // The products (a[q] * s >= cutoff ? a[q] * s : 0) added to acc[q], q in [0, n): one run of a metaball's terms.
-IMPS_VECTOR_CLONES void addScaledTerms(const float* __restrict a, float s, size_t n, float* __restrict acc) {
+inline void addScaledTerms(const float* __restrict a, float s, size_t n, float* __restrict acc) {
   for (size_t q = 0; q < n; ++q) {
     const float c = a[q] * s;
     acc[q] += c >= kExponentialCutoff ? c : 0.0f;
@@ -614,9 +614,9 @@ IMPS_VECTOR_CLONES void addScaledTerms(const float* __restrict a, float s, size_
 // [k0, k1) that `rows` (null: all) wants, a whole slice's rows as one run. Rows whose ey ez is below the cutoff are
 // trimmed from both ends: ex ey <= ey, so each of their products is too. exy: scratch of nx ny floats. The result
 // depends only on the point and the primitive, never on the lattice around it.
-void addSeparableMetaball(const float* ex, const float* ey, size_t j0, size_t j1, const float* ez, size_t k0,
-                          size_t k1, size_t nx, size_t ny, const uint8_t* rows, const uint8_t* wholeSlice, float* exy,
-                          float* acc) {
+IMPS_VECTOR_CLONES void addSeparableMetaball(const float* ex, const float* ey, size_t j0, size_t j1, const float* ez,
+                                             size_t k0, size_t k1, size_t nx, size_t ny, const uint8_t* rows,
+                                             const uint8_t* wholeSlice, float* exy, float* acc) {
   for (size_t j = j0; j < j1; ++j)
     for (size_t i = 0; i < nx; ++i) exy[i + nx * j] = ex[i] * ey[j];
   for (size_t k = k0; k < k1; ++k) {
