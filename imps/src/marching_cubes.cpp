@@ -580,7 +580,6 @@ bool cullBlock(const Field& field, const Grid& g, size_t b, std::span<const uint
   // set's sum from above (float addition of non-negative terms is monotone): most empty blocks stop here,
   // before the blend sets are prepared for the tighter upperBound().
   float largestTermsSum = 0.0f;
-  bool anyAboveIso = false;
   for (uint32_t i : cand) {
     const Primitive& p = field.primitive(i);
     const float skip = field.supportDistance(i) * (1.0f + 1e-3f) + 1e-3f;
@@ -592,21 +591,23 @@ bool cullBlock(const Field& field, const Grid& g, size_t b, std::span<const uint
     if (d > skip) continue;
     ws.reaching.push_back(i);
     ws.reachingDistances.push_back(d);
-    const float largest = field.blend().term(d, field.param(i));
-    largestTermsSum += largest;
-    anyAboveIso |= largest > iso * (1.0f + 1e-3f);
+    largestTermsSum += field.blend().term(d, field.param(i));
   }
   if (ws.reaching.empty()) return false;
   const bool additive = field.blend().additive();
   if (additive && largestTermsSum < iso * (1.0f - 1e-3f)) return false;
   field.prepare(ws.reaching, ws.field);
   // With one blend set that sum is upperBound() itself (the same terms added in the same order).
-  if ((!additive || ws.field.setCount() > 1) && field.upperBound(ws.reachingDistances, ws.field) < iso * (1.0f - 1e-3f))
-    return false;
-  // The additive lower bound is the largest term at a candidate's farthest point in the block, never above its
-  // largest term: only when one of those is above iso can the block lie wholly inside.
-  if ((!additive || anyAboveIso) && field.lowerBound(box, ws.field) > iso * (1.0f + 1e-3f)) return false;
-  return true;
+  const bool oneSet = additive && ws.field.setCount() == 1;
+  if (!oneSet && field.upperBound(ws.reachingDistances, ws.field) < iso * (1.0f - 1e-3f)) return false;
+  // Wholly inside? For the additive blends each set's sum of its members' smallest terms in the block (far tighter
+  // than the largest single one where many overlap, as deep inside a crowd of blobs), never above the sum of the
+  // largest terms, so only asked when that is above iso.
+  if (!additive) return field.lowerBound(box, ws.field) <= iso * (1.0f + 1e-3f);
+  if (largestTermsSum <= iso * (1.0f + 1e-3f)) return true;
+  ws.reachingDistances.clear();  // now the largest distances
+  for (uint32_t i : ws.reaching) ws.reachingDistances.push_back(field.primitive(i).maxDistance(box));
+  return field.lowerBound(ws.reachingDistances, ws.field) <= iso * (1.0f + 1e-3f);
 }
 
 bool cullSubBlocks(const Field& field, const Grid& g, glm::ivec3 block, bool forced, WorkerScratch& ws) {

@@ -126,7 +126,7 @@ struct BlockAxes {
 struct WorkerScratch {
   FieldScratch field;
   std::vector<uint32_t> reaching;        // cullBlock: the candidates whose support reaches the block
-  std::vector<float> reachingDistances;  // and their minDistance() to it
+  std::vector<float> reachingDistances;  // and their minDistance() to it (then, for the lower bound, maxDistance())
   std::array<uint8_t, kSubBlocks> subBlocks{};  // cullSubBlocks -> sampleBlock: each sub-block's SubBlockClass
   std::array<uint8_t, kBlockVerts * kBlockVerts> rows{};  // cullSubBlocks -> sampleBlock: rows (j + 9 k) to sample
   std::vector<EdgeRoot> edges;           // classifyBlock -> findEdgeRoots -> shadeEdgeVertices
