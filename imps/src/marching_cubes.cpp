@@ -989,7 +989,7 @@ void triangulateBlock(const Field& field, const Grid& g, size_t b, const Marchin
 
 // ---- 7. Gather -----------------------------------------------------------------------------------------------
 
-void gatherMesh(uint32_t edgeVertices, MarchingCubes::State& st, Mesh& out) {
+void gatherMesh(uint32_t edgeVertices, int threads, MarchingCubes::State& st, Mesh& out) {
   const size_t blockCount = st.blocks.size();
   uint32_t centreBase = edgeVertices;
   st.centreBases.assign(blockCount, 0);
@@ -997,30 +997,40 @@ void gatherMesh(uint32_t edgeVertices, MarchingCubes::State& st, Mesh& out) {
     st.centreBases[b] = centreBase;
     if (st.blocks[b].hasSurface) centreBase += uint32_t(st.blocks[b].centrePositions.size() / 3);
   }
-  out.positions.reserve(size_t(centreBase) * 3);
-  for (const BlockResult& r : st.blocks) {
-    if (!r.hasSurface) continue;
-    out.positions.insert(out.positions.end(), r.positions.begin(), r.positions.end());
-    out.normals.insert(out.normals.end(), r.normals.begin(), r.normals.end());
-    out.colors.insert(out.colors.end(), r.colors.begin(), r.colors.end());
-  }
-  for (size_t b = 0; b < blockCount; ++b) {
-    const BlockResult& r = st.blocks[b];
-    if (!r.hasSurface) continue;
-    out.positions.insert(out.positions.end(), r.centrePositions.begin(), r.centrePositions.end());
-    out.normals.insert(out.normals.end(), r.centreNormals.begin(), r.centreNormals.end());
-    out.colors.insert(out.colors.end(), r.centreColors.begin(), r.centreColors.end());
-    if (r.centrePositions.empty()) {  // no provisional indices
-      out.indices.insert(out.indices.end(), r.triangles.begin(), r.triangles.end());
-      continue;
+  // Four independent streams, one task each: positions, normals, colours (edge vertices in block order, then the
+  // loop-centre vertices), and the triangles.
+  using Stream = std::pair<std::vector<float> BlockResult::*, std::vector<float> BlockResult::*>;
+  const std::array<std::pair<std::vector<float>*, Stream>, 3> streams = {{
+      {&out.positions, {&BlockResult::positions, &BlockResult::centrePositions}},
+      {&out.normals, {&BlockResult::normals, &BlockResult::centreNormals}},
+      {&out.colors, {&BlockResult::colors, &BlockResult::centreColors}},
+  }};
+  parallelForWorkers(4, threads, [&](size_t task, int) {
+    if (task < 3) {
+      auto& [to, from] = streams[task];
+      if (std::ranges::any_of(st.blocks, [&](const BlockResult& r) { return !(r.*from.first).empty(); }))
+        to->reserve(size_t(centreBase) * 3);  // (normals and colours may not be asked for)
+      for (const BlockResult& r : st.blocks)
+        if (r.hasSurface) to->insert(to->end(), (r.*from.first).begin(), (r.*from.first).end());
+      for (const BlockResult& r : st.blocks)
+        if (r.hasSurface) to->insert(to->end(), (r.*from.second).begin(), (r.*from.second).end());
+      return;
     }
-    const size_t at = out.indices.size();
-    out.indices.resize(at + r.triangles.size());
-    for (size_t q = 0; q < r.triangles.size(); ++q) {
-      const uint32_t v = r.triangles[q];
-      out.indices[at + q] = v & kProvisional ? st.centreBases[b] + (v & ~kProvisional) : v;
+    for (size_t b = 0; b < blockCount; ++b) {
+      const BlockResult& r = st.blocks[b];
+      if (!r.hasSurface) continue;
+      if (r.centrePositions.empty()) {  // no provisional indices
+        out.indices.insert(out.indices.end(), r.triangles.begin(), r.triangles.end());
+        continue;
+      }
+      const size_t at = out.indices.size();
+      out.indices.resize(at + r.triangles.size());
+      for (size_t q = 0; q < r.triangles.size(); ++q) {
+        const uint32_t v = r.triangles[q];
+        out.indices[at + q] = v & kProvisional ? st.centreBases[b] + (v & ~kProvisional) : v;
+      }
     }
-  }
+  });
 }
 
 }  // namespace imps::mc
@@ -1155,7 +1165,7 @@ bool MarchingCubes::polygonize(const Field& field, const MarchingCubesOptions& o
     return stop();
   phaseMs[3] = run.lap();
 
-  mc::gatherMesh(edgeVertices, st, out);
+  mc::gatherMesh(edgeVertices, options.threads, st, out);
   phaseMs[4] = run.lap();
   if (stats) fillStats(g, st, phaseMs, run.totalMs(), *stats);
   run.proceed(1.0f);

@@ -16,7 +16,8 @@
 //   5. numberVertices   global vertex numbers: each surface block's first vertex, in block order;
 //   6. triangulateBlock per surface block, in parallel: each cell's triangles from the face-consistent case table,
 //                       ambiguous faces decided by the asymptotic decider, loop-centre vertices where needed;
-//   7. gatherMesh       concatenation in block order (edge vertices, then loop-centre vertices).
+//   7. gatherMesh       concatenation in block order (edge vertices, then loop-centre vertices), its four streams
+//                       (positions, normals, colours, triangles) in parallel.
 // Every pass writes only its own block's results (or runs serially), so 1 and N threads give the identical mesh.
 #pragma once
 
@@ -223,6 +224,6 @@ void triangulateBlock(const Field& field, const Grid& g, size_t b, const Marchin
 
 // 7. out = every surface block's edge vertices in block order, then every block's loop-centre vertices (numbered
 // from `edgeVertices` on, st.centreBases), and the triangles in block order with provisional indices resolved.
-void gatherMesh(uint32_t edgeVertices, MarchingCubes::State& st, Mesh& out);
+void gatherMesh(uint32_t edgeVertices, int threads, MarchingCubes::State& st, Mesh& out);
 
 }  // namespace imps::mc

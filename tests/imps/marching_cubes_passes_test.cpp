@@ -234,7 +234,7 @@ TEST(MarchingCubesPasses, GatherMeshPutsLoopCentresAfterEveryEdgeVertex) {
   st.blocks[0].triangles = {0, 1, kProvisional | 0};
   st.blocks[2].triangles = {3, 4, kProvisional | 1, 2, 3, kProvisional | 0};
   Mesh out;
-  gatherMesh(5, st, out);
+  gatherMesh(5, 2, st, out);
   EXPECT_EQ(out.vertexCount(), 8u);
   EXPECT_EQ(out.indices, (std::vector<uint32_t>{0, 1, 5, 3, 4, 7, 2, 3, 6}));
   EXPECT_EQ(out.position(5).y, 1.0f) << "block 0's centre follows all five edge vertices";
@@ -345,7 +345,7 @@ TEST(MarchingCubesPasses, PassesByHandMakeThePolygonizersMesh) {
   const uint32_t edgeVertices = numberVertices(st.blocks, surface);
   for (uint32_t b : surface) triangulateBlock(field, g, b, o, st, st.workers[0].field);
   Mesh byHand;
-  gatherMesh(edgeVertices, st, byHand);
+  gatherMesh(edgeVertices, 1, st, byHand);
   const Mesh whole = polygonize(field, o);
   EXPECT_GT(whole.triangleCount(), 100u);
   EXPECT_EQ(byHand.positions, whole.positions);
