@@ -678,6 +678,10 @@ namespace {
 // The comparisons run as one vectorised pass into bytes (0 or 1); a row's first eight bytes, read as a
 // little-endian word, become bits by one multiplication: byte i (bit 8i) times 2^(56 - 7i) lands on bit 56 + i,
 // and no two products share a bit, so nothing carries.
+// Fewer candidates than this in a block: root finding starts from the line's root, an evaluation of the field
+// costing less than the cubic estimate would save (the biped's blocks); classifyBlock then keeps no outer samples.
+constexpr size_t kCubicMinCandidates = 6;
+
 std::array<uint32_t, kBlockVerts * kBlockVerts> insideRows(std::span<const float> samples, float iso) {
   static_assert(std::endian::native == std::endian::little);
   std::array<uint8_t, kBlockSamples + 7> inside{};  // padded so the last row's 8-byte read stays inside
@@ -712,9 +716,11 @@ bool classifyBlock(float iso, int rootIterations, const BlockAxes& axes, BlockRe
   auto outerSample = [&](int i, int j, int k, int axis, int step) -> float {
     glm::ivec3 v(i, j, k);
     v[axis] += step;
-    if (!r.moved.empty() || v[axis] < 0 || v[axis] > kBlock || !ws.rows[size_t(v.y + kBlockVerts * v.z)]) return -1.0f;
+    if (v[axis] < 0 || v[axis] > kBlock || !ws.rows[size_t(v.y + kBlockVerts * v.z)]) return -1.0f;
     return r.samples[size_t(sampleIndex(v.x, v.y, v.z))];
   };
+  // Only findEdgeRoots' cubic estimate reads them (see there), and not in a block with moved vertices.
+  const bool cubic = ws.field.candidates.size() >= kCubicMinCandidates && r.moved.empty();
   ws.edges.clear();
   ws.ends.clear();
   ws.outer.clear();
@@ -747,8 +753,10 @@ bool classifyBlock(float iso, int rootIterations, const BlockAxes& axes, BlockRe
           e.pb = samplePosition(i + (axis == 0), j + (axis == 1), k + (axis == 2), moved);
           ws.ends.push_back(r.samples[size_t(s0)]);
           ws.ends.push_back(r.samples[size_t(s1)]);
-          ws.outer.push_back(outerSample(i, j, k, axis, -1));
-          ws.outer.push_back(outerSample(i, j, k, axis, 2));
+          if (cubic) {
+            ws.outer.push_back(outerSample(i, j, k, axis, -1));
+            ws.outer.push_back(outerSample(i, j, k, axis, 2));
+          }
           // Edges from a vertex moved onto a thin limb span a much steeper field: give them more steps.
           e.iterations = moved ? std::max(rootIterations, 10) : rootIterations;
           ws.edges.push_back(e);
@@ -814,14 +822,17 @@ float firstEstimate(float gm, float ga, float gb, float gp) {
 void findEdgeRoots(const Field& field, RootTransform tf, WorkerScratch& ws) {
   // (tf is a by-value copy: a reference could alias the values it transforms, which would keep its loops scalar.)
   std::vector<EdgeRoot>& edges = ws.edges;
-  // The ends' (and outer samples') transformed values in one vectorised pass, then each edge's first estimate.
+  // The ends' (and outer samples') transformed values in one vectorised pass, then each edge's first estimate. With
+  // few candidates an evaluation of the field costs less than the cubic would save: the line's root then.
+  const bool cubic = ws.outer.size() == ws.ends.size();  // classifyBlock kept the outer samples
   for (float& v : ws.ends) v = tf(v);
-  for (float& v : ws.outer) v = v > kOuterMin && v < FLT_MAX ? tf(v) : NAN;
+  if (cubic)
+    for (float& v : ws.outer) v = v > kOuterMin && v < FLT_MAX ? tf(v) : NAN;
   for (size_t q = 0; q < edges.size(); ++q) {
     EdgeRoot& e = edges[q];
     e.ga = ws.ends[2 * q];
     e.gb = ws.ends[2 * q + 1];
-    e.t = firstEstimate(ws.outer[2 * q], e.ga, e.gb, ws.outer[2 * q + 1]);
+    e.t = cubic ? firstEstimate(ws.outer[2 * q], e.ga, e.gb, ws.outer[2 * q + 1]) : e.ga / (e.ga - e.gb);
     // Scale-free stopping rule: |g| below 5e-4 of its change along the edge puts the vertex within about
     // 5e-4 of an edge of the root where g is near linear, which the transform makes it.
     e.tolerance = 5e-4f * std::abs(e.ga - e.gb);

@@ -200,14 +200,15 @@ void sampleBlock(const Field& field, const Grid& g, glm::ivec3 block, const Bloc
 // 4d. From r.samples: r.cells (surface cells in index order with their case codes), r.edgeVertex (every owned edge's
 // local vertex number or -1) and, in the same order, ws.edges (ends' positions, iterations), ws.ends (F at both
 // ends) and ws.outer (F at the samples one step beyond each end on the edge's line, -1 where there is none: off the
-// block, on a row left out, or in a block with moved vertices). Local numbers follow cells (i, j, k) ascending with i
-// fastest, axes x, y, z within a cell. ws.rows must say which rows were sampled. Returns whether the block has a
-// surface cell.
+// block or on a row left out; ws.outer stays empty in a block with moved vertices or with fewer than
+// kCubicMinCandidates candidates). Local numbers follow cells (i, j, k) ascending with i fastest, axes x, y, z within
+// a cell. ws.rows must say which rows were sampled, ws.field be prepared for the block. Returns whether the block
+// has a surface cell.
 bool classifyBlock(float iso, int rootIterations, const BlockAxes& axes, BlockResult& r, WorkerScratch& ws);
 
 // 4e. Root finding on ws.edges: their parameters t in (0, 1) along pa -> pb, at most each edge's iterations batched
-// evaluations of the true field after the first estimate (the polynomial through ws.ends and the known ws.outer).
-// ws.field must be prepared for the block.
+// evaluations of the true field after the first estimate: the root of the polynomial through ws.ends and the known
+// ws.outer, or of the line through ws.ends when ws.outer is empty. ws.field must be prepared for the block.
 void findEdgeRoots(const Field& field, RootTransform transform, WorkerScratch& ws);
 
 // 4f. r.positions (and, as the options ask, r.normals and r.colors) of ws.edges' vertices, 3 floats per vertex.
