@@ -477,6 +477,18 @@ void atLeast(std::vector<float>& v, size_t size) {
   if (v.size() < size) v.resize(size);
 }
 
+// The points into scratch.xs, ys and zs (SoA, for the vectorised kernels).
+void splitPoints(std::span<const glm::vec3> points, FieldScratch& scratch) {
+  atLeast(scratch.xs, points.size());
+  atLeast(scratch.ys, points.size());
+  atLeast(scratch.zs, points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    scratch.xs[i] = points[i].x;
+    scratch.ys[i] = points[i].y;
+    scratch.zs[i] = points[i].z;
+  }
+}
+
 // F at n points from their per-set accumulators (sets x points): the maximum over the sets.
 void maxOverSets(bool additive, size_t sets, size_t n, const float* accs, float* out) {
   if (additive && sets > 0) {  // the first set's pass also clears: max(0, acc) is what max(out = 0, acc) gives
@@ -534,15 +546,8 @@ void addTerms(const BlendFunction& blend, const Primitive& p, float param, const
 
 void Field::accumulate(std::span<const glm::vec3> points, FieldScratch& scratch, bool keepTerms) const {
   const size_t n = points.size();
-  atLeast(scratch.xs, n);
-  atLeast(scratch.ys, n);
-  atLeast(scratch.zs, n);
+  splitPoints(points, scratch);
   atLeast(scratch.term, n);
-  for (size_t i = 0; i < n; ++i) {
-    scratch.xs[i] = points[i].x;
-    scratch.ys[i] = points[i].y;
-    scratch.zs[i] = points[i].z;
-  }
   const bool additive = blend_.additive();
   const size_t sets = scratch.setCount();
   atLeast(scratch.acc, sets * n);
@@ -941,14 +946,7 @@ void Field::contributions(const glm::vec3& x, FieldScratch& scratch,
 void Field::samplesOfOneSet(std::span<const glm::vec3> points, std::span<FieldSample> out,
                             FieldScratch& scratch) const {
   const size_t n = points.size();
-  atLeast(scratch.xs, n);
-  atLeast(scratch.ys, n);
-  atLeast(scratch.zs, n);
-  for (size_t i = 0; i < n; ++i) {
-    scratch.xs[i] = points[i].x;
-    scratch.ys[i] = points[i].y;
-    scratch.zs[i] = points[i].z;
-  }
+  splitPoints(points, scratch);
   FieldScratch::Lanes& l = scratch.lanes;
   for (auto* v : {&l.d, &l.gx, &l.gy, &l.gz, &l.cr, &l.cg, &l.cb, &l.weight, &l.bestWeight}) v->assign(n, 0.0f);
   // (l.d: the value; l.bestWeight from 0: only positive terms own a point)

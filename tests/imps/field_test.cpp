@@ -21,6 +21,22 @@ Field makeField(std::vector<Primitive> prims, BlendFunction blend, BlendSets set
   return Field(std::move(prims), std::move(params), std::move(colors), blend, std::move(sets));
 }
 
+// Random primitives: `metaballs` metaballs, then `segments` line segments, then `ellipsoids` ellipsoids; points
+// drawn from u, radii from r.
+std::vector<Primitive> randomPrimitives(std::mt19937& rng, std::uniform_real_distribution<float>& u,
+                                        std::uniform_real_distribution<float>& r, int metaballs, int segments,
+                                        int ellipsoids = 0) {
+  std::vector<Primitive> prims;
+  for (int i = 0; i < metaballs; ++i) prims.push_back(Primitive::metaball({u(rng), u(rng), u(rng)}, r(rng)));
+  for (int i = 0; i < segments; ++i)
+    prims.push_back(Primitive::lineSeg({u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, r(rng), r(rng)));
+  for (int i = 0; i < ellipsoids; ++i)
+    prims.push_back(Primitive::ellipsoid({u(rng), u(rng), u(rng)},
+                                         glm::angleAxis(u(rng) * 3.0f, glm::normalize(glm::vec3(u(rng), u(rng), 1))),
+                                         {r(rng), r(rng), r(rng)}));
+  return prims;
+}
+
 TEST(Field, ExpAccurateIsWithinTwoUlpOfStdExp) {
   for (float x = -80.0f; x < 80.0f; x += 0.0137f) {
     const float exact = std::exp(x), approx = expAccurate(x);
@@ -82,10 +98,7 @@ TEST(Field, EllipticalBlendIsAUnionAwayFromTheJoin) {
 TEST(Field, BatchedValuesAreBitIdenticalToPointValues) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(-1.5f, 1.5f), r(0.1f, 0.3f);
-  std::vector<Primitive> prims;
-  for (int i = 0; i < 40; ++i) prims.push_back(Primitive::metaball({u(rng), u(rng), u(rng)}, r(rng)));
-  for (int i = 0; i < 10; ++i)
-    prims.push_back(Primitive::lineSeg({u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, r(rng), r(rng)));
+  const std::vector<Primitive> prims = randomPrimitives(rng, u, r, 40, 10);
   BlendFunction blend;
   blend.defaultParam = -3.0f;
   const Field f = makeField(prims, blend);
@@ -110,14 +123,7 @@ TEST(Field, BatchedValuesAreBitIdenticalToPointValues) {
 TEST(Field, BatchedSamplesAreBitIdenticalToPointSamples) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f), r(0.1f, 0.3f);
-  std::vector<Primitive> prims;
-  for (int i = 0; i < 24; ++i) prims.push_back(Primitive::metaball({u(rng), u(rng), u(rng)}, r(rng)));
-  for (int i = 0; i < 6; ++i)
-    prims.push_back(Primitive::lineSeg({u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, r(rng), r(rng)));
-  for (int i = 0; i < 6; ++i)
-    prims.push_back(Primitive::ellipsoid({u(rng), u(rng), u(rng)},
-                                         glm::angleAxis(u(rng) * 3.0f, glm::normalize(glm::vec3(u(rng), u(rng), 1))),
-                                         {r(rng), r(rng), r(rng)}));
+  const std::vector<Primitive> prims = randomPrimitives(rng, u, r, 24, 6, 6);
   BlendSets sets;
   for (uint32_t first = 0; first < prims.size(); first += 5) {
     std::vector<uint32_t> members;
@@ -168,10 +174,7 @@ TEST(Field, BatchedSamplesAreBitIdenticalToPointSamples) {
 TEST(Field, LatticeValuesArePointValuesAndAFunctionOfThePointAlone) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f), r(0.05f, 0.3f);
-  std::vector<Primitive> prims;
-  for (int i = 0; i < 20; ++i) prims.push_back(Primitive::metaball({u(rng), u(rng), u(rng)}, r(rng)));
-  for (int i = 0; i < 6; ++i)
-    prims.push_back(Primitive::lineSeg({u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, r(rng), r(rng)));
+  const std::vector<Primitive> prims = randomPrimitives(rng, u, r, 20, 6);
   BlendSets sets;
   for (uint32_t first = 0; first < prims.size(); first += 4) {
     std::vector<uint32_t> members;
@@ -241,10 +244,7 @@ TEST(Field, LatticeValuesArePointValuesAndAFunctionOfThePointAlone) {
 TEST(Field, BoxBoundsHoldAtEveryPointOfTheirBox) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f), r(0.1f, 0.4f), unit(0.0f, 1.0f);
-  std::vector<Primitive> prims;
-  for (int i = 0; i < 12; ++i) prims.push_back(Primitive::metaball({u(rng), u(rng), u(rng)}, r(rng)));
-  for (int i = 0; i < 3; ++i)
-    prims.push_back(Primitive::lineSeg({u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, r(rng), r(rng)));
+  std::vector<Primitive> prims = randomPrimitives(rng, u, r, 12, 3);
   const glm::vec3 axis = glm::normalize(glm::vec3(1, 2, 3));
   for (int i = 0; i < 3; ++i)
     prims.push_back(
@@ -329,8 +329,7 @@ TEST(Field, BlendSetsPreventUnwantedBlending) {
 TEST(Field, SurfaceBoundsEncloseTheSurface) {
   std::mt19937 rng(9);
   std::uniform_real_distribution<float> u(-1, 1), r(0.1f, 0.3f);
-  std::vector<Primitive> prims;
-  for (int i = 0; i < 30; ++i) prims.push_back(Primitive::metaball({u(rng), u(rng), u(rng)}, r(rng)));
+  const std::vector<Primitive> prims = randomPrimitives(rng, u, r, 30, 0);
   BlendFunction blend;
   blend.defaultParam = -0.8f;  // very blobby: the surface reaches well beyond the radii
   const Field f = makeField(prims, blend);
