@@ -139,9 +139,9 @@ TEST(MeshIoTextured, GlbEmbedsEachImageOnceWithARepeatingTrilinearSampler) {
   ASSERT_EQ(glb.gltf["images"].size(), 2u);
   ASSERT_EQ(glb.gltf["textures"].size(), 2u);
   for (const json& image : glb.gltf["images"]) {
-    const auto k = size_t(
-        std::find_if(kImages.begin(), kImages.end(), [&](const MeshImage& m) { return m.name == image["name"]; }) -
-        kImages.begin());
+    const auto k = size_t(std::find_if(kImages.begin(), kImages.end(),
+                                       [&](const MeshImage& m) { return m.name == image["name"].get<std::string>(); }) -
+                          kImages.begin());
     ASSERT_LT(k, kImages.size());
     EXPECT_EQ(image["mimeType"], kImages[k].mimeType);
     EXPECT_EQ(glb.view(image["bufferView"]), kImages[k].bytes) << "the image's own bytes";
