@@ -149,7 +149,7 @@ TEST(MeshWorldCommand, EveryCharacterAndPropIsAnObject) {
   ASSERT_EQ(model.scenes.size(), 1u);
   ASSERT_EQ(model.scenes[0].nodes.size(), report["objects"].size());
   for (size_t i = 0; i < report["objects"].size(); ++i)
-    EXPECT_EQ(model.nodes[size_t(model.scenes[0].nodes[i])].name, report["objects"][i]["name"]);
+    EXPECT_EQ(model.nodes[size_t(model.scenes[0].nodes[i])].name, report["objects"][i]["name"].get<std::string>());
   for (const WorldCharacter& c : world->characters) {
     bool named = false;
     for (const nlohmann::json& o : report["objects"]) named = named || o["name"] == c.name;
