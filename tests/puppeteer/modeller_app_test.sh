@@ -8,10 +8,11 @@
 # uses the polygonizer the scene file names.
 # Usage: modeller_app_test.sh PUPPETEER SOURCE_DIR MODELLER_CHECK XVFB_RUN
 set -euo pipefail
+source "$(dirname "$0")/xvfb_run.sh"
 puppeteer=$1 src=$2 check=$3 xvfb=$4
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-run() { "$xvfb" -a "$puppeteer" "$@"; }
+run() { xvfb_run "$xvfb" "$puppeteer" "$@"; }
 W=640 H=480
 view() { run view "$@" --no-hud --width $W --height $H; }
 fail() { echo "FAIL: $*"; exit 1; }
@@ -66,7 +67,7 @@ grep -q "drag .*: orbit$" "$work/n.txt" || fail "--no-manipulators still grabbed
 cmp "$work/orig.wrl" "$work/n.wrl" || fail "--no-manipulators changed the document"
 # 6. view uses the polygonizer the file names: textured_blobs.wrl is a MarchingCubes scene, so its default meshes
 #    are exactly those of --polygonizer mc, and not the particles'.
-hashes() { "$xvfb" -a "$puppeteer" view "$blobs" --frames 3 --mesh-hashes --no-hud --width 320 --height 240 "$@" \
+hashes() { xvfb_run "$xvfb" "$puppeteer" view "$blobs" --frames 3 --mesh-hashes --no-hud --width 320 --height 240 "$@" \
     | grep '^frame '; }
 hashes >"$work/default.hashes"
 hashes --polygonizer mc >"$work/mc.hashes"

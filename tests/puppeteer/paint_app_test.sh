@@ -6,13 +6,14 @@
 # region, the rest as it was, the original image untouched). Both polygonizers.
 # Usage: paint_app_test.sh PUPPETEER SOURCE_DIR PAINT_CHECK XVFB_RUN
 set -euo pipefail
+source "$(dirname "$0")/xvfb_run.sh"
 puppeteer=$1 src=$2 check=$3 xvfb=$4
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 cp "$src/examples/textured_blobs.wrl" "$src"/examples/textured_blobs_*.png "$work/"
 before=$(sha256sum "$work/textured_blobs_checker.png")
 for polygonizer in mc particles; do
-  "$xvfb" -a "$puppeteer" view "$work/textured_blobs.wrl" --polygonizer "$polygonizer" --no-hud --width 640 \
+  xvfb_run "$xvfb" "$puppeteer" view "$work/textured_blobs.wrl" --polygonizer "$polygonizer" --no-hud --width 640 \
       --height 480 --keys t@2,6@3,s@8 --drag 230,210,280,230@4 --frames 10 --save-as "$work/painted_$polygonizer.wrl" \
       >"$work/out" 2>&1 || { cat "$work/out"; exit 1; }
   grep -q "paint mode" "$work/out" || { cat "$work/out"; echo "FAIL: no paint mode"; exit 1; }

@@ -9,11 +9,12 @@
 # keys o (start/stop a take) and k (re-calibrate: saved, applied, recorded; a noisy window rejected).
 # Usage: viewer_app_test.sh PUPPETEER SOURCE_DIR VIEWER_SHOT_CHECK XVFB_RUN SESSION_MATCH_CHECK
 set -euo pipefail
+source "$(dirname "$0")/xvfb_run.sh"
 puppeteer=$1 src=$2 checker=$3 xvfb=$4 match=$5
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 scene=$src/examples/simple_biped.wrl
-run() { "$xvfb" -a "$puppeteer" "$@"; }
+run() { xvfb_run "$xvfb" "$puppeteer" "$@"; }
 
 # 1. view: rest pose and posed, both polygonizers.
 run view "$scene" --frames 30 --screenshot "$work/rest.png" --no-hud --width 640 --height 480

@@ -6,11 +6,12 @@
 # steps), and a --drive naming no character is a usage error before any window opens.
 # Usage: world_app_test.sh PUPPETEER SOURCE_DIR XVFB_RUN
 set -euo pipefail
+source "$(dirname "$0")/xvfb_run.sh"
 puppeteer=$1 src=$2 xvfb=$3
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 world=$src/examples/two_bipeds.wrl
-run() { "$xvfb" -a "$puppeteer" view "$world" --polygonizer mc --no-hud --width 480 --height 320 "$@"; }
+run() { xvfb_run "$xvfb" "$puppeteer" view "$world" --polygonizer mc --no-hud --width 480 --height 320 "$@"; }
 
 run --frames 20 --screenshot "$work/a.png" >"$work/a.log"
 grep -q "world .*two_bipeds.wrl: 2 characters, 1 props" "$work/a.log" || { cat "$work/a.log"; echo "FAIL: world summary"; exit 1; }
