@@ -24,7 +24,7 @@ std::vector<uint8_t> noise(int width, int height, uint32_t seed) {
   std::vector<uint8_t> rgba(size_t(width) * size_t(height) * 4);
   for (uint8_t& v : rgba) v = uint8_t(random() & 0xFF);
   rgba[3] = 0;
-  rgba[7] = 255;
+  if (rgba.size() >= 8) rgba[7] = 255;  // (a 1 x 1 image has one pixel)
   return rgba;
 }
 
