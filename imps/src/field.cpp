@@ -1067,6 +1067,22 @@ void Field::samples(std::span<const glm::vec3> points, std::span<FieldSample> ou
   }
 }
 
+namespace {
+
+// The largest over the prepared local sets of the sum of their members' values t[k] (k: candidate position), at
+// least 0: the additive blends' bounds from per-candidate bounds on the terms.
+float largestSetSum(std::span<const float> t, const FieldScratch& scratch) {
+  float best = 0.0f;
+  for (size_t s = 0; s < scratch.setCount(); ++s) {
+    float sum = 0.0f;
+    for (uint32_t m = scratch.setOffsets[s]; m < scratch.setOffsets[s + 1]; ++m) sum += t[scratch.setMembers[m]];
+    best = std::max(best, sum);
+  }
+  return best;
+}
+
+}  // namespace
+
 float Field::upperBound(std::span<const float> minDistances, FieldScratch& scratch) const {
   const auto& cand = scratch.candidates;
   IMPS_CHECK_EQ(minDistances.size(), cand.size());
@@ -1079,13 +1095,7 @@ float Field::upperBound(std::span<const float> minDistances, FieldScratch& scrat
   auto& t = scratch.pointTerms;
   t.resize(cand.size());
   for (size_t k = 0; k < cand.size(); ++k) t[k] = blend_.term(minDistances[k], params_[cand[k]]);
-  float best = 0.0f;
-  for (size_t s = 0; s < scratch.setCount(); ++s) {
-    float sum = 0.0f;
-    for (uint32_t m = scratch.setOffsets[s]; m < scratch.setOffsets[s + 1]; ++m) sum += t[scratch.setMembers[m]];
-    best = std::max(best, sum);
-  }
-  return best;
+  return largestSetSum(t, scratch);
 }
 
 float Field::lowerBound(const Box& box, const FieldScratch& scratch) const {
@@ -1117,13 +1127,7 @@ float Field::lowerBound(std::span<const float> maxDistances, FieldScratch& scrat
   t.resize(cand.size());
   for (size_t k = 0; k < cand.size(); ++k)
     t[k] = blend_.term(maxDistances[k] * (1.0f + 1e-3f) + 1e-3f, params_[cand[k]]);
-  float best = 0.0f;
-  for (size_t s = 0; s < scratch.setCount(); ++s) {
-    float sum = 0.0f;
-    for (uint32_t m = scratch.setOffsets[s]; m < scratch.setOffsets[s + 1]; ++m) sum += t[scratch.setMembers[m]];
-    best = std::max(best, sum);
-  }
-  return best;
+  return largestSetSum(t, scratch);
 }
 
 void Field::boxBounds(std::span<const Box> boxes, std::span<float> lower, std::span<float> upper,
