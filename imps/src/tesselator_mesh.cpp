@@ -999,6 +999,107 @@ bool removeToUnfold(Tesselator::State& s, uint32_t p) {
   return true;
 }
 
+// Replaces the triangles region[0..r) (distinct, live) by another triangulation of their boundary, if the region is a
+// disk whose boundary loop has at most kMaxHalfEdges distinct vertices: by fanRing, else clipRing (every triangle
+// winding with the surface, every new edge new; the region's own edges do not count, as they go). A disk with m
+// boundary and I inner vertices has m + 2 I - 2 triangles; the new m - 2 fill the region's first slots and the rest are
+// marked dead, and the inner vertices are left unused this render. Keeps the mesh closed and manifold: a disk is
+// replaced by a disk with the same boundary. Returns whether it replaced (all or nothing).
+constexpr size_t kMaxRegion = 3 * kMaxHalfEdges;  // the most triangles a repair region holds
+bool retriangulateRegion(Tesselator::State& s, const uint32_t* region, size_t r) {
+  if (r > kMaxRegion) return false;
+  // The region's directed edges; its boundary is those whose twin is not in it.
+  uint32_t from[3 * kMaxRegion], to[3 * kMaxRegion], vertices[3 * kMaxRegion];
+  bool open[3 * kMaxRegion];
+  size_t edges = 0, boundary = 0, v = 0, start = 0;
+  for (size_t q = 0; q < r; ++q)
+    for (size_t k = 0; k < 3; ++k, ++edges) {
+      from[edges] = s.tris[3 * size_t(region[q]) + k], to[edges] = s.tris[3 * size_t(region[q]) + (k + 1) % 3];
+      if (std::find(vertices, vertices + v, from[edges]) == vertices + v) vertices[v++] = from[edges];
+    }
+  for (size_t e = 0; e < edges; ++e) {
+    open[e] = true;
+    for (size_t f = 0; f < edges && open[e]; ++f) open[e] = !(from[f] == to[e] && to[f] == from[e]);
+    if (open[e]) ++boundary, start = e;
+  }
+  // A disk: Euler characteristic V - E + F = 1, and one boundary loop through distinct vertices.
+  if (boundary < 3 || boundary > kMaxHalfEdges || v + r != (edges + boundary) / 2 + 1) return false;
+  uint32_t loop[kMaxHalfEdges];
+  size_t m = 0;
+  for (size_t e = start; m < boundary;) {
+    loop[m++] = from[e];
+    if (to[e] == loop[0]) break;
+    size_t f = 0;
+    while (f < edges && !(open[f] && from[f] == to[e])) ++f;
+    if (f == edges) return false;
+    e = f;
+  }
+  if (m != boundary || std::find(loop + 1, loop + m, loop[0]) != loop + m) return false;
+  // Without the region's edges while new ones are chosen (a chord of the loop may be one of them); put back if none do.
+  for (size_t e = 0; e < edges; ++e) dropHalfEdge(s, from[e], to[e]);
+  auto restore = [&] {
+    for (size_t q = 0; q < r; ++q) {
+      const uint32_t* tri = &s.tris[3 * size_t(region[q])];
+      for (size_t k = 0; k < 3; ++k) setHalfEdge(s, tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3], region[q], true);
+    }
+    return false;
+  };
+  uint32_t ears[3 * kMaxHalfEdges];
+  size_t count = fanRing(s, loop, m, ears);
+  if (count == 0) count = clipRing(s, loop, m, ears);
+  bool ok = count > 0;
+  for (size_t i = 0; i < m && ok; ++i) {  // room in each loop vertex's half-edge table for its new edges
+    size_t out = 0;
+    for (size_t q = 0; q < 3 * count; ++q) out += ears[q] == loop[i];
+    ok = s.heCount[loop[i]] + out <= kMaxHalfEdges;
+  }
+  if (!ok) return restore();
+  for (size_t q = count; q < r; ++q) std::fill_n(&s.tris[3 * size_t(region[q])], 3, kDead);
+  for (size_t q = 0; q < count; ++q) {
+    const uint32_t t = region[q];
+    const uint32_t a = ears[3 * q], b = ears[3 * q + 1], c = ears[3 * q + 2];
+    uint32_t* out = &s.tris[3 * size_t(t)];
+    out[0] = a, out[1] = b, out[2] = c;
+    setHalfEdge(s, a, b, c, t, true);
+    setHalfEdge(s, b, c, a, t, true);
+    setHalfEdge(s, c, a, b, t, true);
+  }
+  return true;
+}
+
+// Unfolds fold t by retriangulating the region around it (retriangulateRegion): t and its three neighbours, then
+// grown by the triangles across the region's boundary edges, up to kMaxGrowth times while it has at most kMaxRegion
+// triangles. Indexes every half-edge's triangle first (once per render). Returns whether it did.
+constexpr int kMaxGrowth = 8;
+bool retriangulateAround(Tesselator::State& s, uint32_t t) {
+  if (!s.heTriAll) {
+    const size_t triangles = s.tris.size() / 3;
+    for (uint32_t q = 0; q < triangles; ++q) {
+      const uint32_t* tri = &s.tris[3 * size_t(q)];
+      if (tri[0] != kDead)
+        for (int k = 0; k < 3; ++k) s.heTri[halfEdgeSlot(s, tri[k], tri[(k + 1) % 3])] = q;
+    }
+    std::fill(s.heTriKnown.begin(), s.heTriKnown.end(), uint8_t(1));
+    s.heTriAll = true;
+  }
+  uint32_t region[kMaxRegion];
+  size_t r = 0;
+  region[r++] = t;
+  for (int grow = 0; grow < kMaxGrowth; ++grow) {
+    const size_t before = r;
+    for (size_t q = 0; q < before; ++q)
+      for (size_t k = 0; k < 3; ++k) {
+        const uint32_t a = s.tris[3 * size_t(region[q]) + k], b = s.tris[3 * size_t(region[q]) + (k + 1) % 3];
+        const uint32_t across = s.heTri[halfEdgeSlot(s, b, a)];
+        if (std::find(region, region + r, across) != region + r) continue;
+        if (r == kMaxRegion) return false;
+        region[r++] = across;
+      }
+    if (retriangulateRegion(s, region, r)) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 size_t unfoldTriangles(Tesselator::State& s) {
@@ -1013,6 +1114,7 @@ size_t unfoldTriangles(Tesselator::State& s) {
   // brings in: knowTrianglesAround), in one scan; the repairs keep them up to date.
   s.heTri.resize(s.heTo.size());
   s.heTriKnown.assign(s.size(), 0);
+  s.heTriAll = false;
   for (uint32_t t : s.folded)
     for (size_t k = 0; k < 3; ++k) s.heTriKnown[s.tris[3 * size_t(t) + k]] = 1;
   for (uint32_t t = 0; t < triangles; ++t) {
@@ -1029,6 +1131,7 @@ size_t unfoldTriangles(Tesselator::State& s) {
       bool fixed = false;
       for (int k = 0; k < 3 && !fixed; ++k) fixed = flipToUnfold(s, t, k);
       for (int k = 0; k < 3 && !fixed; ++k) fixed = removeToUnfold(s, tri[k]);
+      if (!fixed) fixed = retriangulateAround(s, t);
       if (!fixed) s.folded[left++] = t;
     }
     s.folded.resize(left);

@@ -136,6 +136,7 @@ struct Tesselator::State {
   std::vector<uint32_t> loop, tris;
   std::vector<uint32_t> heTri;   // unfoldTriangles: per half-edge slot the index of its triangle in s.tris / 3
   std::vector<uint8_t> heTriKnown;  // unfoldTriangles: per vertex, heTri is valid for its half-edges
+  bool heTriAll = false;            // unfoldTriangles: heTri is valid for every half-edge
   std::vector<uint32_t> folded;  // unfoldTriangles: the triangles winding against their corners' normals
   FieldScratch foldScratch;      // unfoldTriangles: the field prepared over the vertices' box, on first use
   bool foldScratchReady = false;
@@ -200,10 +201,11 @@ size_t unpinchVertices(Tesselator::State& s, const TesselatorOptions& o, size_t&
 // in s.openUp and the half-edge slots of all but their largest fan in s.dropSlot. Parallel; reads the half-edge table.
 size_t markPinchedVertices(Tesselator::State& s, const TesselatorOptions& o);
 // H. folds (sequential; only on a closed, manifold triangulation): a triangle winding against its corners' field
-// normals (a fold, in the concave creases where the corners' tangent planes disagree) has its edges flipped, each
-// flip replacing it and its neighbour by the quad's other diagonal when both new triangles wind with the normals and
-// that diagonal is no edge yet (a flip keeps the mesh closed and manifold). In triangle order, up to three rounds.
-// Returns the folds left.
+// normals (a fold, in the concave creases where the corners' tangent planes disagree) gets the first repair that
+// unfolds it without folding another: an edge flip (it and its neighbour become the quad's other diagonal), else the
+// removal of a corner (its ring triangulated again), else the retriangulation of a disk-shaped region grown around it
+// (retriangulateAround). Each replaces a disk by a disk with the same boundary, so the mesh stays closed and
+// manifold. In triangle order, up to three rounds. Returns the folds left.
 size_t unfoldTriangles(Tesselator::State& s);
 // The output: one vertex per particle (s.vpos, s.nrm, s.vcol clamped to [0, 1]) and s.tris.
 void writeMesh(const Tesselator::State& s, const TesselatorOptions& o, Mesh& mesh);
