@@ -908,6 +908,8 @@ bool flipToUnfold(Tesselator::State& s, uint32_t t, int k) {
   return true;
 }
 
+constexpr size_t kMaxLoop = 2 * kMaxHalfEdges;  // the longest loop fanRing and clipRing triangulate
+
 // A triangulation of ring[0..m) (a counter-clockwise loop) into `ears` whose triangles all wind with the surface and
 // whose new edges are no edges yet: the fan from the ring vertex with the shortest diagonals. Returns the triangle
 // count, m - 2, or 0 if no fan will do.
@@ -933,26 +935,46 @@ size_t fanRing(Tesselator::State& s, const uint32_t* ring, size_t m, uint32_t* e
   return m - 2;
 }
 
-// The same by ear clipping: each time the ear with the shortest new edge among those that wind with the surface and
-// whose new edge is no edge yet. Returns m - 2, or 0 if it gets stuck.
+// The same by ear clipping: each time the ear with the shortest new edge among those that wind with the surface,
+// whose new edge is no edge yet and which hold no other vertex of the ring seen along the ring's mean normal (as
+// plane ear clipping asks, so a ring that is a simple polygon in that view is not clipped into a dead end). Returns
+// m - 2, or 0 if it gets stuck.
 size_t clipRing(Tesselator::State& s, const uint32_t* ring, size_t m, uint32_t* ears) {
-  uint32_t left[kMaxHalfEdges];
-  std::copy_n(ring, m, left);
+  uint32_t left[kMaxLoop];
+  glm::vec2 flat[kMaxLoop];  // left[k] in the plane across the ring's mean normal
+  glm::vec3 normal(0.0f), b0, b1;
+  for (size_t k = 0; k < m; ++k) normal += s.nrm[ring[k]];
+  if (!(glm::length(normal) > 1e-6f)) return 0;
+  tangentBasis(glm::normalize(normal), b0, b1);
+  for (size_t k = 0; k < m; ++k) {
+    left[k] = ring[k];
+    flat[k] = {glm::dot(s.vpos[ring[k]], b0), glm::dot(s.vpos[ring[k]], b1)};
+  }
+  auto cross2 = [](glm::vec2 o, glm::vec2 a, glm::vec2 b) {
+    return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
+  };
   size_t n = m, count = 0;
   while (n > 3) {
     size_t best = n;
     float bestLength = 1e30f;
     for (size_t k = 0; k < n; ++k) {
-      const uint32_t a = left[k], b = left[(k + 1) % n], c = left[(k + 2) % n];
-      if (hasHalfEdge(s, a, c) || hasHalfEdge(s, c, a) || !windsOutward(s, a, b, c)) continue;
+      const size_t kb = (k + 1) % n, kc = (k + 2) % n;
+      const uint32_t a = left[k], b = left[kb], c = left[kc];
       const float length = glm::length(s.vpos[c] - s.vpos[a]);
-      if (length < bestLength) bestLength = length, best = k;
+      if (length >= bestLength || hasHalfEdge(s, a, c) || hasHalfEdge(s, c, a)) continue;
+      bool empty = true;  // no other loop vertex inside the ear, seen along the mean normal
+      for (size_t q = 0; q < n && empty; ++q)
+        if (q != k && q != kb && q != kc)
+          empty = !(cross2(flat[k], flat[kb], flat[q]) > 0.0f && cross2(flat[kb], flat[kc], flat[q]) > 0.0f &&
+                    cross2(flat[kc], flat[k], flat[q]) > 0.0f);
+      if (empty && windsOutward(s, a, b, c)) bestLength = length, best = k;
     }
     if (best == n) return 0;
     uint32_t* ear = ears + 3 * count++;
     ear[0] = left[best], ear[1] = left[(best + 1) % n], ear[2] = left[(best + 2) % n];
     const size_t drop = (best + 1) % n;
     std::copy(left + drop + 1, left + n, left + drop);
+    std::copy(flat + drop + 1, flat + n, flat + drop);
     --n;
   }
   if (!windsOutward(s, left[0], left[1], left[2])) return 0;
@@ -1005,38 +1027,43 @@ bool removeToUnfold(Tesselator::State& s, uint32_t p) {
 // boundary and I inner vertices has m + 2 I - 2 triangles; the new m - 2 fill the region's first slots and the rest are
 // marked dead, and the inner vertices are left unused this render. Keeps the mesh closed and manifold: a disk is
 // replaced by a disk with the same boundary. Returns whether it replaced (all or nothing).
-constexpr size_t kMaxRegion = 3 * kMaxHalfEdges;  // the most triangles a repair region holds
+constexpr size_t kMaxRegion = 160;  // the most triangles a repair region holds
 bool retriangulateRegion(Tesselator::State& s, const uint32_t* region, size_t r) {
   if (r > kMaxRegion) return false;
-  // The region's directed edges; its boundary is those whose twin is not in it.
-  uint32_t from[3 * kMaxRegion], to[3 * kMaxRegion], vertices[3 * kMaxRegion];
+  // The region's directed edges (sorted, as from << 32 | to); its boundary is those whose twin is not in it.
+  uint64_t edge[3 * kMaxRegion];
+  uint32_t vertices[3 * kMaxRegion];
   bool open[3 * kMaxRegion];
   size_t edges = 0, boundary = 0, v = 0, start = 0;
   for (size_t q = 0; q < r; ++q)
-    for (size_t k = 0; k < 3; ++k, ++edges) {
-      from[edges] = s.tris[3 * size_t(region[q]) + k], to[edges] = s.tris[3 * size_t(region[q]) + (k + 1) % 3];
-      if (std::find(vertices, vertices + v, from[edges]) == vertices + v) vertices[v++] = from[edges];
+    for (size_t k = 0; k < 3; ++k) {
+      const uint32_t a = s.tris[3 * size_t(region[q]) + k], b = s.tris[3 * size_t(region[q]) + (k + 1) % 3];
+      edge[edges++] = uint64_t(a) << 32 | b;
+      if (std::find(vertices, vertices + v, a) == vertices + v) vertices[v++] = a;
     }
+  std::sort(edge, edge + edges);
+  auto from = [&](size_t e) { return uint32_t(edge[e] >> 32); };
+  auto to = [&](size_t e) { return uint32_t(edge[e]); };
   for (size_t e = 0; e < edges; ++e) {
-    open[e] = true;
-    for (size_t f = 0; f < edges && open[e]; ++f) open[e] = !(from[f] == to[e] && to[f] == from[e]);
+    open[e] = !std::binary_search(edge, edge + edges, uint64_t(to(e)) << 32 | from(e));
     if (open[e]) ++boundary, start = e;
   }
   // A disk: Euler characteristic V - E + F = 1, and one boundary loop through distinct vertices.
-  if (boundary < 3 || boundary > kMaxHalfEdges || v + r != (edges + boundary) / 2 + 1) return false;
-  uint32_t loop[kMaxHalfEdges];
+  if (boundary < 3 || boundary > kMaxLoop || v + r != (edges + boundary) / 2 + 1) return false;
+  uint32_t loop[kMaxLoop];
   size_t m = 0;
   for (size_t e = start; m < boundary;) {
-    loop[m++] = from[e];
-    if (to[e] == loop[0]) break;
-    size_t f = 0;
-    while (f < edges && !(open[f] && from[f] == to[e])) ++f;
-    if (f == edges) return false;
+    loop[m++] = from(e);
+    if (to(e) == loop[0]) break;
+    // The open edge out of to(e): the edges out of a vertex are adjacent in the sorted list.
+    size_t f = size_t(std::lower_bound(edge, edge + edges, uint64_t(to(e)) << 32) - edge);
+    while (f < edges && from(f) == to(e) && !open[f]) ++f;
+    if (f == edges || from(f) != to(e)) return false;
     e = f;
   }
   if (m != boundary || std::find(loop + 1, loop + m, loop[0]) != loop + m) return false;
   // Without the region's edges while new ones are chosen (a chord of the loop may be one of them); put back if none do.
-  for (size_t e = 0; e < edges; ++e) dropHalfEdge(s, from[e], to[e]);
+  for (size_t e = 0; e < edges; ++e) dropHalfEdge(s, from(e), to(e));
   auto restore = [&] {
     for (size_t q = 0; q < r; ++q) {
       const uint32_t* tri = &s.tris[3 * size_t(region[q])];
@@ -1044,7 +1071,7 @@ bool retriangulateRegion(Tesselator::State& s, const uint32_t* region, size_t r)
     }
     return false;
   };
-  uint32_t ears[3 * kMaxHalfEdges];
+  uint32_t ears[3 * kMaxLoop];
   size_t count = fanRing(s, loop, m, ears);
   if (count == 0) count = clipRing(s, loop, m, ears);
   bool ok = count > 0;
@@ -1070,7 +1097,7 @@ bool retriangulateRegion(Tesselator::State& s, const uint32_t* region, size_t r)
 // Unfolds fold t by retriangulating the region around it (retriangulateRegion): t and its three neighbours, then
 // grown by the triangles across the region's boundary edges, up to kMaxGrowth times while it has at most kMaxRegion
 // triangles. Indexes every half-edge's triangle first (once per render). Returns whether it did.
-constexpr int kMaxGrowth = 8;
+constexpr int kMaxGrowth = 12;
 bool retriangulateAround(Tesselator::State& s, uint32_t t) {
   if (!s.heTriAll) {
     const size_t triangles = s.tris.size() / 3;
