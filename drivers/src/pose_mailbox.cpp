@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <bit>
 #include <chrono>
+#include <limits>
 
 namespace imps::drivers {
 
@@ -17,6 +18,15 @@ namespace {
 template <class T>
 void bump(std::atomic<T>& counter, T by = 1) {
   counter.store(counter.load(std::memory_order_relaxed) + by, std::memory_order_relaxed);
+}
+
+// now - arrival: 0 for a sample stamped after now, and at most the largest int64_t. A sample stamped on another clock
+// or long ago (a replayed session's stamps come from its file) must not overflow the age or its sum.
+constexpr int64_t kMaxAge = std::numeric_limits<int64_t>::max();
+int64_t ageNs(int64_t now, int64_t arrival) {
+  if (arrival >= now) return 0;
+  const uint64_t age = uint64_t(now) - uint64_t(arrival);  // the exact difference: now > arrival
+  return age > uint64_t(kMaxAge) ? kMaxAge : int64_t(age);
 }
 }  // namespace
 
@@ -59,11 +69,12 @@ bool PoseMailbox::latest(Sample& out) {
   front_ = previous & kIndexMask;
   out = slots_[front_].sample;
 
-  const int64_t age = std::max<int64_t>(0, now() - out.arrivalTimeNs);
+  const int64_t age = ageNs(now(), out.arrivalTimeNs);
   bump(consumed_);
   lastAgeNs_.store(age, std::memory_order_relaxed);
   if (age > maxAgeNs_.load(std::memory_order_relaxed)) maxAgeNs_.store(age, std::memory_order_relaxed);
-  bump(totalAgeNs_, age);
+  const int64_t total = totalAgeNs_.load(std::memory_order_relaxed);  // saturating, as the ages themselves
+  totalAgeNs_.store(age > kMaxAge - total ? kMaxAge : total + age, std::memory_order_relaxed);
   return true;
 }
 

@@ -7,6 +7,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <limits>
 #include <thread>
 
 namespace imps::drivers {
@@ -84,6 +85,27 @@ TEST(PoseMailbox, AgeIsMeasuredOnTheInjectedClock) {
   EXPECT_EQ(s.lastAgeNs, 0);
   EXPECT_EQ(s.maxAgeNs, 500);
   EXPECT_EQ(s.totalAgeNs, 700);
+  EXPECT_EQ(s.consumed, 3u);
+}
+
+// Stamps from another clock or from long ago (a replayed session's come from its file): the age and its sum saturate
+// instead of overflowing (undefined behaviour, which UBSan found in make test-sanitize when the concurrent test below
+// summed ages of samples stamped 0 on a machine up for hours).
+TEST(PoseMailbox, AgesSaturateInsteadOfOverflowing) {
+  constexpr int64_t kMax = std::numeric_limits<int64_t>::max(), kMin = std::numeric_limits<int64_t>::min();
+  ManualClock clock(kMax);
+  PoseMailbox box({.queueCapacity = 0, .clock = &clock});
+  box.publish(stamped(1, kMin));  // now - arrival would be 2^64 - 1
+  ASSERT_TRUE(box.takeNewest());
+  EXPECT_EQ(box.stats().lastAgeNs, kMax);
+  box.publish(stamped(2, kMax / 2));
+  ASSERT_TRUE(box.takeNewest());
+  box.publish(stamped(3, -1));  // an age of exactly 2^63: one more than the largest
+  ASSERT_TRUE(box.takeNewest());
+  const auto s = box.stats();
+  EXPECT_EQ(s.lastAgeNs, kMax);
+  EXPECT_EQ(s.maxAgeNs, kMax);
+  EXPECT_EQ(s.totalAgeNs, kMax);
   EXPECT_EQ(s.consumed, 3u);
 }
 

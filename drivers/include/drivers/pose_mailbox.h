@@ -31,7 +31,8 @@ struct PoseMailboxStats {
   uint64_t queued = 0;       // samples put into the in-order queue
   uint64_t drained = 0;      // samples handed out by drain()
   uint64_t queueOverflows = 0;  // samples not queued because the queue was full (the recorder will see a gap)
-  // Age = clock() - Sample::arrivalTimeNs when latest()/takeNewest() hands a sample out (negative ages count as 0).
+  // Age = clock() - Sample::arrivalTimeNs when latest()/takeNewest() hands a sample out (negative ages count as 0;
+  // ages and their sum saturate at the largest int64_t rather than overflow).
   int64_t lastAgeNs = 0;
   int64_t maxAgeNs = 0;
   int64_t totalAgeNs = 0;  // sum over consumed samples; mean = totalAgeNs / consumed
