@@ -25,11 +25,13 @@ demo: build
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) --timeout 600
 
-# The same tests under AddressSanitizer + UndefinedBehaviorSanitizer (Debug build, slow tests skipped).
+# The same tests under AddressSanitizer + UndefinedBehaviorSanitizer (Debug build, slow tests skipped). Leaks inside
+# system libraries are suppressed by tests/lsan.supp; the GL tests do not check leaks (tests/CMakeLists.txt).
 test-sanitize: deps
 	cmake -S . -B $(ASAN_BUILD) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=Debug -DIMPS_SANITIZE=ON -DIMPS_BUILD_BENCH=OFF
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
-	cd $(ASAN_BUILD) && ctest --output-on-failure -j $(JOBS) -LE slow --timeout 900
+	cd $(ASAN_BUILD) && LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp ctest --output-on-failure -j $(JOBS) \
+	    -LE slow --timeout 900
 
 # Every libFuzzer target, FUZZ_SECONDS each, starting from its seeds (clang 16, ASan + UBSan, UB fatal). Readers of
 # whole files, where size matters (limits, quadratic checks), get inputs up to FUZZ_LARGE_LEN bytes; wire codecs
