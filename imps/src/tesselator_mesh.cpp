@@ -1021,9 +1021,50 @@ bool removeToUnfold(Tesselator::State& s, uint32_t p) {
   return true;
 }
 
+// The best triangulation of loop[0..m) (counter-clockwise, m <= kMaxExactLoop) into `ears` among all whose triangles
+// wind with the surface and whose diagonals are no edges yet: the one with the shortest diagonals in all, by dynamic
+// programming over the loop's sub-polygons (each triangle tested once). Returns m - 2, or 0 if there is none. Unlike
+// fanRing and clipRing it cannot miss a triangulation that exists.
+constexpr size_t kMaxExactLoop = 20;
+size_t triangulateLoop(Tesselator::State& s, const uint32_t* loop, size_t m, uint32_t* ears) {
+  constexpr float kNone = 1e30f;
+  float cost[kMaxExactLoop][kMaxExactLoop];  // cost[i][j], i < j: the best of sub-polygon loop[i..j]; kNone: none
+  uint8_t apex[kMaxExactLoop][kMaxExactLoop];
+  auto diagonal = [&](size_t i, size_t j) {  // usable as a diagonal (j - i >= 2, not the closing edge 0 -> m - 1)
+    return !hasHalfEdge(s, loop[i], loop[j]) && !hasHalfEdge(s, loop[j], loop[i]);
+  };
+  for (size_t i = 0; i + 1 < m; ++i) cost[i][i + 1] = 0.0f;
+  for (size_t span = 2; span < m; ++span)
+    for (size_t i = 0; i + span < m; ++i) {
+      const size_t j = i + span;
+      cost[i][j] = kNone;
+      if (span < m - 1 && !diagonal(i, j)) continue;
+      const float own = span < m - 1 ? glm::length(s.vpos[loop[j]] - s.vpos[loop[i]]) : 0.0f;
+      for (size_t k = i + 1; k < j; ++k) {
+        const float c = cost[i][k] + cost[k][j];
+        if (c >= cost[i][j] || cost[i][k] >= kNone || cost[k][j] >= kNone) continue;
+        if (!windsOutward(s, loop[i], loop[k], loop[j])) continue;
+        cost[i][j] = c + own, apex[i][j] = uint8_t(k);
+      }
+    }
+  if (cost[0][m - 1] >= kNone) return 0;
+  size_t count = 0, stack[2 * kMaxExactLoop], top = 0;
+  stack[top++] = 0, stack[top++] = m - 1;
+  while (top > 0) {
+    const size_t j = stack[--top], i = stack[--top];
+    if (j - i < 2) continue;
+    const size_t k = apex[i][j];
+    uint32_t* ear = ears + 3 * count++;
+    ear[0] = loop[i], ear[1] = loop[k], ear[2] = loop[j];
+    stack[top++] = i, stack[top++] = k, stack[top++] = k, stack[top++] = j;
+  }
+  return count;
+}
+
 // Replaces the triangles region[0..r) (distinct, live) by another triangulation of their boundary, if the region is a
-// disk whose boundary loop has at most kMaxHalfEdges distinct vertices: by fanRing, else clipRing (every triangle
-// winding with the surface, every new edge new; the region's own edges do not count, as they go). A disk with m
+// disk whose boundary loop has at most kMaxLoop distinct vertices: by triangulateLoop for a short loop, else fanRing,
+// else clipRing (every triangle winding with the surface, every new edge new; the region's own edges do not count,
+// as they go). A disk with m
 // boundary and I inner vertices has m + 2 I - 2 triangles; the new m - 2 fill the region's first slots and the rest are
 // marked dead, and the inner vertices are left unused this render. Keeps the mesh closed and manifold: a disk is
 // replaced by a disk with the same boundary. Returns whether it replaced (all or nothing).
@@ -1072,8 +1113,8 @@ bool retriangulateRegion(Tesselator::State& s, const uint32_t* region, size_t r)
     return false;
   };
   uint32_t ears[3 * kMaxLoop];
-  size_t count = fanRing(s, loop, m, ears);
-  if (count == 0) count = clipRing(s, loop, m, ears);
+  size_t count = m <= kMaxExactLoop ? triangulateLoop(s, loop, m, ears) : fanRing(s, loop, m, ears);
+  if (count == 0 && m > kMaxExactLoop) count = clipRing(s, loop, m, ears);
   bool ok = count > 0;
   for (size_t i = 0; i < m && ok; ++i) {  // room in each loop vertex's half-edge table for its new edges
     size_t out = 0;

@@ -70,7 +70,8 @@ struct TesselatorOptions {
   bool closedFallback = true;
   // A closed triangulation's folds (triangles winding against the field's outward normal at their centroid, in the
   // concave creases) are repaired by edge flips, vertex removals and retriangulations of a disk around them, which
-  // keep it closed and manifold (pass H, docs/tesselator.md); stats().foldedTriangles counts those left. False: folds stay (and are not counted).
+  // keep it closed and manifold (pass H, docs/tesselator.md); stats().foldedTriangles counts those left. False: folds
+  // stay (and are not counted).
   bool unfold = true;
   // Projective: a textured mesh's coordinates come from the generators (textureMesh alone). Carried: every particle
   // carries its coordinates (see carryTexcoords), so the texture stretches with the skin instead of sliding.
