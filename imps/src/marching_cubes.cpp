@@ -674,14 +674,14 @@ void sampleBlock(const Field& field, const Grid& g, glm::ivec3 block, const Bloc
 
 namespace {
 
-// Inside bits, one 9-bit mask per row of samples: rows[j + 9k] bit i is sample (i, j, k) >= iso.
-// The comparisons run as one vectorised pass into bytes (0 or 1); a row's first eight bytes, read as a
-// little-endian word, become bits by one multiplication: byte i (bit 8i) times 2^(56 - 7i) lands on bit 56 + i,
-// and no two products share a bit, so nothing carries.
 // Fewer candidates than this in a block: root finding starts from the line's root, an evaluation of the field
 // costing less than the cubic estimate would save (the biped's blocks); classifyBlock then keeps no outer samples.
 constexpr size_t kCubicMinCandidates = 6;
 
+// Inside bits, one 9-bit mask per row of samples: rows[j + 9k] bit i is sample (i, j, k) >= iso.
+// The comparisons run as one vectorised pass into bytes (0 or 1); a row's first eight bytes, read as a
+// little-endian word, become bits by one multiplication: byte i (bit 8i) times 2^(56 - 7i) lands on bit 56 + i,
+// and no two products share a bit, so nothing carries.
 std::array<uint32_t, kBlockVerts * kBlockVerts> insideRows(std::span<const float> samples, float iso) {
   static_assert(std::endian::native == std::endian::little);
   std::array<uint8_t, kBlockSamples + 7> inside{};  // padded so the last row's 8-byte read stays inside

@@ -1041,10 +1041,10 @@ size_t triangulateLoop(Tesselator::State& s, const uint32_t* loop, size_t m, uin
       if (span < m - 1 && !diagonal(i, j)) continue;
       const float own = span < m - 1 ? glm::length(s.vpos[loop[j]] - s.vpos[loop[i]]) : 0.0f;
       for (size_t k = i + 1; k < j; ++k) {
-        const float c = cost[i][k] + cost[k][j];
-        if (c >= cost[i][j] || cost[i][k] >= kNone || cost[k][j] >= kNone) continue;
-        if (!windsOutward(s, loop[i], loop[k], loop[j])) continue;
-        cost[i][j] = c + own, apex[i][j] = uint8_t(k);
+        if (cost[i][k] >= kNone || cost[k][j] >= kNone) continue;
+        const float c = cost[i][k] + cost[k][j] + own;
+        if (c >= cost[i][j] || !windsOutward(s, loop[i], loop[k], loop[j])) continue;
+        cost[i][j] = c, apex[i][j] = uint8_t(k);
       }
     }
   if (cost[0][m - 1] >= kNone) return 0;
@@ -1064,28 +1064,25 @@ size_t triangulateLoop(Tesselator::State& s, const uint32_t* loop, size_t m, uin
 // Replaces the triangles region[0..r) (distinct, live) by another triangulation of their boundary, if the region is a
 // disk whose boundary loop has at most kMaxLoop distinct vertices: by triangulateLoop for a short loop, else fanRing,
 // else clipRing (every triangle winding with the surface, every new edge new; the region's own edges do not count,
-// as they go). A disk with m
-// boundary and I inner vertices has m + 2 I - 2 triangles; the new m - 2 fill the region's first slots and the rest are
-// marked dead, and the inner vertices are left unused this render. Keeps the mesh closed and manifold: a disk is
-// replaced by a disk with the same boundary. Returns whether it replaced (all or nothing).
+// as they go). A disk with m boundary and I inner vertices has m + 2 I - 2 triangles; the new m - 2 fill the region's
+// first slots and the rest are marked dead, and the inner vertices are left unused this render. Keeps the mesh closed
+// and manifold: a disk is replaced by a disk with the same boundary. Returns whether it replaced (all or nothing).
 constexpr size_t kMaxRegion = 160;  // the most triangles a repair region holds
 bool retriangulateRegion(Tesselator::State& s, const uint32_t* region, size_t r) {
   if (r > kMaxRegion) return false;
-  // The region's directed edges (sorted, as from << 32 | to); its boundary is those whose twin is not in it.
+  // The region's directed edges (sorted, as from << 32 | to); its boundary is those whose twin is not in it, and its
+  // vertices are their distinct starts (every corner starts an edge of its triangle).
   uint64_t edge[3 * kMaxRegion];
-  uint32_t vertices[3 * kMaxRegion];
   bool open[3 * kMaxRegion];
   size_t edges = 0, boundary = 0, v = 0, start = 0;
   for (size_t q = 0; q < r; ++q)
-    for (size_t k = 0; k < 3; ++k) {
-      const uint32_t a = s.tris[3 * size_t(region[q]) + k], b = s.tris[3 * size_t(region[q]) + (k + 1) % 3];
-      edge[edges++] = uint64_t(a) << 32 | b;
-      if (std::find(vertices, vertices + v, a) == vertices + v) vertices[v++] = a;
-    }
+    for (size_t k = 0; k < 3; ++k)
+      edge[edges++] = uint64_t(s.tris[3 * size_t(region[q]) + k]) << 32 | s.tris[3 * size_t(region[q]) + (k + 1) % 3];
   std::sort(edge, edge + edges);
   auto from = [&](size_t e) { return uint32_t(edge[e] >> 32); };
   auto to = [&](size_t e) { return uint32_t(edge[e]); };
   for (size_t e = 0; e < edges; ++e) {
+    v += e == 0 || from(e) != from(e - 1);
     open[e] = !std::binary_search(edge, edge + edges, uint64_t(to(e)) << 32 | from(e));
     if (open[e]) ++boundary, start = e;
   }
@@ -1153,9 +1150,10 @@ bool retriangulateAround(Tesselator::State& s, uint32_t t) {
   uint32_t region[kMaxRegion];
   size_t r = 0;
   region[r++] = t;
+  size_t scanned = 0;  // the triangles before it have no neighbour outside the region
   for (int grow = 0; grow < kMaxGrowth; ++grow) {
     const size_t before = r;
-    for (size_t q = 0; q < before; ++q)
+    for (size_t q = scanned; q < before; ++q)
       for (size_t k = 0; k < 3; ++k) {
         const uint32_t a = s.tris[3 * size_t(region[q]) + k], b = s.tris[3 * size_t(region[q]) + (k + 1) % 3];
         const uint32_t across = s.heTri[halfEdgeSlot(s, b, a)];
@@ -1163,6 +1161,7 @@ bool retriangulateAround(Tesselator::State& s, uint32_t t) {
         if (r == kMaxRegion) return false;
         region[r++] = across;
       }
+    scanned = before;
     if (retriangulateRegion(s, region, r)) return true;
   }
   return false;
