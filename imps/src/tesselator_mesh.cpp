@@ -40,6 +40,12 @@ namespace {
 // Newton steps, is no vertex this render: it was carried into a limb it does not blend with and dies as a stray.
 constexpr float kVertexOff = 0.5f;
 constexpr size_t kFanCandidates = 32;  // the nearest this many agreeing neighbours cut a particle's cell
+// A fan candidate agrees with the particle when their normals are less than 72 degrees apart (n_i . n_j >= 0.3), or
+// less than 90 degrees apart where the two lie on a convex arc, each behind the other's tangent plane: the neighbours
+// around a limb resolved by only four to seven particles (the biped's wrists, hands and feet at ~900 particles). The
+// far side of a thin limb (normals opposed) never connects, nor does a separate surface in front of the particle.
+constexpr float kFanAgreement = 0.3f;
+constexpr float kFanAgreementConvex = 0.0f;
 constexpr float kNearFan = 1.5f;       // fan candidates nearer than this (desiredRadius) are sorted up front
 
 // Four lanes of GCC's portable vector extension: the hot tests below look at four cell corners, half-edges or fan
@@ -391,8 +397,10 @@ std::pair<size_t, size_t> fanCandidates(const Tesselator::State& s, size_t i, fl
     const uint32_t j = nl[k];
     const glm::vec3 d = s.vpos[j] - p;
     const float d2 = d.x * d.x + d.y * d.y + d.z * d.z;
+    const float agree = glm::dot(s.nrm[j], nn);
+    const size_t convex = size_t(glm::dot(d, nn) <= 0.0f) & size_t(glm::dot(d, s.nrm[j]) >= 0.0f);
     const size_t ok = size_t(s.vok[j] != 0) & size_t(d2 <= rT2) & size_t(d2 > 0.0f) &
-                      size_t(glm::dot(s.nrm[j], nn) >= 0.3f);
+                      (size_t(agree >= kFanAgreement) | (size_t(agree >= kFanAgreementConvex) & convex));
     const size_t near = size_t(d2 <= nearT2);
     const uint64_t key = sortKey(d2, j);
     keys[nearCnt] = key;

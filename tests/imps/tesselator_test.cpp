@@ -660,7 +660,38 @@ TEST(Tesselator, FoldsAreRepairedAndTheMeshStaysClosed) {
   }
   std::printf("folds over 90 renders: %zu without pass H, %zu with\n", folds[0], folds[1]);
   ASSERT_GT(folds[0], 0u) << "the swing must fold some triangles for this test to mean anything";
-  EXPECT_LE(8 * folds[1], folds[0]);  // 270 -> 21 (flips and removals alone: 270 -> 46)
+  EXPECT_LE(6 * folds[1], folds[0]);  // 145 -> 20 (flips and removals alone: 145 -> 32)
+}
+
+// At ~900 particles a wrist or an ankle is a tube four to seven particles around, whose neighbours' normals are
+// 60-90 degrees apart. The biped is one connected surface in every pose of the swing (Marching Cubes at half
+// desiredRadius, checked at both ends of it), but the particle mesh can cut a hand or a foot off at its neck: two
+// closed caps instead of a tube. Not solved (docs/tesselator.md, "What is left"): this guards what the fans' convex
+// agreement gained, 138 -> 103 of 300 renders.
+TEST(Tesselator, HandsAndFeetStayConnectedAtThesisFidelity) {
+  Example e = load("simple_biped.wrl");
+  scaleToParticles(e.options, 900.0f);
+  SkeletonCache skel(*e.character);
+  Tesselator tess(e.options);
+  Mesh mesh;
+  tess.settle(skel, mesh, 200);
+  LimbSwing swing(*e.character, skel, true);
+  MarchingCubesOptions mc;
+  mc.cellSize = 0.5f * e.options.desiredRadius;
+  for (float angle : {-45.0f, 45.0f}) {
+    swing.pose(angle);
+    EXPECT_EQ(analyzeTopology(polygonize(skel.field(), mc)).components, 1u) << angle;
+  }
+  int split = 0;
+  for (int f = 0; f < 300; ++f) {
+    swing.advance(12.0f);
+    tess.frame(skel, mesh);
+    const MeshTopology t = analyzeTopology(mesh);
+    ASSERT_TRUE(t.closedManifold()) << "render " << f;
+    if (!tess.stats().fallback && t.components > 1) ++split;
+  }
+  std::printf("renders with a part cut off: %d of 300\n", split);
+  EXPECT_LE(split, 115);  // measured 103 (138 with fans within 72 degrees only)
 }
 
 // The file's fidelity (~2650 particles) at 30 Hz: swing:360 advances 12 degrees per render. Over 600 renders every

@@ -263,9 +263,9 @@ TEST(MeshCommand, AnIncompleteParticleMeshExits4AndIsWrittenAllTheSame) {
   }
 }
 
-// mesh --polygonizer particles always checks its mesh: a scene where the particles miss a small blob that Marching
-// Cubes finds (twelve metaballs, a desiredRadius of 0.3 m against radii of 0.15-0.35 m) exits 4 and says so; the mesh
-// is written all the same. The same scene without its Tesselator3MP node gets a desiredRadius from its smallest
+// mesh --polygonizer particles always checks its mesh: a scene where the particles miss small blobs that Marching
+// Cubes finds (twelve metaballs, a desiredRadius of 0.45 m against radii of 0.15-0.35 m: 4 components of 12) exits 4
+// and says so; the mesh is written all the same. The same scene without its Tesselator3MP node gets a desiredRadius from its smallest
 // metaball (issue 15) and meshes closed with every component, exit 0.
 TEST(MeshCommand, AParticleMeshMissingPartOfTheSurfaceExits4) {
   const ScratchDir dir("imps_cli_scene");
@@ -283,7 +283,7 @@ TEST(MeshCommand, AParticleMeshMissingPartOfTheSurfaceExits4) {
       "    Metaball { center -1.275 0.467 0.285 radius 0.214 }\n"
       "    Metaball { center 0.016 0.553 -0.792 radius 0.158 }\n"
       "    Metaball { center -0.388 -1.448 0.955 radius 0.296 }\n  ]\n}\n";
-  write(dir / "blobs12.wrl", "#VRML V2.0 utf8\nTesselator3MP {\n  desiredRadius 0.3\n  sceneGraph " + balls + "}\n");
+  write(dir / "blobs12.wrl", "#VRML V2.0 utf8\nTesselator3MP {\n  desiredRadius 0.45\n  sceneGraph " + balls + "}\n");
   const test::ProgramRun run = runPuppeteer(
       {"mesh", (dir / "blobs12.wrl").string(), "--polygonizer", "particles", "-o", (dir / "blobs12.ply").string()});
   EXPECT_EQ(run.exitCode, kCliCheckFailed) << run.err;
