@@ -6,6 +6,7 @@
 #include <numeric>
 
 #include <glm/common.hpp>
+#include <glm/geometric.hpp>
 
 #include "imps/check.h"
 
@@ -132,6 +133,60 @@ MeshTopology analyzeTopology(const Mesh& mesh) {
   topology.eulerCharacteristic =
       static_cast<long>(usedVertices) - static_cast<long>(edgeCount) + static_cast<long>(faceCount);
   return topology;
+}
+
+namespace {
+
+// Each used vertex's component (triangles joined by shared vertices), numbered from 0 in order of first vertex;
+// kUnused for vertices no triangle uses. Returns the component count.
+constexpr uint32_t kUnused = ~0u;
+size_t vertexComponents(const Mesh& mesh, std::vector<uint32_t>& label) {
+  DisjointSets sets(mesh.vertexCount());
+  std::vector<uint8_t> used(mesh.vertexCount(), 0);
+  for (size_t t = 0; t < mesh.triangleCount(); ++t) {
+    const uint32_t* tri = &mesh.indices[3 * t];
+    used[tri[0]] = used[tri[1]] = used[tri[2]] = 1;
+    sets.unite(tri[0], tri[1]);
+    sets.unite(tri[0], tri[2]);
+  }
+  label.assign(mesh.vertexCount(), kUnused);
+  size_t count = 0;
+  for (uint32_t v = 0; v < label.size(); ++v) {
+    if (!used[v]) continue;
+    const uint32_t root = sets.find(v);  // the smallest vertex of its component: labelled first
+    label[v] = root == v ? uint32_t(count++) : label[root];
+  }
+  return count;
+}
+
+}  // namespace
+
+ComponentMatch matchComponents(const Mesh& mesh, const Mesh& reference) {
+  ComponentMatch match;
+  std::vector<uint32_t> label, referenceLabel;
+  match.components = vertexComponents(mesh, label);
+  match.referenceComponents = vertexComponents(reference, referenceLabel);
+  std::vector<size_t> members(match.referenceComponents, 0);
+  std::vector<uint8_t> seen(match.components, 0);
+  for (uint32_t v = 0; v < label.size(); ++v) {
+    if (label[v] == kUnused || seen[label[v]]) continue;
+    seen[label[v]] = 1;  // v is the component's first vertex
+    const glm::vec3 p = mesh.position(v);
+    float best = std::numeric_limits<float>::infinity();
+    uint32_t nearest = kUnused;
+    for (uint32_t r = 0; r < referenceLabel.size(); ++r) {
+      if (referenceLabel[r] == kUnused) continue;
+      const glm::vec3 d = reference.position(r) - p;
+      const float d2 = glm::dot(d, d);
+      if (d2 < best) best = d2, nearest = referenceLabel[r];
+    }
+    if (nearest != kUnused) ++members[nearest];
+  }
+  for (size_t m : members) {
+    match.missing += m == 0;
+    match.cutOff += m > 1 ? m - 1 : 0;
+  }
+  return match;
 }
 
 double signedVolume(const Mesh& mesh) {

@@ -154,10 +154,10 @@ std::string resolutionSource(float cell, int res, const MarchingCubesNode* node)
   return text;
 }
 
-// Whether a particle mesh covers the surface: it has as many components as Marching Cubes finds at half
-// desiredRadius, and at least 90 % of the particles are in a triangle (a settled mesh leaves out only the few
-// particles that are off the surface this render, 0-2 %). "" if so, else what is
-// missing ("leaves 1419 of 1677 particles out of every triangle").
+// Whether a particle mesh covers the surface: its components match those Marching Cubes finds at half desiredRadius
+// one for one (matchComponents: none missing, none cut off), and at least 90 % of the particles are in a triangle (a
+// settled mesh leaves out only the few particles that are off the surface this render, 0-2 %). "" if so, else what
+// is wrong ("leaves 1419 of 1677 particles out of every triangle").
 std::string particleCoverage(const Mesh& mesh, const Field& field, const TesselatorOptions& options,
                              Progress& progress, Json* json) {
   progress.phase("comparing the particle mesh's components with Marching Cubes");
@@ -165,22 +165,32 @@ std::string particleCoverage(const Mesh& mesh, const Field& field, const Tessela
   MarchingCubesOptions mc;
   mc.cellSize = 0.5f * options.desiredRadius;
   mc.threads = options.threads;
-  const size_t reference = planGrid(field, mc) ? analyzeTopology(polygonize(field, mc)).components : 0;
+  const ComponentMatch match = matchComponents(mesh, planGrid(field, mc) ? polygonize(field, mc) : Mesh{});
   progress.done();
   if (json) {
     (*json)["unusedParticles"] = t.unusedVertices;
-    (*json)["marchingCubesComponents"] = reference;
+    (*json)["marchingCubesComponents"] = match.referenceComponents;
+    (*json)["missingComponents"] = match.missing;
+    (*json)["cutOffComponents"] = match.cutOff;
   } else {
-    std::printf("coverage: %zu of %zu particles in no triangle; %zu components (Marching Cubes at %g m: %zu)\n",
-                t.unusedVertices, mesh.vertexCount(), t.components, double(mc.cellSize), reference);
+    std::printf("coverage: %zu of %zu particles in no triangle; %zu components (Marching Cubes at %g m: %zu; %zu "
+                "missing, %zu cut off)\n",
+                t.unusedVertices, mesh.vertexCount(), match.components, double(mc.cellSize),
+                match.referenceComponents, match.missing, match.cutOff);
   }
-  if (t.components < reference)
-    return "has " + std::to_string(t.components) + " components where Marching Cubes finds " +
-           std::to_string(reference) + " (parts of the surface are missing)";
+  std::vector<std::string> wrong;
+  if (match.missing > 0)
+    wrong.push_back("misses " + std::to_string(match.missing) + " of the " +
+                    std::to_string(match.referenceComponents) + " components Marching Cubes finds");
+  if (match.cutOff > 0)
+    wrong.push_back("cuts " + std::to_string(match.cutOff) + (match.cutOff == 1 ? " part" : " parts") +
+                    " off (separate pieces where Marching Cubes finds one surface)");
   if (t.unusedVertices * 10 > mesh.vertexCount())
-    return "leaves " + std::to_string(t.unusedVertices) + " of " + std::to_string(mesh.vertexCount()) +
-           " particles out of every triangle (parts of the surface are missing)";
-  return "";
+    wrong.push_back("leaves " + std::to_string(t.unusedVertices) + " of " + std::to_string(mesh.vertexCount()) +
+                    " particles out of every triangle (parts of the surface are missing)");
+  std::string out;
+  for (const std::string& w : wrong) out += (out.empty() ? "" : " and ") + w;
+  return out;
 }
 
 // --polygonizer particles: the tesselator run until settled (or --updates N), its triangulation written.

@@ -79,6 +79,9 @@ struct RenderRow {
   uint64_t fissions = 0, fusions = 0;
   size_t fallback = 0;  // 1: the particle triangulation was not closed and manifold; Marching Cubes was shown
   size_t particleOpenEdges = 0, particlePinchedVertices = 0;  // what the particle triangulation had left
+  // Against Marching Cubes of the same field at half desiredRadius (matchComponents): parts meshed as separate
+  // pieces where the surface is one (a hand cut off at the wrist), and components not meshed at all.
+  size_t cutOffParts = 0, missingComponents = 0;
 };
 
 struct Report {
@@ -113,8 +116,12 @@ struct Report {
 };
 
 // The mesh's defects as the viewer would show them: topology (analyzeTopology), triangles whose winding disagrees
-// with the field's outward normal at their centroid, and how far the used vertices are from F = iso.
-void measureRender(const Mesh& mesh, const Field& field, RenderRow& row) {
+// with the field's outward normal at their centroid, how far the used vertices are from F = iso, and its components
+// against `reference` (Marching Cubes of the same field at a finer cell).
+void measureRender(const Mesh& mesh, const Field& field, const Mesh& reference, RenderRow& row) {
+  const ComponentMatch match = matchComponents(mesh, reference);
+  row.cutOffParts = match.cutOff;
+  row.missingComponents = match.missing;
   const MeshTopology t = analyzeTopology(mesh);
   row.boundaryEdges = t.boundaryEdges;
   row.nonManifoldEdges = t.nonManifoldEdges;
@@ -297,6 +304,11 @@ std::optional<Report> benchScene(const std::string& path, const Motion& motion, 
   measureSettled(tess, skel, mesh, r);
 
   const int frames = a.renders > 0 ? a.renders : take ? int(take->frames()) : 300;
+  MarchingCubes marchingCubes;  // every render's reference for the components
+  MarchingCubesOptions reference;
+  reference.cellSize = 0.5f * o.desiredRadius;
+  reference.threads = o.threads;
+  Mesh referenceMesh;
   for (int f = 0; f < frames; ++f) {
     if (f % 10 == 0) progress.phase(r.name + ": render " + std::to_string(f + 1) + "/" + std::to_string(frames));
     driver.pose(f);
@@ -316,7 +328,8 @@ std::optional<Report> benchScene(const std::string& path, const Motion& motion, 
     row.fallback = tess.stats().fallback ? 1 : 0;
     row.particleOpenEdges = tess.stats().openEdges;
     row.particlePinchedVertices = tess.stats().pinchedVertices;
-    measureRender(mesh, skel.field(), row);
+    marchingCubes.polygonize(skel.field(), reference, referenceMesh);
+    measureRender(mesh, skel.field(), referenceMesh, row);
     r.rows.push_back(row);
   }
   const double renders = std::max(1, frames), updates = renders * o.updatesPerRender;
@@ -373,16 +386,16 @@ std::string csvText(const std::vector<Report>& reports) {
   std::string out =
       "scene,render,seconds,particles,triangles,boundary_edges,nonmanifold_edges,nonmanifold_vertices,"
       "folded_triangles,worst_f_minus_iso,worst_offset_mm,fissions,fusions,fallback,particle_open_edges,"
-      "particle_pinched_vertices\n";
+      "particle_pinched_vertices,cut_off_parts,missing_components\n";
   char line[512];
   for (const Report& r : reports)
     for (size_t f = 0; f < r.rows.size(); ++f) {
       const RenderRow& w = r.rows[f];
-      std::snprintf(line, sizeof line, "%s,%zu,%.4f,%zu,%zu,%zu,%zu,%zu,%zu,%.6g,%.4g,%llu,%llu,%zu,%zu,%zu\n",
+      std::snprintf(line, sizeof line, "%s,%zu,%.4f,%zu,%zu,%zu,%zu,%zu,%zu,%.6g,%.4g,%llu,%llu,%zu,%zu,%zu,%zu,%zu\n",
                     r.name.c_str(), f, w.seconds, w.particles, w.triangles, w.boundaryEdges, w.nonManifoldEdges,
                     w.nonManifoldVertices, w.foldedTriangles, w.worstFieldError, w.worstOffsetMm,
                     (unsigned long long)w.fissions, (unsigned long long)w.fusions, w.fallback, w.particleOpenEdges,
-                    w.particlePinchedVertices);
+                    w.particlePinchedVertices, w.cutOffParts, w.missingComponents);
       out += line;
     }
   return out;
@@ -414,6 +427,10 @@ Json reportJson(const Report& r) {
               {"renders_with_fallback", r.count(&RenderRow::fallback)},
               {"max_particle_open_edges", r.max(&RenderRow::particleOpenEdges)},
               {"max_particle_pinched_vertices", r.max(&RenderRow::particlePinchedVertices)},
+              {"renders_with_cut_off_parts", r.count(&RenderRow::cutOffParts)},
+              {"max_cut_off_parts", r.max(&RenderRow::cutOffParts)},
+              {"renders_with_missing_components", r.count(&RenderRow::missingComponents)},
+              {"max_missing_components", r.max(&RenderRow::missingComponents)},
               {"updates_to_settle", r.settleUpdates},
               {"updates_to_still", r.updatesToStill},
               {"fissions_per_update_settled", r.fissionsPerUpdateSettled},
@@ -455,6 +472,8 @@ void printTable(const BenchArgs& a, const std::vector<Report>& reports) {
   row("Renders with folds", [&](const Report& r) { return pct(r, r.count(&RenderRow::foldedTriangles)); });
   row("Folded triangles (max)", [&](const Report& r) { return num(r.max(&RenderRow::foldedTriangles)); });
   row("Renders with MC fallback", [&](const Report& r) { return pct(r, r.count(&RenderRow::fallback)); });
+  row("Renders with parts cut off", [&](const Report& r) { return pct(r, r.count(&RenderRow::cutOffParts)); });
+  row("Renders missing components", [&](const Report& r) { return pct(r, r.count(&RenderRow::missingComponents)); });
   row("Worst |F-iso| at a vertex", [&](const Report& r) { return fmt("%.3g", r.worst(&RenderRow::worstFieldError)); });
   row("Worst vertex offset (mm)", [&](const Report& r) { return fmt("%.3g", r.worst(&RenderRow::worstOffsetMm)); });
   row("Worst sample dist (mm)", [&](const Report& r) { return fmt("%.2f", r.worstMm); });

@@ -150,6 +150,30 @@ TEST(MeshTopology, DisjointCubesAreTwoComponents) {
   EXPECT_NEAR(signedVolume(mesh), 2.0, 1e-12);
 }
 
+// A bar [0,3] x [0,1]^2 and a unit cube at x = 10 (the reference), against the bar meshed as two unit cubes at its
+// ends and no cube at x = 10: the same two components, but one part cut off and one missing.
+TEST(MatchComponents, FindsPartsCutOffAndPartsMissingThatTheCountHides) {
+  Mesh bar = cube();
+  for (size_t v = 0; v < bar.vertexCount(); ++v) bar.positions[3 * v] *= 3.0f;
+  Mesh reference = bar;
+  appendMesh(reference, cube({10.0f, 0.0f, 0.0f}));
+  Mesh pieces = cube();
+  appendMesh(pieces, cube({2.0f, 0.0f, 0.0f}));
+  pieces.positions.insert(pieces.positions.end(), {10.5f, 0.5f, 0.5f});  // an unused vertex beside the missing cube
+  const ComponentMatch m = matchComponents(pieces, reference);
+  EXPECT_EQ(m.components, 2u);
+  EXPECT_EQ(m.referenceComponents, 2u);
+  EXPECT_EQ(m.cutOff, 1u);
+  EXPECT_EQ(m.missing, 1u);
+  const ComponentMatch same = matchComponents(reference, reference);
+  EXPECT_EQ(same.components, 2u);
+  EXPECT_EQ(same.cutOff, 0u);
+  EXPECT_EQ(same.missing, 0u);
+  const ComponentMatch none = matchComponents(Mesh{}, reference);
+  EXPECT_EQ(none.components, 0u);
+  EXPECT_EQ(none.missing, 2u);
+}
+
 TEST(MeshTopology, DegenerateTrianglesAndUnusedVerticesAreCounted) {
   Mesh mesh = cube();
   mesh.positions.insert(mesh.positions.end(), {5, 5, 5, 6, 6, 6});  // vertices 8 and 9, unused

@@ -854,7 +854,8 @@ TEST(Tesselator, ManySmallBlobsMeshClosedWithEveryComponent) {
   EXPECT_GE(float(1 << o.bitsPerDim) * o.cubeSize, 4.0f);  // the hash spans the scene
   MarchingCubesOptions mc;
   mc.cellSize = 0.5f * o.desiredRadius;
-  const size_t reference = analyzeTopology(polygonize(skel.field(), mc)).components;
+  const Mesh referenceMesh = polygonize(skel.field(), mc);
+  const size_t reference = analyzeTopology(referenceMesh).components;
   EXPECT_EQ(reference, 14u);
 
   std::vector<uint32_t> indices[2];
@@ -869,6 +870,9 @@ TEST(Tesselator, ManySmallBlobsMeshClosedWithEveryComponent) {
     EXPECT_TRUE(t.closedManifold()) << t.boundaryEdges << " boundary edges, " << t.nonManifoldVertices
                                     << " non-manifold vertices";
     EXPECT_EQ(t.components, reference);
+    const ComponentMatch match = matchComponents(mesh, referenceMesh);  // one for one, not just as many
+    EXPECT_EQ(match.missing, 0u) << threads << " threads";
+    EXPECT_EQ(match.cutOff, 0u) << threads << " threads";
     EXPECT_LE(t.unusedVertices * 50, mesh.vertexCount()) << t.unusedVertices << " of " << mesh.vertexCount();
     indices[threads - 1] = mesh.indices;
   }
@@ -881,6 +885,7 @@ TEST(Tesselator, ManySmallBlobsMeshClosedWithEveryComponent) {
   Mesh mesh;
   tess.settle(skel, mesh, 100);
   EXPECT_LT(analyzeTopology(mesh).components, reference);
+  EXPECT_GT(matchComponents(mesh, referenceMesh).missing, 0u);
 }
 
 // ---- The update's phases one at a time (tesselator_state.h), on particles spread evenly over a sphere ---------

@@ -48,7 +48,9 @@ TEST(BenchCommand, ChecksEveryRenderOfASwingAClipAndASession) {
     const nlohmann::json& scene = report["scenes"][0];
     for (const char* key : {"renders", "renders_with_holes", "max_boundary_edges", "renders_with_nonmanifold",
                             "max_nonmanifold_edges", "max_nonmanifold_vertices", "renders_with_folds",
-                            "fissions_per_update_settled", "worst_f_minus_iso", "renders_with_fallback"})
+                            "fissions_per_update_settled", "worst_f_minus_iso", "renders_with_fallback",
+                            "renders_with_cut_off_parts", "max_cut_off_parts", "renders_with_missing_components",
+                            "max_missing_components"})
       EXPECT_TRUE(scene.contains(key)) << c.motion << ": " << key;
     EXPECT_EQ(scene["renders"], c.renders) << c.motion;
     EXPECT_EQ(scene["renders_with_holes"], 0) << c.motion;
@@ -57,9 +59,19 @@ TEST(BenchCommand, ChecksEveryRenderOfASwingAClipAndASession) {
     std::string line;
     std::getline(csv, line);
     EXPECT_EQ(line.rfind("scene,render,seconds,particles,triangles,boundary_edges,", 0), 0u) << line;
-    int rows = 0;
-    while (std::getline(csv, line)) ++rows;
+    EXPECT_TRUE(line.ends_with(",cut_off_parts,missing_components")) << line;
+    // The last two columns are each render's parts cut off and components missing (against Marching Cubes):
+    // the JSON counts the renders where they are not zero.
+    int rows = 0, cut = 0, missing = 0;
+    while (std::getline(csv, line)) {
+      ++rows;
+      const size_t last = line.rfind(','), before = line.rfind(',', last - 1);
+      cut += std::stoi(line.substr(before + 1, last - before - 1)) > 0;
+      missing += std::stoi(line.substr(last + 1)) > 0;
+    }
     EXPECT_EQ(rows, c.renders) << c.motion;
+    EXPECT_EQ(scene["renders_with_cut_off_parts"], cut) << c.motion;
+    EXPECT_EQ(scene["renders_with_missing_components"], missing) << c.motion;
   }
 }
 

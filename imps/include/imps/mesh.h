@@ -96,6 +96,19 @@ struct MeshTopology {
 // a bad index is a bug in whoever built the mesh).
 MeshTopology analyzeTopology(const Mesh& mesh);
 
+// How the connected components of `mesh` match those of `reference`, another mesh of the same surface (the particle
+// tesselator's against Marching Cubes at a finer cell): each component of `mesh` (triangles joined by shared
+// vertices) belongs to the reference component holding the reference vertex nearest to the component's first
+// vertex. Counts alone can hide both defects at once (a part cut off and a part missing give the same number).
+struct ComponentMatch {
+  size_t components = 0;           // of `mesh`
+  size_t referenceComponents = 0;  // of `reference`
+  size_t missing = 0;  // reference components no component of `mesh` belongs to: parts of the surface not meshed
+  size_t cutOff = 0;   // components of `mesh` beyond the first in one reference component: parts meshed apart
+};
+// O(mesh vertices + components of `mesh` x reference vertices).
+ComponentMatch matchComponents(const Mesh& mesh, const Mesh& reference);
+
 // Signed volume enclosed by the mesh (positive when triangles face outward); meaningful for closed meshes.
 double signedVolume(const Mesh& mesh);
 
