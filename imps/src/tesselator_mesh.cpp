@@ -634,6 +634,196 @@ bool clipEars(Tesselator::State& s, float h, size_t& boundary) {
   return L.size() == 3 && addTriangle(s, L[0], L[1], L[2], &boundary);
 }
 
+// The field sample at p, with s.foldScratch prepared over the vertices' box on first use (p inside that box: a point
+// between vertices). Shared by the hole repair and the fold pass (the vertices do not move in between).
+FieldSample sampleAmongVertices(Tesselator::State& s, const glm::vec3& p) {
+  if (!s.foldScratchReady) {
+    Box box;
+    for (const glm::vec3& v : s.vpos) box.extend(v);
+    s.field->prepare(box, s.foldScratch);
+    s.foldScratchReady = true;
+  }
+  return s.field->sample(p, s.foldScratch);
+}
+
+// A hole loop's shape: its centroid, vector area (along the outward normal of a cap over it: a hole loop turns
+// counter-clockwise seen from outside) and mean distance of its vertices from the centroid.
+struct LoopShape {
+  glm::vec3 centroid{0.0f}, area{0.0f};
+  float radius = 0.0f;
+};
+LoopShape loopShape(const Tesselator::State& s, const uint32_t* L, size_t m) {
+  LoopShape shape;
+  for (size_t k = 0; k < m; ++k) {
+    shape.centroid += s.vpos[L[k]];
+    shape.area += 0.5f * glm::cross(s.vpos[L[k]], s.vpos[L[(k + 1) % m]]);
+  }
+  shape.centroid /= float(m);
+  for (size_t k = 0; k < m; ++k) shape.radius += glm::length(s.vpos[L[k]] - shape.centroid) / float(m);
+  return shape;
+}
+
+// Whether loops a and b are the two rims of a tube the triangulation left open all the way round (a neck, wrist or
+// ankle whose ring of particles made no triangle): close together, each facing the other (the caps ear clipping would
+// put over them face each other), and the solid runs between them (their centroids and the midpoint are inside).
+// Capping such loops would cut the limb off; bridgeLoops joins them instead.
+bool rimsOfOneTube(Tesselator::State& s, const LoopShape& a, const LoopShape& b) {
+  const glm::vec3 d = b.centroid - a.centroid;
+  const float reach = 2.0f * std::max(a.radius, b.radius);
+  if (!(glm::dot(d, d) < reach * reach) || !(glm::dot(a.area, d) > 0.0f) || !(glm::dot(b.area, d) < 0.0f)) return false;
+  const float iso = s.field->iso();
+  return sampleAmongVertices(s, a.centroid).value > iso && sampleAmongVertices(s, b.centroid).value > iso &&
+         sampleAmongVertices(s, 0.5f * (a.centroid + b.centroid)).value > iso;
+}
+
+// Joins hole loops A and B (the rims of one tube, running opposite ways round it) by a strip of triangles, A walked
+// forwards and B backwards, each step taking the shorter new rung: (a_i, a_i+1, b_j) uses A's hole edge
+// a_i -> a_i+1, (b_j-1, b_j, a_i) B's b_j-1 -> b_j, and consecutive triangles share their rung both ways, so the strip
+// closes the hole exactly. Disjoint loops start at their closest pair of vertices. Loops that touch at one vertex v
+// (what is left of the tube is one triangle wide there) make a disk: the strip starts with (b_v-1, v, a_v+1) and
+// ends with (a_v-1, v, b_v+1). All or nothing: returns false, adding nothing, when they share more vertices or a
+// triangle would reuse a taken half-edge.
+constexpr float kBridgeOff = 2.0f;  // a strip triangle's centroid may lie this far off the surface (desiredRadius)
+bool bridgeLoops(Tesselator::State& s, const uint32_t* A, size_t na, const uint32_t* B, size_t nb, float h,
+                 size_t& boundary) {
+  const float invH2 = 1.0f / (h * h);
+  size_t shared = 0, i = 0, j = 0;
+  for (size_t p = 0; p < na; ++p)
+    for (size_t q = 0; q < nb; ++q)
+      if (A[p] == B[q]) ++shared, i = p, j = q;
+  if (shared > 1) return false;
+  const auto a = [&](size_t k) { return A[k % na]; };
+  const auto b = [&](size_t k) { return B[k % nb]; };
+  const auto dist2 = [&](uint32_t u, uint32_t v) {
+    const glm::vec3 d = s.vpos[u] - s.vpos[v];
+    return glm::dot(d, d);
+  };
+  s.strip.clear();
+  i += na, j += nb;  // indices stay positive when walked back
+  size_t stepsA = na, stepsB = nb;
+  if (shared == 1) {
+    s.strip.insert(s.strip.end(), {b(j - 1), b(j), a(i + 1)});
+    ++i, --j;
+    stepsA = na - 2, stepsB = nb - 2;
+  } else {
+    float best = 1e30f;
+    for (size_t p = 0; p < na; ++p)
+      for (size_t q = 0; q < nb; ++q)
+        if (dist2(A[p], B[q]) < best) best = dist2(A[p], B[q]), i = p + na, j = q + nb;
+  }
+  // A step's cost: its new rung's length (in desiredRadius) squared, plus how far the triangle's normal turns from
+  // its corners' normals, as bestEar scores an ear.
+  const auto cost = [&](uint32_t u, uint32_t v, uint32_t w, uint32_t rung0, uint32_t rung1) {
+    const glm::vec3 cr = glm::cross(s.vpos[v] - s.vpos[u], s.vpos[w] - s.vpos[u]);
+    const glm::vec3 nv = s.nrm[u] + s.nrm[v] + s.nrm[w];
+    const float cl = glm::length(cr);
+    const float agree = cl > 0.0f ? glm::dot(cr, nv) / (cl * std::max(glm::length(nv), 1e-6f)) : -1.0f;
+    return dist2(rung0, rung1) * invH2 + 4.0f * (1.0f - agree) + (agree < 0.0f ? 100.0f : 0.0f);
+  };
+  for (size_t ia = 0, jb = 0; ia < stepsA || jb < stepsB;) {
+    if (jb == stepsB || (ia < stepsA && cost(a(i), a(i + 1), b(j), a(i + 1), b(j)) <=
+                                            cost(b(j - 1), b(j), a(i), a(i), b(j - 1)))) {
+      s.strip.insert(s.strip.end(), {a(i), a(i + 1), b(j)});
+      ++i, ++ia;
+    } else {
+      s.strip.insert(s.strip.end(), {b(j - 1), b(j), a(i)});
+      --j, ++jb;
+    }
+  }
+  if (shared == 1) s.strip.insert(s.strip.end(), {a(i), a(i + 1), b(j)});
+  const float iso = s.field->iso(), maxOff = kBridgeOff * h;
+  for (size_t t = 0; t < s.strip.size(); t += 3) {
+    for (size_t k = 0; k < 3; ++k) {
+      const uint32_t u = s.strip[t + k], v = s.strip[t + (k + 1) % 3];
+      if (u == v || hasHalfEdge(s, u, v) || size_t(s.heCount[u]) + 3 > kMaxHalfEdges) return false;
+    }
+    const glm::vec3 c = (s.vpos[s.strip[t]] + s.vpos[s.strip[t + 1]] + s.vpos[s.strip[t + 2]]) / 3.0f;
+    const FieldSample fs = sampleAmongVertices(s, c);
+    if (!(std::fabs(fs.value - iso) <= maxOff * glm::length(fs.gradient))) return false;
+  }
+  for (size_t t = 0; t < s.strip.size(); t += 3) addTriangle(s, s.strip[t], s.strip[t + 1], s.strip[t + 2], &boundary);
+  return true;
+}
+
+// The round's hole loops into s.loops / s.loopStart: the closed ones of 3 to maxHoleLoop edges. The others are marked
+// to be opened up (s.openUp); returns how many.
+size_t collectLoops(Tesselator::State& s, const TesselatorOptions& o) {
+  const size_t n = s.size();
+  size_t open = 0;
+  s.loops.clear();
+  s.loopStart.assign(1, 0);
+  for (uint32_t start = 0; start < n; ++start)
+    for (size_t e = 0; e < s.holeCount[start]; ++e) {
+      if (s.holeUsed[size_t(start) * 4 + e]) continue;
+      const bool closed = walkHoleLoop(s, start, e, o.maxHoleLoop);
+      if (closed && s.loop.size() <= size_t(o.maxHoleLoop) && s.loop.size() >= 3) {
+        s.loops.insert(s.loops.end(), s.loop.begin(), s.loop.end());
+        s.loopStart.push_back(s.loops.size());
+      } else {
+        ++open;
+        for (uint32_t v : s.loop) s.openUp[v] = 1;  // open up around it next round
+      }
+    }
+  s.loopBridged.assign(s.loopStart.size() - 1, 0);
+  return open;
+}
+
+// Joins the loops that are the two rims of one tube (rimsOfOneTube) by strips (bridgeLoops), nearest pairs first,
+// setting s.loopBridged: capping them would cut the limb off. Only loops on different pieces of the mesh are joined
+// (joining two holes of one piece would make a handle).
+void bridgeTubes(Tesselator::State& s, float h, size_t& boundary) {
+  const size_t loopCount = s.loopStart.size() - 1, n = s.size();
+  if (loopCount < 2) return;
+  // The pieces: vertices joined by triangles, but never through a vertex on two loops (or twice on one), where a
+  // piece cut off may still touch the rest.
+  std::vector<uint32_t>& piece = s.piece;
+  std::vector<uint8_t>& onLoops = s.onLoops;
+  piece.resize(n);
+  onLoops.assign(n, 0);
+  for (uint32_t v : s.loops) onLoops[v] = uint8_t(std::min(onLoops[v] + 1, 2));
+  for (uint32_t v = 0; v < n; ++v) piece[v] = v;
+  const auto find = [&](uint32_t v) {
+    while (piece[v] != v) v = piece[v] = piece[piece[v]];
+    return v;
+  };
+  for (size_t t = 0; t < s.tris.size(); t += 3) {
+    uint32_t first = ~0u;
+    for (size_t k = 0; k < 3; ++k) {
+      const uint32_t v = s.tris[t + k];
+      if (onLoops[v] > 1) continue;
+      if (first == ~0u) first = find(v);
+      else piece[find(v)] = first;
+    }
+  }
+  // A loop's piece: that of its first vertex on no other loop (~0u: none).
+  const auto pieceOf = [&](size_t k) {
+    uint32_t p = ~0u;
+    for (size_t q = s.loopStart[k]; q < s.loopStart[k + 1]; ++q) {
+      if (p == ~0u && onLoops[s.loops[q]] == 1) p = find(s.loops[q]);
+    }
+    return p;
+  };
+  std::vector<LoopShape> shapes(loopCount);
+  for (size_t k = 0; k < loopCount; ++k)
+    shapes[k] = loopShape(s, &s.loops[s.loopStart[k]], s.loopStart[k + 1] - s.loopStart[k]);
+  std::vector<std::pair<float, std::pair<uint32_t, uint32_t>>> pairs;
+  for (uint32_t a = 0; a < loopCount; ++a)
+    for (uint32_t b = a + 1; b < loopCount; ++b) {
+      const uint32_t pa = pieceOf(a), pb = pieceOf(b);
+      if (pa == ~0u || pb == ~0u || pa == pb) continue;
+      if (rimsOfOneTube(s, shapes[a], shapes[b]) || rimsOfOneTube(s, shapes[b], shapes[a]))
+        pairs.push_back({glm::length(shapes[b].centroid - shapes[a].centroid), {a, b}});
+    }
+  std::sort(pairs.begin(), pairs.end());
+  for (const auto& [dist, ab] : pairs) {
+    const auto [a, b] = ab;
+    if (s.loopBridged[a] || s.loopBridged[b]) continue;
+    const size_t na = s.loopStart[a + 1] - s.loopStart[a], nb = s.loopStart[b + 1] - s.loopStart[b];
+    if (bridgeLoops(s, &s.loops[s.loopStart[a]], na, &s.loops[s.loopStart[b]], nb, h, boundary))
+      s.loopBridged[a] = s.loopBridged[b] = 1;
+  }
+}
+
 }  // namespace
 
 // ---- The passes ----------------------------------------------------------------------------------------------
@@ -748,23 +938,24 @@ size_t assembleTriangles(Tesselator::State& s, const TesselatorOptions& o) {
 
 size_t repairHoles(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary) {
   const size_t n = s.size();
+  s.foldScratchReady = false;  // the vertices moved since the last triangulation
   s.holeTo.resize(n * 4);
   size_t unfilled = 0;
   for (int round = 0; round < 4 && boundary > 0; ++round) {
     collectHoles(s);
     s.holeUsed.assign(n * 4, 0);
     s.openUp.assign(n, 0);
-    unfilled = 0;
-    for (uint32_t start = 0; start < n; ++start)
-      for (size_t e = 0; e < s.holeCount[start]; ++e) {
-        if (s.holeUsed[size_t(start) * 4 + e]) continue;
-        const bool closed = walkHoleLoop(s, start, e, o.maxHoleLoop);
-        const bool fill = closed && s.loop.size() <= size_t(o.maxHoleLoop) && s.loop.size() >= 3 && fillable(s, s.loop);
-        if (!fill || !clipEars(s, o.desiredRadius, boundary)) {
-          ++unfilled;
-          for (uint32_t v : s.loop) s.openUp[v] = 1;  // open up around it next round
-        }
+    unfilled = collectLoops(s, o);
+    bridgeTubes(s, o.desiredRadius, boundary);
+    // Every loop not bridged is capped by ear clipping.
+    for (size_t k = 0; k + 1 < s.loopStart.size(); ++k) {
+      if (s.loopBridged[k]) continue;
+      s.loop.assign(s.loops.begin() + std::ptrdiff_t(s.loopStart[k]), s.loops.begin() + std::ptrdiff_t(s.loopStart[k + 1]));
+      if (!fillable(s, s.loop) || !clipEars(s, o.desiredRadius, boundary)) {
+        ++unfilled;
+        for (uint32_t v : s.loop) s.openUp[v] = 1;  // open up around it next round
       }
+    }
     // Loops that could not be closed (pinched or folded): remove every triangle touching them, so that the next
     // round sees one larger, simple loop around the trouble spot. (A loop counts as unclosed when another loop's
     // triangles closed it first: then nothing is left open.)
@@ -846,13 +1037,7 @@ bool windsOutward(Tesselator::State& s, uint32_t a, uint32_t b, uint32_t c) {
   const float near = 0.5f * glm::length(face);
   if (glm::dot(face, s.nrm[a]) > near && glm::dot(face, s.nrm[b]) > near && glm::dot(face, s.nrm[c]) > near)
     return true;
-  if (!s.foldScratchReady) {
-    Box box;
-    for (const glm::vec3& v : s.vpos) box.extend(v);
-    s.field->prepare(box, s.foldScratch);
-    s.foldScratchReady = true;
-  }
-  return glm::dot(face, s.field->sample((pa + s.vpos[b] + s.vpos[c]) / 3.0f, s.foldScratch).gradient) < 0.0f;
+  return glm::dot(face, sampleAmongVertices(s, (pa + s.vpos[b] + s.vpos[c]) / 3.0f).gradient) < 0.0f;
 }
 
 // The slot of directed edge a -> b in a's half-edge table (a -> b must exist).

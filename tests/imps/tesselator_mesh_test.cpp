@@ -210,6 +210,91 @@ TEST(TesselatorMesh, RepairLeavesLoopsLongerThanMaxHoleLoopOpen) {
   EXPECT_EQ(boundary, openEdges(s));
 }
 
+// E, tubes: every triangle touching a particle of a band round the sphere's equator is withdrawn, so the assembly
+// leaves two caps whose rims face each other across the band (as a neck or wrist whose ring of particles made no
+// triangle). Capping each rim would mesh the sphere as two pieces; the repair joins the rims by a strip and the sphere
+// stays one closed surface of Euler characteristic 2, every strip triangle near the surface.
+TEST(TesselatorMesh, HoleRepairJoinsTheTwoRimsOfATubeInsteadOfCappingThem) {
+  Sphere sphere(300);
+  auto& s = sphere.s;
+  const float h = sphere.options.desiredRadius;
+  sphere.fansAndVotes();
+  std::vector<uint8_t> inBand(s.size(), 0);
+  size_t banded = 0;
+  for (uint32_t i = 0; i < s.size(); ++i) banded += inBand[i] = std::fabs(s.vpos[i].z) < 0.5f * h;
+  ASSERT_GT(banded, 5u);
+  for (uint32_t i = 0; i < s.size(); ++i)
+    for (size_t k = 0; k < s.candCount[i]; ++k) {
+      uint32_t* slot = &s.cand[(size_t(i) * kMaxFan + k) * 3];
+      if (inBand[i] || inBand[slot[0]] || inBand[slot[1]]) slot[2] = 0;
+    }
+  s.fanRepeat[0] = 1;
+  size_t boundary = assembleTriangles(s, sphere.options);
+  {
+    Mesh before;
+    writeMesh(s, sphere.options, before);
+    ASSERT_EQ(analyzeTopology(before).components, 2u) << "the band cuts the sphere in two";
+  }
+  const size_t assembled = s.tris.size() / 3;
+  EXPECT_EQ(repairHoles(s, sphere.options, boundary), 0u);
+  EXPECT_EQ(boundary, 0u);
+  Mesh mesh;
+  writeMesh(s, sphere.options, mesh);
+  const MeshTopology t = analyzeTopology(mesh);
+  EXPECT_EQ(t.boundaryEdges, 0u);
+  EXPECT_EQ(t.nonManifoldEdges, 0u);
+  EXPECT_EQ(t.nonManifoldVertices, 0u);
+  EXPECT_EQ(t.orientationConflicts, 0u);
+  EXPECT_EQ(t.components, 1u) << "the rims were capped: the sphere is meshed as two pieces";
+  EXPECT_EQ(t.eulerCharacteristic, 2);
+  EXPECT_EQ(t.unusedVertices, banded) << "only the band's particles are left out";
+  for (size_t k = assembled; k < s.tris.size() / 3; ++k) {  // the strip: outward, and near the sphere
+    const glm::vec3 a = s.vpos[s.tris[3 * k]], b = s.vpos[s.tris[3 * k + 1]], c = s.vpos[s.tris[3 * k + 2]];
+    const glm::vec3 centroid = (a + b + c) / 3.0f;
+    EXPECT_GT(glm::dot(glm::cross(b - a, c - a), centroid), 0.0f) << "strip triangle " << k << " faces inward";
+    EXPECT_LT(kRadius - glm::length(centroid), 0.5f * h) << "strip triangle " << k;
+  }
+}
+
+// ... but two holes that face each other on two bodies (two spheres 0.1 apart, the holes on their facing sides) are not
+// the rims of a tube: the air between them is no solid to join across. Each is capped; the bodies stay two.
+TEST(TesselatorMesh, HoleRepairDoesNotJoinHolesFacingEachOtherAcrossAGap) {
+  const size_t n = 300;
+  const float gap = 0.1f, shift = kRadius + 0.5f * gap;
+  std::vector<glm::vec3> points;
+  for (const float side : {-1.0f, 1.0f})
+    for (const glm::vec3& p : test::fibonacciSphere(n)) points.push_back(p + glm::vec3(side * shift, 0.0f, 0.0f));
+  Sphere two(points, test::sphereOptions(n));
+  BlendFunction blend;
+  blend.defaultParam = -8.0f;
+  two.field = Field({Primitive::metaball(glm::vec3(-shift, 0, 0), kRadius), Primitive::metaball(glm::vec3(shift, 0, 0), kRadius)},
+                    {-8.0f, -8.0f}, {glm::vec3(0.5f), glm::vec3(0.5f)}, blend, BlendSets::all(2));
+  auto& s = two.s;
+  s.field = &two.field;
+  const float h = two.options.desiredRadius;
+  two.fansAndVotes();
+  std::vector<uint8_t> facing(s.size(), 0);  // the particles within 0.3 h of the gap, on either sphere
+  for (uint32_t i = 0; i < s.size(); ++i) facing[i] = std::fabs(s.vpos[i].x) < 0.5f * gap + 0.3f * h;
+  for (uint32_t i = 0; i < s.size(); ++i)
+    for (size_t k = 0; k < s.candCount[i]; ++k) {
+      uint32_t* slot = &s.cand[(size_t(i) * kMaxFan + k) * 3];
+      if (facing[i] || facing[slot[0]] || facing[slot[1]]) slot[2] = 0;
+    }
+  s.fanRepeat[0] = 1;
+  size_t boundary = assembleTriangles(s, two.options);
+  ASSERT_GT(boundary, 6u);
+  EXPECT_EQ(repairHoles(s, two.options, boundary), 0u);
+  EXPECT_EQ(boundary, 0u);
+  Mesh mesh;
+  writeMesh(s, two.options, mesh);
+  const MeshTopology t = analyzeTopology(mesh);
+  EXPECT_EQ(t.boundaryEdges, 0u);
+  EXPECT_EQ(t.nonManifoldEdges, 0u);
+  EXPECT_EQ(t.components, 2u) << "the two spheres were joined across the gap";
+  for (size_t k = 0; k < s.tris.size(); k += 3)  // no triangle spans the gap
+    EXPECT_GT(s.vpos[s.tris[k]].x * s.vpos[s.tris[k + 1]].x, 0.0f);
+}
+
 // F: a vertex whose triangles form two closed fans (a square pyramid and a tetrahedron sharing their apex 0: every
 // edge has its twin, yet the mesh is pinched at 0) is found, the smaller fan's slots are marked, and the pass leaves
 // no pinched vertex, with the larger fan untouched.

@@ -263,27 +263,34 @@ TEST(MeshCommand, AnIncompleteParticleMeshExits4AndIsWrittenAllTheSame) {
   }
 }
 
-// Two metaballs joined by a thin neck (Marching Cubes finds one surface, at half desiredRadius and at 5 mm), meshed
-// by particles 0.1 m apart: the neck gets no triangles and each ball is closed on its own, a closed 2-manifold with
-// the right number of components for two balls. The component match (matchComponents) sees the part cut off; a
-// count would not. Exit 4, the mesh written all the same.
+// Two metaballs joined by a neck (Marching Cubes finds one surface, at half desiredRadius and at 5 mm), meshed by
+// particles 0.1 m apart. With the balls 0.6 m apart the neck's ring of particles makes no triangle, and the hole
+// repair joins the two rims left (capping each would cut one ball off): one component, exit 0. With them 0.64 m apart
+// the neck is too thin for that: each ball is closed on its own, a closed 2-manifold with the right number of
+// components for two balls. The component match (matchComponents) sees the part cut off; a count would not. Exit 4,
+// the mesh written all the same.
 TEST(MeshCommand, AParticleMeshThatCutsAPartOffExits4) {
   const ScratchDir dir("imps_cli_scene");
-  write(dir / "dumbbell.wrl",
-        "#VRML V2.0 utf8\nTesselator3MP {\n  desiredRadius 0.1\n  sceneGraph ExponentialBlend {\n    variance 0.25\n"
-        "    children [\n      Metaball { center -0.3 0 0 radius 0.3 }\n      Metaball { center 0.3 0 0 radius 0.3 }\n"
-        "    ]\n  }\n}\n");
-  const test::ProgramRun fine = runPuppeteer(
-      {"mesh", (dir / "dumbbell.wrl").string(), "--cell", "0.005", "--check", "-o", (dir / "mc.ply").string()});
-  ASSERT_EQ(fine.exitCode, kCliOk) << describe(fine);
-  EXPECT_TRUE(contains(fine.out, " 1 components")) << fine.out;
-  const test::ProgramRun run = runPuppeteer({"mesh", (dir / "dumbbell.wrl").string(), "--polygonizer", "particles",
-                                             "-o", (dir / "dumbbell.ply").string()});
-  EXPECT_EQ(run.exitCode, kCliCheckFailed) << describe(run);
-  EXPECT_TRUE(contains(run.out, "closed 2-manifold")) << run.out;
-  EXPECT_TRUE(contains(run.out, "2 components (Marching Cubes at 0.05 m: 1; 0 missing, 1 cut off)")) << run.out;
-  EXPECT_TRUE(contains(run.err, "cuts 1 part off")) << run.err;
-  EXPECT_TRUE(fs::exists(dir / "dumbbell.ply"));
+  for (const char* centre : {"0.3", "0.32"}) {
+    const bool cut = std::string(centre) == "0.32";
+    write(dir / "dumbbell.wrl",
+          std::string("#VRML V2.0 utf8\nTesselator3MP {\n  desiredRadius 0.1\n  sceneGraph ExponentialBlend {\n") +
+              "    variance 0.25\n    children [\n      Metaball { center -" + centre + " 0 0 radius 0.3 }\n" +
+              "      Metaball { center " + centre + " 0 0 radius 0.3 }\n    ]\n  }\n}\n");
+    const test::ProgramRun fine = runPuppeteer(
+        {"mesh", (dir / "dumbbell.wrl").string(), "--cell", "0.005", "--check", "-o", (dir / "mc.ply").string()});
+    ASSERT_EQ(fine.exitCode, kCliOk) << describe(fine);
+    EXPECT_TRUE(contains(fine.out, " 1 components")) << fine.out;
+    const test::ProgramRun run = runPuppeteer({"mesh", (dir / "dumbbell.wrl").string(), "--polygonizer", "particles",
+                                               "-o", (dir / "dumbbell.ply").string()});
+    EXPECT_EQ(run.exitCode, cut ? kCliCheckFailed : kCliOk) << centre << describe(run);
+    EXPECT_TRUE(contains(run.out, "closed 2-manifold")) << run.out;
+    EXPECT_TRUE(contains(run.out, cut ? "2 components (Marching Cubes at 0.05 m: 1; 0 missing, 1 cut off)"
+                                      : "1 components (Marching Cubes at 0.05 m: 1; 0 missing, 0 cut off)"))
+        << run.out;
+    EXPECT_EQ(contains(run.err, "cuts 1 part off"), cut) << run.err;
+    EXPECT_TRUE(fs::exists(dir / "dumbbell.ply"));
+  }
 }
 
 // mesh --polygonizer particles always checks its mesh: a scene where the particles miss small blobs that Marching
