@@ -194,9 +194,10 @@ void voteTriangles(Tesselator::State& s, const TesselatorOptions& o);
 // only if none of its directed edges is taken (no edge ever has more than two triangles; orientations agree).
 // Fills the half-edge table (s.heTo / s.heCount) and s.openOut. Returns the directed edges without a twin.
 size_t assembleTriangles(Tesselator::State& s, const TesselatorOptions& o);
-// E. hole repair: up to four rounds of closing boundary loops of at most maxHoleLoop edges by ear clipping; loops it
-// cannot close are opened up (the triangles around them removed) for the next round. Keeps `boundary` (directed
-// edges without a twin) up to date; returns the loops left unfilled.
+// E. hole repair: up to four rounds of closing boundary loops of at most maxHoleLoop edges: the two rims of a tube
+// left open all round are joined by a strip, every other loop is capped by ear clipping; loops it cannot close are
+// opened up (the triangles around them removed) for the next round. Keeps `boundary` (directed edges without a twin)
+// up to date; returns the loops left unfilled.
 size_t repairHoles(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary);
 // F. pinches: a vertex whose triangles form more than one fan (two disks touching at a point, which the edge-based
 // assembly and repair cannot see) loses the triangles of its smaller fans (twice; the third time every triangle
