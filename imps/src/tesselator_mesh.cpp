@@ -676,16 +676,13 @@ bool rimsOfOneTube(Tesselator::State& s, const LoopShape& a, const LoopShape& b)
          sampleAmongVertices(s, 0.5f * (a.centroid + b.centroid)).value > iso;
 }
 
-// Joins hole loops A and B (the rims of one tube, running opposite ways round it) by a strip of triangles, A walked
-// forwards and B backwards, each step taking the shorter new rung: (a_i, a_i+1, b_j) uses A's hole edge
-// a_i -> a_i+1, (b_j-1, b_j, a_i) B's b_j-1 -> b_j, and consecutive triangles share their rung both ways, so the strip
-// closes the hole exactly. Disjoint loops start at their closest pair of vertices. Loops that touch at one vertex v
-// (what is left of the tube is one triangle wide there) make a disk: the strip starts with (b_v-1, v, a_v+1) and
-// ends with (a_v-1, v, b_v+1). All or nothing: returns false, adding nothing, when they share more vertices or a
-// triangle would reuse a taken half-edge.
-constexpr float kBridgeOff = 2.0f;  // a strip triangle's centroid may lie this far off the surface (desiredRadius)
-bool bridgeLoops(Tesselator::State& s, const uint32_t* A, size_t na, const uint32_t* B, size_t nb, float h,
-                 size_t& boundary) {
+// Appends to s.strip a strip of triangles joining hole loops A and B (the rims of one tube, running opposite ways round
+// it), A walked forwards and B backwards, each step taking the cheaper of the two next triangles: (a_i, a_i+1, b_j)
+// uses A's hole edge a_i -> a_i+1, (b_j-1, b_j, a_i) B's b_j-1 -> b_j, and consecutive triangles share their rung
+// both ways, so the strip closes the hole exactly. Disjoint loops start at their closest pair of vertices. Loops
+// that touch at one vertex v (what is left of the tube is one triangle wide there) make a disk: the strip starts with
+// (b_v-1, v, a_v+1) and ends with (a_v-1, v, b_v+1). Returns false (appending nothing) if they share more vertices.
+bool appendStrip(Tesselator::State& s, const uint32_t* A, size_t na, const uint32_t* B, size_t nb, float h) {
   const float invH2 = 1.0f / (h * h);
   size_t shared = 0, i = 0, j = 0;
   for (size_t p = 0; p < na; ++p)
@@ -698,7 +695,6 @@ bool bridgeLoops(Tesselator::State& s, const uint32_t* A, size_t na, const uint3
     const glm::vec3 d = s.vpos[u] - s.vpos[v];
     return glm::dot(d, d);
   };
-  s.strip.clear();
   i += na, j += nb;  // indices stay positive when walked back
   size_t stepsA = na, stepsB = nb;
   if (shared == 1) {
@@ -731,16 +727,98 @@ bool bridgeLoops(Tesselator::State& s, const uint32_t* A, size_t na, const uint3
     }
   }
   if (shared == 1) s.strip.insert(s.strip.end(), {a(i), a(i + 1), b(j)});
+  return true;
+}
+
+constexpr float kBridgeOff = 2.0f;  // a strip triangle's centroid may lie this far off the surface (desiredRadius)
+
+// Whether every triangle of s.strip may be added: no degenerate or taken half-edge, room in the half-edge table, and
+// its centroid within kBridgeOff desiredRadius of the surface.
+bool stripFits(Tesselator::State& s, float h) {
   const float iso = s.field->iso(), maxOff = kBridgeOff * h;
   for (size_t t = 0; t < s.strip.size(); t += 3) {
     for (size_t k = 0; k < 3; ++k) {
       const uint32_t u = s.strip[t + k], v = s.strip[t + (k + 1) % 3];
-      if (u == v || hasHalfEdge(s, u, v) || size_t(s.heCount[u]) + 3 > kMaxHalfEdges) return false;
+      if (u == v || hasHalfEdge(s, u, v) || size_t(s.heCount[u]) + 6 > kMaxHalfEdges) return false;
     }
     const glm::vec3 c = (s.vpos[s.strip[t]] + s.vpos[s.strip[t + 1]] + s.vpos[s.strip[t + 2]]) / 3.0f;
     const FieldSample fs = sampleAmongVertices(s, c);
     if (!(std::fabs(fs.value - iso) <= maxOff * glm::length(fs.gradient))) return false;
   }
+  return true;
+}
+
+// The particles left without triangles between rims A and B (near a rim vertex, between the rims along the tube's
+// axis, within 1.5 rim radii of it) into s.ring, ordered round the axis the way B runs. False if fewer than three,
+// or if they leave a gap of more than 120 degrees round the axis.
+bool middleRing(Tesselator::State& s, const uint32_t* A, size_t na, const uint32_t* B, size_t nb,
+                const LoopShape& sa, const LoopShape& sb) {
+  const glm::vec3 axis = sb.centroid - sa.centroid;
+  const float len2 = glm::dot(axis, axis), reach = 1.5f * std::max(sa.radius, sb.radius);
+  if (!(len2 > 0.0f)) return false;
+  glm::vec3 b0, b1;
+  tangentBasis(axis / std::sqrt(len2), b0, b1);
+  s.ring.clear();
+  for (const auto& [L, m] : {std::pair{A, na}, std::pair{B, nb}})
+    for (size_t k = 0; k < m; ++k)
+      for (size_t q = 0; q < s.nbrCount[L[k]]; ++q) {
+        const uint32_t u = s.nbr[size_t(L[k]) * kMaxNeighbours + q];
+        if (s.heCount[u] != 0 || !s.vok[u]) continue;
+        const glm::vec3 d = s.vpos[u] - sa.centroid;
+        const float t = glm::dot(d, axis) / len2;
+        if (t > 0.15f && t < 0.85f && glm::length(d - t * axis) < reach) s.ring.push_back(u);
+      }
+  std::sort(s.ring.begin(), s.ring.end());
+  s.ring.erase(std::unique(s.ring.begin(), s.ring.end()), s.ring.end());
+  if (s.ring.size() < 3) return false;
+  const auto angle = [&](uint32_t u) {
+    const glm::vec3 d = s.vpos[u] - sa.centroid;
+    return std::atan2(glm::dot(d, b1), glm::dot(d, b0));
+  };
+  // One particle per sector of the angle, as many sectors as the rims have vertices on average: the one nearest the
+  // middle between the rims (where the tube has several rows of them, one ring, not a zigzag through the rows).
+  const size_t sectors = std::max<size_t>(3, (na + nb) / 2);
+  const auto sectorOf = [&](uint32_t u) {
+    return std::min(sectors - 1, size_t((angle(u) + 3.14159265f) / 6.2831853f * float(sectors)));
+  };
+  const auto middleness = [&](uint32_t u) {
+    return std::fabs(glm::dot(s.vpos[u] - sa.centroid, axis) / len2 - 0.5f);
+  };
+  std::sort(s.ring.begin(), s.ring.end(), [&](uint32_t u, uint32_t v) {
+    const size_t su = sectorOf(u), sv = sectorOf(v);
+    return su != sv ? su < sv : middleness(u) < middleness(v);
+  });
+  s.ring.erase(std::unique(s.ring.begin(), s.ring.end(), [&](uint32_t u, uint32_t v) { return sectorOf(u) == sectorOf(v); }),
+               s.ring.end());
+  if (s.ring.size() < 3) return false;
+  std::sort(s.ring.begin(), s.ring.end(), [&](uint32_t u, uint32_t v) { return angle(u) < angle(v); });
+  for (size_t k = 0; k < s.ring.size(); ++k) {
+    float gap = angle(s.ring[(k + 1) % s.ring.size()]) - angle(s.ring[k]);
+    if (gap <= 0.0f) gap += 6.2831853f;
+    if (gap > 2.0943951f) return false;
+  }
+  // Sorted by angle the ring runs counter-clockwise round the axis (b0 x b1 = axis); B does so when its vector area
+  // points along the axis (rims facing each other: it points back along it, and B runs clockwise).
+  if (glm::dot(sb.area, axis) < 0.0f) std::reverse(s.ring.begin(), s.ring.end());
+  return true;
+}
+
+// Joins hole loops A and B, the rims of one tube (rimsOfOneTube), by a strip (appendStrip). When that strip would lie
+// too far off the surface (the rims several rings apart, where the particles between them made no triangle), by two:
+// A to the ring of those particles and the ring to B. All or nothing: returns false, adding nothing, when no strip
+// fits (stripFits).
+bool bridgeLoops(Tesselator::State& s, const uint32_t* A, size_t na, const uint32_t* B, size_t nb,
+                 const LoopShape& sa, const LoopShape& sb, float h, size_t& boundary) {
+  s.strip.clear();
+  bool fits = appendStrip(s, A, na, B, nb, h) && stripFits(s, h);
+  if (!fits && middleRing(s, A, na, B, nb, sa, sb)) {
+    s.strip.clear();
+    std::vector<uint32_t>& ring = s.ring;
+    fits = appendStrip(s, A, na, ring.data(), ring.size(), h);
+    std::reverse(ring.begin(), ring.end());  // the ring's edges, the other way round for the second strip
+    fits = fits && appendStrip(s, ring.data(), ring.size(), B, nb, h) && stripFits(s, h);
+  }
+  if (!fits) return false;
   for (size_t t = 0; t < s.strip.size(); t += 3) addTriangle(s, s.strip[t], s.strip[t + 1], s.strip[t + 2], &boundary);
   return true;
 }
@@ -819,7 +897,7 @@ void bridgeTubes(Tesselator::State& s, float h, size_t& boundary) {
     const auto [a, b] = ab;
     if (s.loopBridged[a] || s.loopBridged[b]) continue;
     const size_t na = s.loopStart[a + 1] - s.loopStart[a], nb = s.loopStart[b + 1] - s.loopStart[b];
-    if (bridgeLoops(s, &s.loops[s.loopStart[a]], na, &s.loops[s.loopStart[b]], nb, h, boundary))
+    if (bridgeLoops(s, &s.loops[s.loopStart[a]], na, &s.loops[s.loopStart[b]], nb, shapes[a], shapes[b], h, boundary))
       s.loopBridged[a] = s.loopBridged[b] = 1;
   }
 }

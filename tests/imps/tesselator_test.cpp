@@ -667,7 +667,7 @@ TEST(Tesselator, FoldsAreRepairedAndTheMeshStaysClosed) {
 // 60-90 degrees apart. The particle mesh can cut a hand or a foot off at its neck: two closed caps instead of a tube,
 // where Marching Cubes of the same field (at half desiredRadius, matched one for one every render) finds one surface.
 // Not solved (docs/tesselator.md, "Parts cut off"): this guards what the fans' convex band and the repair's joined
-// tube rims gained, 170 -> 102 -> 66 of 300 renders, and that no component is ever missing.
+// tube rims gained, 170 -> 102 -> 61 of 300 renders, and that no component is ever missing.
 TEST(Tesselator, HandsAndFeetStayConnectedAtThesisFidelity) {
   Example e = load("simple_biped.wrl");
   scaleToParticles(e.options, 900.0f);
@@ -690,7 +690,9 @@ TEST(Tesselator, HandsAndFeetStayConnectedAtThesisFidelity) {
     cut += match.cutOff > 0;
   }
   std::printf("renders with a part cut off: %d of 300\n", cut);
-  EXPECT_LE(cut, 75);  // measured 66 (102 before the repair joined tube rims, 170 with fans within 72 degrees only)
+  // measured 61: 66 when rims are joined only straight across, 102 before the repair joined tube rims at all, 170 with
+  // fans within 72 degrees only
+  EXPECT_LE(cut, 63);
 }
 
 // The file's fidelity (~2650 particles) at 30 Hz: swing:360 advances 12 degrees per render. Over 600 renders every
