@@ -131,16 +131,18 @@ struct Cell {
     float* oy = by[1 - cur];
     int32_t* ol = bl[1 - cur];
     int m = 0;
-    auto put = [&](float px, float py, int32_t l) { ox[m] = px, oy[m] = py, ol[m++] = l; };
+    // (The helpers are forced inline: the clip is the fans' inner loop, and GCC's inlining budget for this file
+    // otherwise leaves them as calls whenever the file grows.)
+    auto put = [&](float px, float py, int32_t l) __attribute__((always_inline)) { ox[m] = px, oy[m] = py, ol[m++] = l; };
     // The point where edge k -> k1 crosses the line.
-    auto cross = [&](int k, int k1, int32_t l) {
+    auto cross = [&](int k, int k1, int32_t l) __attribute__((always_inline)) {
       const float dc = dist[k], dn = dist[k1];
       const float t = dc / (dc - dn);
       put(x[k] + t * (x[k1] - x[k]), y[k] + t * (y[k1] - y[k]), l);
     };
-    auto copy = [&](int from, int to) {  // corners [from, to) unchanged; up to eight as whole lanes (slack)
+    auto copy = [&](int from, int to) __attribute__((always_inline)) {  // corners [from, to) unchanged; up to eight as whole lanes (slack)
       if (to - from <= 8) {
-        auto lanes = [&](auto* dst, const auto* src) {  // 32-bit lanes, copied as bits
+        auto lanes = [&](auto* dst, const auto* src) __attribute__((always_inline)) {  // 32-bit lanes, as bits
           const I32x4 a = load4<I32x4>(src + from), b = load4<I32x4>(src + from + 4);
           std::memcpy(dst + m, &a, sizeof a);
           std::memcpy(dst + m + 4, &b, sizeof b);
@@ -663,14 +665,18 @@ LoopShape loopShape(const Tesselator::State& s, const uint32_t* L, size_t m) {
   return shape;
 }
 
-// Whether loops a and b are the two rims of a tube the triangulation left open all the way round (a neck, wrist or
-// ankle whose ring of particles made no triangle): close together, each facing the other (the caps ear clipping would
-// put over them face each other), and the solid runs between them (their centroids and the midpoint are inside).
-// Capping such loops would cut the limb off; bridgeLoops joins them instead.
-bool rimsOfOneTube(Tesselator::State& s, const LoopShape& a, const LoopShape& b) {
+// Whether loops a and b can be the two rims of a tube the triangulation left open all the way round (a neck, wrist or
+// ankle whose ring of particles made no triangle), by their shapes: close together (centroids within twice the larger
+// mean radius) and facing each other (the caps ear clipping would put over them face each other). Symmetric.
+bool facingRims(const LoopShape& a, const LoopShape& b) {
   const glm::vec3 d = b.centroid - a.centroid;
   const float reach = 2.0f * std::max(a.radius, b.radius);
-  if (!(glm::dot(d, d) < reach * reach) || !(glm::dot(a.area, d) > 0.0f) || !(glm::dot(b.area, d) < 0.0f)) return false;
+  return glm::dot(d, d) < reach * reach && glm::dot(a.area, d) > 0.0f && glm::dot(b.area, d) < 0.0f;
+}
+
+// Whether the solid runs between two facing rims: their centroids and the midpoint are inside (F > iso). Two bodies
+// with facing holes, or an arm against the hip, have air between them.
+bool solidBetween(Tesselator::State& s, const LoopShape& a, const LoopShape& b) {
   const float iso = s.field->iso();
   return sampleAmongVertices(s, a.centroid).value > iso && sampleAmongVertices(s, b.centroid).value > iso &&
          sampleAmongVertices(s, 0.5f * (a.centroid + b.centroid)).value > iso;
@@ -803,7 +809,7 @@ bool middleRing(Tesselator::State& s, const uint32_t* A, size_t na, const uint32
   return true;
 }
 
-// Joins hole loops A and B, the rims of one tube (rimsOfOneTube), by a strip (appendStrip). When that strip would lie
+// Joins hole loops A and B, the rims of one tube (bridgeTubes), by a strip (appendStrip). When that strip would lie
 // too far off the surface (the rims several rings apart, where the particles between them made no triangle), by two:
 // A to the ring of those particles and the ring to B. All or nothing: returns false, adding nothing, when no strip
 // fits (stripFits).
@@ -846,51 +852,55 @@ size_t collectLoops(Tesselator::State& s, const TesselatorOptions& o) {
   return open;
 }
 
-// Joins the loops that are the two rims of one tube (rimsOfOneTube) by strips (bridgeLoops), nearest pairs first,
-// setting s.loopBridged: capping them would cut the limb off. Only loops on different pieces of the mesh are joined
-// (joining two holes of one piece would make a handle).
+// Joins the loops that are the two rims of one tube by strips (bridgeLoops), nearest pairs first, setting
+// s.loopBridged: capping them would cut the limb off. Two loops are rims of one tube when they face each other
+// (facingRims), lie on different pieces of the mesh (joining two holes of one piece would make a handle) and the solid
+// runs between them (solidBetween).
 void bridgeTubes(Tesselator::State& s, float h, size_t& boundary) {
   const size_t loopCount = s.loopStart.size() - 1, n = s.size();
   if (loopCount < 2) return;
-  // The pieces: vertices joined by triangles, but never through a vertex on two loops (or twice on one), where a
-  // piece cut off may still touch the rest.
+  std::vector<LoopShape> shapes(loopCount);
+  for (size_t k = 0; k < loopCount; ++k)
+    shapes[k] = loopShape(s, &s.loops[s.loopStart[k]], s.loopStart[k + 1] - s.loopStart[k]);
+  // The pieces (built on first need: most rounds have no facing pair): vertices joined by triangles, but never
+  // through a vertex on two loops (or twice on one), where a piece cut off may still touch the rest.
   std::vector<uint32_t>& piece = s.piece;
   std::vector<uint8_t>& onLoops = s.onLoops;
-  piece.resize(n);
-  onLoops.assign(n, 0);
-  for (uint32_t v : s.loops) onLoops[v] = uint8_t(std::min(onLoops[v] + 1, 2));
-  for (uint32_t v = 0; v < n; ++v) piece[v] = v;
+  bool piecesBuilt = false;
   const auto find = [&](uint32_t v) {
     while (piece[v] != v) v = piece[v] = piece[piece[v]];
     return v;
   };
-  for (size_t t = 0; t < s.tris.size(); t += 3) {
-    uint32_t first = ~0u;
-    for (size_t k = 0; k < 3; ++k) {
-      const uint32_t v = s.tris[t + k];
-      if (onLoops[v] > 1) continue;
-      if (first == ~0u) first = find(v);
-      else piece[find(v)] = first;
+  const auto buildPieces = [&] {
+    piece.resize(n);
+    onLoops.assign(n, 0);
+    for (uint32_t v : s.loops) onLoops[v] = uint8_t(std::min(onLoops[v] + 1, 2));
+    for (uint32_t v = 0; v < n; ++v) piece[v] = v;
+    for (size_t t = 0; t < s.tris.size(); t += 3) {
+      uint32_t first = ~0u;
+      for (size_t k = 0; k < 3; ++k) {
+        const uint32_t v = s.tris[t + k];
+        if (onLoops[v] > 1) continue;
+        if (first == ~0u) first = find(v);
+        else piece[find(v)] = first;
+      }
     }
-  }
+    piecesBuilt = true;
+  };
   // A loop's piece: that of its first vertex on no other loop (~0u: none).
   const auto pieceOf = [&](size_t k) {
-    uint32_t p = ~0u;
-    for (size_t q = s.loopStart[k]; q < s.loopStart[k + 1]; ++q) {
-      if (p == ~0u && onLoops[s.loops[q]] == 1) p = find(s.loops[q]);
-    }
-    return p;
+    for (size_t q = s.loopStart[k]; q < s.loopStart[k + 1]; ++q)
+      if (onLoops[s.loops[q]] == 1) return find(s.loops[q]);
+    return ~0u;
   };
-  std::vector<LoopShape> shapes(loopCount);
-  for (size_t k = 0; k < loopCount; ++k)
-    shapes[k] = loopShape(s, &s.loops[s.loopStart[k]], s.loopStart[k + 1] - s.loopStart[k]);
   std::vector<std::pair<float, std::pair<uint32_t, uint32_t>>> pairs;
   for (uint32_t a = 0; a < loopCount; ++a)
     for (uint32_t b = a + 1; b < loopCount; ++b) {
+      if (!facingRims(shapes[a], shapes[b])) continue;
+      if (!piecesBuilt) buildPieces();
       const uint32_t pa = pieceOf(a), pb = pieceOf(b);
-      if (pa == ~0u || pb == ~0u || pa == pb) continue;
-      if (rimsOfOneTube(s, shapes[a], shapes[b]) || rimsOfOneTube(s, shapes[b], shapes[a]))
-        pairs.push_back({glm::length(shapes[b].centroid - shapes[a].centroid), {a, b}});
+      if (pa == ~0u || pb == ~0u || pa == pb || !solidBetween(s, shapes[a], shapes[b])) continue;
+      pairs.push_back({glm::length(shapes[b].centroid - shapes[a].centroid), {a, b}});
     }
   std::sort(pairs.begin(), pairs.end());
   for (const auto& [dist, ab] : pairs) {
@@ -936,6 +946,7 @@ void projectVertices(Tesselator::State& s, const TesselatorOptions& o) {
   });
   s.cacheValid = true;
   s.cacheStamp = s.fieldStamp;
+  s.foldScratchReady = false;  // the vertices moved: sampleAmongVertices prepares the field over their box again
 }
 
 void buildFans(Tesselator::State& s, const TesselatorOptions& o) {
@@ -1016,7 +1027,6 @@ size_t assembleTriangles(Tesselator::State& s, const TesselatorOptions& o) {
 
 size_t repairHoles(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary) {
   const size_t n = s.size();
-  s.foldScratchReady = false;  // the vertices moved since the last triangulation
   s.holeTo.resize(n * 4);
   size_t unfilled = 0;
   for (int round = 0; round < 4 && boundary > 0; ++round) {
@@ -1442,7 +1452,6 @@ bool retriangulateAround(Tesselator::State& s, uint32_t t) {
 
 size_t unfoldTriangles(Tesselator::State& s) {
   const size_t triangles = s.tris.size() / 3;
-  s.foldScratchReady = false;
   s.folded.clear();
   for (uint32_t t = 0; t < triangles; ++t)
     if (!windsOutward(s, s.tris[3 * size_t(t)], s.tris[3 * size_t(t) + 1], s.tris[3 * size_t(t) + 2]))

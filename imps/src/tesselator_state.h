@@ -145,7 +145,7 @@ struct Tesselator::State {
   std::vector<uint8_t> heTriKnown;  // unfoldTriangles: per vertex, heTri is valid for its half-edges
   bool heTriAll = false;            // unfoldTriangles: heTri is valid for every half-edge
   std::vector<uint32_t> folded;  // unfoldTriangles: the triangles winding against their corners' normals
-  FieldScratch foldScratch;      // unfoldTriangles: the field prepared over the vertices' box, on first use
+  FieldScratch foldScratch;      // E and H: the field prepared over the vertices' box, on first use after pass A
   bool foldScratchReady = false;
   std::vector<size_t> chunkUnanimous;  // voteTriangles: per chunk its emitted unanimous triangles, then offsets
   std::vector<size_t> chunkOpen;       // assembleTriangles: per chunk its open directed edges
