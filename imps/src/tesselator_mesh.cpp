@@ -133,14 +133,17 @@ struct Cell {
     int m = 0;
     // (The helpers are forced inline: the clip is the fans' inner loop, and GCC's inlining budget for this file
     // otherwise leaves them as calls whenever the file grows.)
-    auto put = [&](float px, float py, int32_t l) __attribute__((always_inline)) { ox[m] = px, oy[m] = py, ol[m++] = l; };
+    auto put = [&](float px, float py, int32_t l) __attribute__((always_inline)) {
+      ox[m] = px, oy[m] = py, ol[m++] = l;
+    };
     // The point where edge k -> k1 crosses the line.
     auto cross = [&](int k, int k1, int32_t l) __attribute__((always_inline)) {
       const float dc = dist[k], dn = dist[k1];
       const float t = dc / (dc - dn);
       put(x[k] + t * (x[k1] - x[k]), y[k] + t * (y[k1] - y[k]), l);
     };
-    auto copy = [&](int from, int to) __attribute__((always_inline)) {  // corners [from, to) unchanged; up to eight as whole lanes (slack)
+    // Corners [from, to) unchanged; up to eight as whole lanes (slack).
+    auto copy = [&](int from, int to) __attribute__((always_inline)) {
       if (to - from <= 8) {
         auto lanes = [&](auto* dst, const auto* src) __attribute__((always_inline)) {  // 32-bit lanes, as bits
           const I32x4 a = load4<I32x4>(src + from), b = load4<I32x4>(src + from + 4);
@@ -723,8 +726,8 @@ bool appendStrip(Tesselator::State& s, const uint32_t* A, size_t na, const uint3
     return dist2(rung0, rung1) * invH2 + 4.0f * (1.0f - agree) + (agree < 0.0f ? 100.0f : 0.0f);
   };
   for (size_t ia = 0, jb = 0; ia < stepsA || jb < stepsB;) {
-    if (jb == stepsB || (ia < stepsA && cost(a(i), a(i + 1), b(j), a(i + 1), b(j)) <=
-                                            cost(b(j - 1), b(j), a(i), a(i), b(j - 1)))) {
+    if (jb == stepsB ||
+        (ia < stepsA && cost(a(i), a(i + 1), b(j), a(i + 1), b(j)) <= cost(b(j - 1), b(j), a(i), a(i), b(j - 1)))) {
       s.strip.insert(s.strip.end(), {a(i), a(i + 1), b(j)});
       ++i, ++ia;
     } else {
@@ -757,8 +760,8 @@ bool stripFits(Tesselator::State& s, float h) {
 // The particles left without triangles between rims A and B (near a rim vertex, between the rims along the tube's
 // axis, within 1.5 rim radii of it) into s.ring, ordered round the axis the way B runs. False if fewer than three,
 // or if they leave a gap of more than 120 degrees round the axis.
-bool middleRing(Tesselator::State& s, const uint32_t* A, size_t na, const uint32_t* B, size_t nb,
-                const LoopShape& sa, const LoopShape& sb) {
+bool middleRing(Tesselator::State& s, const uint32_t* A, size_t na, const uint32_t* B, size_t nb, const LoopShape& sa,
+                const LoopShape& sb) {
   const glm::vec3 axis = sb.centroid - sa.centroid;
   const float len2 = glm::dot(axis, axis), reach = 1.5f * std::max(sa.radius, sb.radius);
   if (!(len2 > 0.0f)) return false;
@@ -787,15 +790,14 @@ bool middleRing(Tesselator::State& s, const uint32_t* A, size_t na, const uint32
   const auto sectorOf = [&](uint32_t u) {
     return std::min(sectors - 1, size_t((angle(u) + 3.14159265f) / 6.2831853f * float(sectors)));
   };
-  const auto middleness = [&](uint32_t u) {
-    return std::fabs(glm::dot(s.vpos[u] - sa.centroid, axis) / len2 - 0.5f);
-  };
+  const auto middleness = [&](uint32_t u) { return std::fabs(glm::dot(s.vpos[u] - sa.centroid, axis) / len2 - 0.5f); };
   std::sort(s.ring.begin(), s.ring.end(), [&](uint32_t u, uint32_t v) {
     const size_t su = sectorOf(u), sv = sectorOf(v);
     return su != sv ? su < sv : middleness(u) < middleness(v);
   });
-  s.ring.erase(std::unique(s.ring.begin(), s.ring.end(), [&](uint32_t u, uint32_t v) { return sectorOf(u) == sectorOf(v); }),
-               s.ring.end());
+  s.ring.erase(
+      std::unique(s.ring.begin(), s.ring.end(), [&](uint32_t u, uint32_t v) { return sectorOf(u) == sectorOf(v); }),
+      s.ring.end());
   if (s.ring.size() < 3) return false;
   std::sort(s.ring.begin(), s.ring.end(), [&](uint32_t u, uint32_t v) { return angle(u) < angle(v); });
   for (size_t k = 0; k < s.ring.size(); ++k) {
@@ -813,8 +815,8 @@ bool middleRing(Tesselator::State& s, const uint32_t* A, size_t na, const uint32
 // too far off the surface (the rims several rings apart, where the particles between them made no triangle), by two:
 // A to the ring of those particles and the ring to B. All or nothing: returns false, adding nothing, when no strip
 // fits (stripFits).
-bool bridgeLoops(Tesselator::State& s, const uint32_t* A, size_t na, const uint32_t* B, size_t nb,
-                 const LoopShape& sa, const LoopShape& sb, float h, size_t& boundary) {
+bool bridgeLoops(Tesselator::State& s, const uint32_t* A, size_t na, const uint32_t* B, size_t nb, const LoopShape& sa,
+                 const LoopShape& sb, float h, size_t& boundary) {
   s.strip.clear();
   bool fits = appendStrip(s, A, na, B, nb, h) && stripFits(s, h);
   if (!fits && middleRing(s, A, na, B, nb, sa, sb)) {
@@ -881,8 +883,10 @@ void bridgeTubes(Tesselator::State& s, float h, size_t& boundary) {
       for (size_t k = 0; k < 3; ++k) {
         const uint32_t v = s.tris[t + k];
         if (onLoops[v] > 1) continue;
-        if (first == ~0u) first = find(v);
-        else piece[find(v)] = first;
+        if (first == ~0u)
+          first = find(v);
+        else
+          piece[find(v)] = first;
       }
     }
     piecesBuilt = true;
@@ -1038,7 +1042,8 @@ size_t repairHoles(Tesselator::State& s, const TesselatorOptions& o, size_t& bou
     // Every loop not bridged is capped by ear clipping.
     for (size_t k = 0; k + 1 < s.loopStart.size(); ++k) {
       if (s.loopBridged[k]) continue;
-      s.loop.assign(s.loops.begin() + std::ptrdiff_t(s.loopStart[k]), s.loops.begin() + std::ptrdiff_t(s.loopStart[k + 1]));
+      s.loop.assign(s.loops.begin() + std::ptrdiff_t(s.loopStart[k]),
+                    s.loops.begin() + std::ptrdiff_t(s.loopStart[k + 1]));
       if (!fillable(s, s.loop) || !clipEars(s, o.desiredRadius, boundary)) {
         ++unfilled;
         for (uint32_t v : s.loop) s.openUp[v] = 1;  // open up around it next round

@@ -134,13 +134,13 @@ struct Tesselator::State {
   std::vector<uint32_t> holeTo;
   std::vector<uint8_t> holeCount, holeUsed, openUp, openOut;
   std::vector<uint32_t> loop, tris;
-  std::vector<uint32_t> loops;      // repairHoles: one round's closed hole loops, concatenated
-  std::vector<size_t> loopStart;    // repairHoles: loop k is loops[loopStart[k], loopStart[k + 1])
-  std::vector<uint8_t> loopBridged; // repairHoles: per loop, joined to another by bridgeTubes
-  std::vector<uint32_t> piece;      // bridgeTubes: union-find over the vertices (the mesh's pieces)
-  std::vector<uint8_t> onLoops;     // bridgeTubes: per vertex, on how many loops (2: two or more)
-  std::vector<uint32_t> strip;      // bridgeLoops: the strip's triangles before they are added
-  std::vector<uint32_t> ring;       // bridgeLoops: the particles without triangles between two rims, in order
+  std::vector<uint32_t> loops;       // repairHoles: one round's closed hole loops, concatenated
+  std::vector<size_t> loopStart;     // repairHoles: loop k is loops[loopStart[k], loopStart[k + 1])
+  std::vector<uint8_t> loopBridged;  // repairHoles: per loop, joined to another by bridgeTubes
+  std::vector<uint32_t> piece;       // bridgeTubes: union-find over the vertices (the mesh's pieces)
+  std::vector<uint8_t> onLoops;      // bridgeTubes: per vertex, on how many loops (2: two or more)
+  std::vector<uint32_t> strip;       // bridgeLoops: the strip's triangles before they are added
+  std::vector<uint32_t> ring;        // bridgeLoops: the particles without triangles between two rims, in order
   std::vector<uint32_t> heTri;   // unfoldTriangles: per half-edge slot the index of its triangle in s.tris / 3
   std::vector<uint8_t> heTriKnown;  // unfoldTriangles: per vertex, heTri is valid for its half-edges
   bool heTriAll = false;            // unfoldTriangles: heTri is valid for every half-edge

@@ -161,19 +161,25 @@ TEST(TesselatorMesh, AssemblyNeverReusesADirectedEdgeAndCountsTheBoundary) {
   }
 }
 
-// Passes A-C, then every candidate triangle around the given particles is withdrawn (no votes), so the assembly
-// leaves a hole of about six edges around each. (A fan-repeat flag sends it down its sequential path, which reads
-// only the candidates.)
-void punchHoles(Sphere& sphere, std::initializer_list<uint32_t> centres) {
+// After passes A-C: every candidate triangle with a corner marked is withdrawn (no votes), so the assembly leaves the
+// marked particles out. (A fan-repeat flag sends it down its sequential path, which reads only the candidates.)
+void withdrawAround(Sphere& sphere, const std::vector<uint8_t>& marked) {
   auto& s = sphere.s;
-  sphere.fansAndVotes();
   for (uint32_t i = 0; i < s.size(); ++i)
     for (size_t k = 0; k < s.candCount[i]; ++k) {
       uint32_t* slot = &s.cand[(size_t(i) * kMaxFan + k) * 3];
-      for (uint32_t c : centres)
-        if (i == c || slot[0] == c || slot[1] == c) slot[2] = 0;
+      if (marked[i] || marked[slot[0]] || marked[slot[1]]) slot[2] = 0;
     }
   s.fanRepeat[0] = 1;
+}
+
+// Passes A-C, then a hole of about six edges around each of the given particles.
+void punchHoles(Sphere& sphere, std::initializer_list<uint32_t> centres) {
+  sphere.fansAndVotes();
+  std::vector<uint8_t> marked(sphere.s.size(), 0);
+  for (uint32_t c : centres)
+    if (c < marked.size()) marked[c] = 1;
+  withdrawAround(sphere, marked);
 }
 
 TEST(TesselatorMesh, HoleRepairClosesTheHolesAroundMissingTriangles) {
@@ -223,12 +229,7 @@ TEST(TesselatorMesh, HoleRepairJoinsTheTwoRimsOfATubeInsteadOfCappingThem) {
   size_t banded = 0;
   for (uint32_t i = 0; i < s.size(); ++i) banded += inBand[i] = std::fabs(s.vpos[i].z) < 0.5f * h;
   ASSERT_GT(banded, 5u);
-  for (uint32_t i = 0; i < s.size(); ++i)
-    for (size_t k = 0; k < s.candCount[i]; ++k) {
-      uint32_t* slot = &s.cand[(size_t(i) * kMaxFan + k) * 3];
-      if (inBand[i] || inBand[slot[0]] || inBand[slot[1]]) slot[2] = 0;
-    }
-  s.fanRepeat[0] = 1;
+  withdrawAround(sphere, inBand);
   size_t boundary = assembleTriangles(s, sphere.options);
   {
     Mesh before;
@@ -267,20 +268,16 @@ TEST(TesselatorMesh, HoleRepairDoesNotJoinHolesFacingEachOtherAcrossAGap) {
   Sphere two(points, test::sphereOptions(n));
   BlendFunction blend;
   blend.defaultParam = -8.0f;
-  two.field = Field({Primitive::metaball(glm::vec3(-shift, 0, 0), kRadius), Primitive::metaball(glm::vec3(shift, 0, 0), kRadius)},
-                    {-8.0f, -8.0f}, {glm::vec3(0.5f), glm::vec3(0.5f)}, blend, BlendSets::all(2));
+  two.field = Field(
+      {Primitive::metaball(glm::vec3(-shift, 0, 0), kRadius), Primitive::metaball(glm::vec3(shift, 0, 0), kRadius)},
+      {-8.0f, -8.0f}, {glm::vec3(0.5f), glm::vec3(0.5f)}, blend, BlendSets::all(2));
   auto& s = two.s;
   s.field = &two.field;
   const float h = two.options.desiredRadius;
   two.fansAndVotes();
   std::vector<uint8_t> facing(s.size(), 0);  // the particles within 0.3 h of the gap, on either sphere
   for (uint32_t i = 0; i < s.size(); ++i) facing[i] = std::fabs(s.vpos[i].x) < 0.5f * gap + 0.3f * h;
-  for (uint32_t i = 0; i < s.size(); ++i)
-    for (size_t k = 0; k < s.candCount[i]; ++k) {
-      uint32_t* slot = &s.cand[(size_t(i) * kMaxFan + k) * 3];
-      if (facing[i] || facing[slot[0]] || facing[slot[1]]) slot[2] = 0;
-    }
-  s.fanRepeat[0] = 1;
+  withdrawAround(two, facing);
   size_t boundary = assembleTriangles(s, two.options);
   ASSERT_GT(boundary, 6u);
   EXPECT_EQ(repairHoles(s, two.options, boundary), 0u);

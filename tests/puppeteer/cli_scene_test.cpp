@@ -281,8 +281,8 @@ TEST(MeshCommand, AParticleMeshThatCutsAPartOffExits4) {
         {"mesh", (dir / "dumbbell.wrl").string(), "--cell", "0.005", "--check", "-o", (dir / "mc.ply").string()});
     ASSERT_EQ(fine.exitCode, kCliOk) << describe(fine);
     EXPECT_TRUE(contains(fine.out, " 1 components")) << fine.out;
-    const test::ProgramRun run = runPuppeteer({"mesh", (dir / "dumbbell.wrl").string(), "--polygonizer", "particles",
-                                               "-o", (dir / "dumbbell.ply").string()});
+    const test::ProgramRun run = runPuppeteer(
+        {"mesh", (dir / "dumbbell.wrl").string(), "--polygonizer", "particles", "-o", (dir / "dumbbell.ply").string()});
     EXPECT_EQ(run.exitCode, cut ? kCliCheckFailed : kCliOk) << centre << describe(run);
     EXPECT_TRUE(contains(run.out, "closed 2-manifold")) << run.out;
     EXPECT_TRUE(contains(run.out, cut ? "2 components (Marching Cubes at 0.05 m: 1; 0 missing, 1 cut off)"
