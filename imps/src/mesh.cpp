@@ -8,31 +8,11 @@
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
+#include "disjoint_sets.h"
 #include "imps/check.h"
 
 namespace imps {
 namespace {
-
-// Union-find with path halving; sizes are small enough for uint32_t (indices are uint32_t too).
-class DisjointSets {
- public:
-  explicit DisjointSets(size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), uint32_t{0}); }
-  uint32_t find(uint32_t x) {
-    while (parent_[x] != x) {
-      parent_[x] = parent_[parent_[x]];
-      x = parent_[x];
-    }
-    return x;
-  }
-  void unite(uint32_t a, uint32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent_[std::max(a, b)] = std::min(a, b);
-  }
-
- private:
-  std::vector<uint32_t> parent_;
-};
 
 // One triangle side, from corner `corner` (3 * triangle + k) to the next corner of the same triangle.
 struct HalfEdge {

@@ -27,7 +27,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <optional>
 
+#include "disjoint_sets.h"
 #include "imps/check.h"
 #include "imps/marching_cubes.h"
 #include "imps/parallel.h"
@@ -866,42 +868,35 @@ void bridgeTubes(Tesselator::State& s, float h, size_t& boundary) {
     shapes[k] = loopShape(s, &s.loops[s.loopStart[k]], s.loopStart[k + 1] - s.loopStart[k]);
   // The pieces (built on first need: most rounds have no facing pair): vertices joined by triangles, but never
   // through a vertex on two loops (or twice on one), where a piece cut off may still touch the rest.
-  std::vector<uint32_t>& piece = s.piece;
   std::vector<uint8_t>& onLoops = s.onLoops;
-  bool piecesBuilt = false;
-  const auto find = [&](uint32_t v) {
-    while (piece[v] != v) v = piece[v] = piece[piece[v]];
-    return v;
-  };
+  std::optional<DisjointSets> pieces;
   const auto buildPieces = [&] {
-    piece.resize(n);
+    pieces.emplace(n);
     onLoops.assign(n, 0);
     for (uint32_t v : s.loops) onLoops[v] = uint8_t(std::min(onLoops[v] + 1, 2));
-    for (uint32_t v = 0; v < n; ++v) piece[v] = v;
     for (size_t t = 0; t < s.tris.size(); t += 3) {
       uint32_t first = ~0u;
       for (size_t k = 0; k < 3; ++k) {
         const uint32_t v = s.tris[t + k];
         if (onLoops[v] > 1) continue;
         if (first == ~0u)
-          first = find(v);
+          first = v;
         else
-          piece[find(v)] = first;
+          pieces->unite(first, v);
       }
     }
-    piecesBuilt = true;
   };
   // A loop's piece: that of its first vertex on no other loop (~0u: none).
   const auto pieceOf = [&](size_t k) {
     for (size_t q = s.loopStart[k]; q < s.loopStart[k + 1]; ++q)
-      if (onLoops[s.loops[q]] == 1) return find(s.loops[q]);
+      if (onLoops[s.loops[q]] == 1) return pieces->find(s.loops[q]);
     return ~0u;
   };
   std::vector<std::pair<float, std::pair<uint32_t, uint32_t>>> pairs;
   for (uint32_t a = 0; a < loopCount; ++a)
     for (uint32_t b = a + 1; b < loopCount; ++b) {
       if (!facingRims(shapes[a], shapes[b])) continue;
-      if (!piecesBuilt) buildPieces();
+      if (!pieces) buildPieces();
       const uint32_t pa = pieceOf(a), pb = pieceOf(b);
       if (pa == ~0u || pb == ~0u || pa == pb || !solidBetween(s, shapes[a], shapes[b])) continue;
       pairs.push_back({glm::length(shapes[b].centroid - shapes[a].centroid), {a, b}});

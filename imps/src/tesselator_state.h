@@ -137,7 +137,6 @@ struct Tesselator::State {
   std::vector<uint32_t> loops;       // repairHoles: one round's closed hole loops, concatenated
   std::vector<size_t> loopStart;     // repairHoles: loop k is loops[loopStart[k], loopStart[k + 1])
   std::vector<uint8_t> loopBridged;  // repairHoles: per loop, joined to another by bridgeTubes
-  std::vector<uint32_t> piece;       // bridgeTubes: union-find over the vertices (the mesh's pieces)
   std::vector<uint8_t> onLoops;      // bridgeTubes: per vertex, on how many loops (2: two or more)
   std::vector<uint32_t> strip;       // bridgeLoops: the strip's triangles before they are added
   std::vector<uint32_t> ring;        // bridgeLoops: the particles without triangles between two rims, in order
