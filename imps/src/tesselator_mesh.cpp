@@ -16,8 +16,9 @@
 //     its vote count (1 to 3);
 //  D. assembly (particle order, 3 votes first, then 2, then 1): a triangle is kept only if none of its directed edges
 //     is already used, so no edge ever has more than two triangles and orientations agree;
-//  E. hole repair (sequential): boundary loops (directed edges whose twin is missing) are walked and closed by ear
-//     clipping, choosing each time the ear with the shortest new edge whose normal agrees with the vertex normals.
+//  E. hole repair (sequential): boundary loops (directed edges whose twin is missing) are walked; the two rims of a
+//     tube are joined by strips, every other loop is closed by ear clipping, choosing each time the ear with the
+//     shortest new edge whose normal agrees with the vertex normals.
 //  F. pinches: vertices whose triangles form more than one fan lose the smaller fans; the holes are repaired again;
 //  G. the fallback: a triangulation still open or pinched is replaced by Marching Cubes (never a hole);
 //  H. folds (sequential, closed triangulations only): a triangle winding against the field normal at its centroid
@@ -742,6 +743,8 @@ bool appendStrip(Tesselator::State& s, const uint32_t* A, size_t na, const uint3
 }
 
 constexpr float kBridgeOff = 2.0f;  // a strip triangle's centroid may lie this far off the surface (desiredRadius)
+constexpr size_t kMaxRows = 6;      // rows of particles a tube's band is joined through, at most
+constexpr size_t kMaxBand = 512;    // particles a band gathers, at most
 
 // Whether every triangle of s.strip may be added: no degenerate or taken half-edge, room in the half-edge table, and
 // its centroid within kBridgeOff desiredRadius of the surface.
@@ -759,74 +762,116 @@ bool stripFits(Tesselator::State& s, float h) {
   return true;
 }
 
-// The particles left without triangles between rims A and B (near a rim vertex, between the rims along the tube's
-// axis, within 1.5 rim radii of it) into s.ring, ordered round the axis the way B runs. False if fewer than three,
-// or if they leave a gap of more than 120 degrees round the axis.
-bool middleRing(Tesselator::State& s, const uint32_t* A, size_t na, const uint32_t* B, size_t nb, const LoopShape& sa,
-                const LoopShape& sb) {
-  const glm::vec3 axis = sb.centroid - sa.centroid;
-  const float len2 = glm::dot(axis, axis), reach = 1.5f * std::max(sa.radius, sb.radius);
-  if (!(len2 > 0.0f)) return false;
-  glm::vec3 b0, b1;
-  tangentBasis(axis / std::sqrt(len2), b0, b1);
-  s.ring.clear();
+// A tube between hole loops A and B (bridgeTubes): the axis joining their centroids, and the angle round it.
+struct Tube {
+  glm::vec3 from, axis, b0, b1;
+  float len2;
+  float along(const glm::vec3& p) const { return glm::dot(p - from, axis) / len2; }  // 0 at A's centroid, 1 at B's
+  float angle(const glm::vec3& p) const { return std::atan2(glm::dot(p - from, b1), glm::dot(p - from, b0)); }
+  float offAxis(const glm::vec3& p) const { return glm::length(p - from - along(p) * axis); }
+};
+
+// The particles left without triangles between rims A and B into s.band. Near: the rims' neighbours between the rims
+// (a fraction 0.15-0.85 of the way along the axis) within 1.5 rim radii of the axis, for one middle ring. Not near:
+// from those on through neighbours, the whole band (0.1-0.9 of the way) within 1.25 times the rims' radius there (the
+// radius interpolated along the axis, so that a wide rim does not reach into the shoulders), for several rows.
+void bandParticles(Tesselator::State& s, const uint32_t* A, size_t na, const uint32_t* B, size_t nb, const Tube& tube,
+                   const LoopShape& sa, const LoopShape& sb, bool near) {
+  const float reach = 1.5f * std::max(sa.radius, sb.radius);
+  const auto inside = [&](uint32_t u) {
+    const float t = tube.along(s.vpos[u]);
+    const float limit = near ? reach : 1.25f * ((1.0f - t) * sa.radius + t * sb.radius);
+    return s.heCount[u] == 0 && s.vok[u] && t > 0.0f && t < 1.0f && tube.offAxis(s.vpos[u]) < limit;
+  };
+  std::vector<uint32_t>& band = s.band;
+  band.clear();
+  s.inBand.resize(s.size(), 0);
+  const auto add = [&](uint32_t u) {
+    if (!s.inBand[u] && inside(u)) s.inBand[u] = 1, band.push_back(u);
+  };
   for (const auto& [L, m] : {std::pair{A, na}, std::pair{B, nb}})
     for (size_t k = 0; k < m; ++k)
-      for (size_t q = 0; q < s.nbrCount[L[k]]; ++q) {
-        const uint32_t u = s.nbr[size_t(L[k]) * kMaxNeighbours + q];
-        if (s.heCount[u] != 0 || !s.vok[u]) continue;
-        const glm::vec3 d = s.vpos[u] - sa.centroid;
-        const float t = glm::dot(d, axis) / len2;
-        if (t > 0.15f && t < 0.85f && glm::length(d - t * axis) < reach) s.ring.push_back(u);
-      }
-  std::sort(s.ring.begin(), s.ring.end());
-  s.ring.erase(std::unique(s.ring.begin(), s.ring.end()), s.ring.end());
-  if (s.ring.size() < 3) return false;
-  const auto angle = [&](uint32_t u) {
-    const glm::vec3 d = s.vpos[u] - sa.centroid;
-    return std::atan2(glm::dot(d, b1), glm::dot(d, b0));
-  };
-  // One particle per sector of the angle, as many sectors as the rims have vertices on average: the one nearest the
-  // middle between the rims (where the tube has several rows of them, one ring, not a zigzag through the rows).
+      for (size_t q = 0; q < s.nbrCount[L[k]]; ++q) add(s.nbr[size_t(L[k]) * kMaxNeighbours + q]);
+  for (size_t head = 0; !near && head < band.size() && band.size() < kMaxBand; ++head)
+    for (size_t q = 0; q < s.nbrCount[band[head]]; ++q) add(s.nbr[size_t(band[head]) * kMaxNeighbours + q]);
+  for (uint32_t u : band) s.inBand[u] = 0;
+  const float lo = near ? 0.15f : 0.1f;
+  std::erase_if(band, [&](uint32_t u) {
+    const float t = tube.along(s.vpos[u]);
+    return t <= lo || t >= 1.0f - lo;
+  });
+}
+
+// `rows` rows of s.band into s.ring / s.ringStart, row k round the tube at a fraction (k + 1) / (rows + 1) of the way
+// from A to B. A row keeps one particle per sector of the angle round the axis (as many sectors as the rims have
+// vertices on average), the one nearest its fraction, and runs round the axis the way B does. False if a row has fewer
+// than three or leaves a gap of more than 120 degrees round the axis.
+bool bandRows(Tesselator::State& s, size_t na, size_t nb, const Tube& tube, const LoopShape& sb, size_t rows) {
   const size_t sectors = std::max<size_t>(3, (na + nb) / 2);
+  const auto angle = [&](uint32_t u) { return tube.angle(s.vpos[u]); };
   const auto sectorOf = [&](uint32_t u) {
     return std::min(sectors - 1, size_t((angle(u) + 3.14159265f) / 6.2831853f * float(sectors)));
   };
-  const auto middleness = [&](uint32_t u) { return std::fabs(glm::dot(s.vpos[u] - sa.centroid, axis) / len2 - 0.5f); };
-  std::sort(s.ring.begin(), s.ring.end(), [&](uint32_t u, uint32_t v) {
-    const size_t su = sectorOf(u), sv = sectorOf(v);
-    return su != sv ? su < sv : middleness(u) < middleness(v);
-  });
-  s.ring.erase(
-      std::unique(s.ring.begin(), s.ring.end(), [&](uint32_t u, uint32_t v) { return sectorOf(u) == sectorOf(v); }),
-      s.ring.end());
-  if (s.ring.size() < 3) return false;
-  std::sort(s.ring.begin(), s.ring.end(), [&](uint32_t u, uint32_t v) { return angle(u) < angle(v); });
-  for (size_t k = 0; k < s.ring.size(); ++k) {
-    float gap = angle(s.ring[(k + 1) % s.ring.size()]) - angle(s.ring[k]);
-    if (gap <= 0.0f) gap += 6.2831853f;
-    if (gap > 2.0943951f) return false;
+  s.ring.clear();
+  s.ringStart.assign(1, 0);
+  for (size_t r = 0; r < rows; ++r) {
+    const float target = float(r + 1) / float(rows + 1), window = 0.5f / float(rows + 1);
+    const auto off = [&](uint32_t u) { return std::fabs(tube.along(s.vpos[u]) - target); };
+    const size_t first = s.ring.size();
+    for (uint32_t u : s.band)
+      if (rows == 1 || off(u) < window) s.ring.push_back(u);
+    const auto row = s.ring.begin() + std::ptrdiff_t(first);
+    std::sort(row, s.ring.end(), [&](uint32_t u, uint32_t v) {
+      const size_t su = sectorOf(u), sv = sectorOf(v);
+      return su != sv ? su < sv : off(u) < off(v);
+    });
+    s.ring.erase(std::unique(row, s.ring.end(), [&](uint32_t u, uint32_t v) { return sectorOf(u) == sectorOf(v); }),
+                 s.ring.end());
+    const size_t count = s.ring.size() - first;
+    if (count < 3) return false;
+    std::sort(row, s.ring.end(), [&](uint32_t u, uint32_t v) { return angle(u) < angle(v); });
+    for (size_t k = 0; k < count; ++k) {
+      float gap = angle(s.ring[first + (k + 1) % count]) - angle(s.ring[first + k]);
+      if (gap <= 0.0f) gap += 6.2831853f;
+      if (gap > 2.0943951f) return false;
+    }
+    // Sorted by angle a row runs counter-clockwise round the axis (b0 x b1 = axis); B does so when its vector area
+    // points along the axis (rims facing each other: it points back along it, and B runs clockwise).
+    if (glm::dot(sb.area, tube.axis) < 0.0f) std::reverse(row, s.ring.end());
+    s.ringStart.push_back(s.ring.size());
   }
-  // Sorted by angle the ring runs counter-clockwise round the axis (b0 x b1 = axis); B does so when its vector area
-  // points along the axis (rims facing each other: it points back along it, and B runs clockwise).
-  if (glm::dot(sb.area, axis) < 0.0f) std::reverse(s.ring.begin(), s.ring.end());
   return true;
 }
 
 // Joins hole loops A and B, the rims of one tube (bridgeTubes), by a strip (appendStrip). When that strip would lie
-// too far off the surface (the rims several rings apart, where the particles between them made no triangle), by two:
-// A to the ring of those particles and the ring to B. All or nothing: returns false, adding nothing, when no strip
-// fits (stripFits).
+// too far off the surface (the rims rings apart, where the particles between them made no triangle), through rows of
+// those particles: one middle ring of the rims' neighbours (bandRows over the near band), else 2 to kMaxRows rows of
+// the whole band (a neck opened up over several rings at the file's fidelity): A to the first row, each row to the
+// next, the last to B, each row's edges used once each way. All or nothing: returns false, adding nothing, when no
+// choice fits (stripFits).
 bool bridgeLoops(Tesselator::State& s, const uint32_t* A, size_t na, const uint32_t* B, size_t nb, const LoopShape& sa,
                  const LoopShape& sb, float h, size_t& boundary) {
   s.strip.clear();
   bool fits = appendStrip(s, A, na, B, nb, h) && stripFits(s, h);
-  if (!fits && middleRing(s, A, na, B, nb, sa, sb)) {
+  Tube tube{sa.centroid, sb.centroid - sa.centroid, {}, {}, 0.0f};
+  tube.len2 = glm::dot(tube.axis, tube.axis);
+  if (!(tube.len2 > 0.0f)) return false;
+  tangentBasis(tube.axis / std::sqrt(tube.len2), tube.b0, tube.b1);
+  for (size_t rows = 1; rows <= kMaxRows && !fits; ++rows) {
+    if (rows <= 2) bandParticles(s, A, na, B, nb, tube, sa, sb, rows == 1);
+    if (!bandRows(s, na, nb, tube, sb, rows)) continue;
     s.strip.clear();
-    std::vector<uint32_t>& ring = s.ring;
-    fits = appendStrip(s, A, na, ring.data(), ring.size(), h);
-    std::reverse(ring.begin(), ring.end());  // the ring's edges, the other way round for the second strip
-    fits = fits && appendStrip(s, ring.data(), ring.size(), B, nb, h) && stripFits(s, h);
+    const uint32_t* from = A;
+    size_t nFrom = na;
+    fits = true;
+    for (size_t r = 0; r < rows && fits; ++r) {
+      uint32_t* row = s.ring.data() + s.ringStart[r];
+      const size_t nRow = s.ringStart[r + 1] - s.ringStart[r];
+      fits = appendStrip(s, from, nFrom, row, nRow, h);
+      std::reverse(row, row + nRow);  // the row's edges, the other way round for the next strip
+      from = row, nFrom = nRow;
+    }
+    fits = fits && appendStrip(s, from, nFrom, B, nb, h) && stripFits(s, h);
   }
   if (!fits) return false;
   for (size_t t = 0; t < s.strip.size(); t += 3) addTriangle(s, s.strip[t], s.strip[t + 1], s.strip[t + 2], &boundary);

@@ -139,7 +139,10 @@ struct Tesselator::State {
   std::vector<uint8_t> loopBridged;  // repairHoles: per loop, joined to another by bridgeTubes
   std::vector<uint8_t> onLoops;      // bridgeTubes: per vertex, on how many loops (2: two or more)
   std::vector<uint32_t> strip;       // bridgeLoops: the strip's triangles before they are added
-  std::vector<uint32_t> ring;        // bridgeLoops: the particles without triangles between two rims, in order
+  std::vector<uint32_t> ring;        // bridgeLoops: rows of the band's particles round the tube, in order
+  std::vector<size_t> ringStart;     // bridgeLoops: row k of several is ring[ringStart[k], ringStart[k + 1])
+  std::vector<uint32_t> band;        // bridgeLoops: the particles without triangles between two rims
+  std::vector<uint8_t> inBand;       // per particle, bandParticles' mark (all 0 between calls)
   std::vector<uint32_t> heTri;   // unfoldTriangles: per half-edge slot the index of its triangle in s.tris / 3
   std::vector<uint8_t> heTriKnown;  // unfoldTriangles: per vertex, heTri is valid for its half-edges
   bool heTriAll = false;            // unfoldTriangles: heTri is valid for every half-edge
@@ -195,9 +198,9 @@ void voteTriangles(Tesselator::State& s, const TesselatorOptions& o);
 // Fills the half-edge table (s.heTo / s.heCount) and s.openOut. Returns the directed edges without a twin.
 size_t assembleTriangles(Tesselator::State& s, const TesselatorOptions& o);
 // E. hole repair: up to four rounds of closing boundary loops of at most maxHoleLoop edges: the two rims of a tube
-// left open all round are joined by a strip (through the particles left between them when they are far apart), every
-// other loop is capped by ear clipping; loops it cannot close are
-// opened up (the triangles around them removed) for the next round. Keeps `boundary` (directed edges without a twin)
+// left open all round are joined by a strip (through one ring, or up to kMaxRows rows, of the particles left between
+// them when they are far apart), every other loop is capped by ear clipping; loops it cannot close are opened up (the
+// triangles around them removed) for the next round. Keeps `boundary` (directed edges without a twin)
 // up to date; returns the loops left unfilled.
 size_t repairHoles(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary);
 // F. pinches: a vertex whose triangles form more than one fan (two disks touching at a point, which the edge-based
