@@ -10,6 +10,7 @@
 
 #include "disjoint_sets.h"
 #include "imps/check.h"
+#include "imps/primitives.h"
 
 namespace imps {
 namespace {
@@ -162,9 +163,24 @@ ComponentMatch matchComponents(const Mesh& mesh, const Mesh& reference) {
     }
     if (nearest != kUnused) ++members[nearest];
   }
-  for (size_t m : members) {
-    match.missing += m == 0;
-    match.cutOff += m > 1 ? m - 1 : 0;
+  // The missing components' sizes and signed volumes (six times: the tetrahedra to the origin, as signedVolume).
+  std::vector<Box> boxes(match.referenceComponents);
+  std::vector<double> volume6(match.referenceComponents, 0.0);
+  for (uint32_t r = 0; r < referenceLabel.size(); ++r)
+    if (referenceLabel[r] != kUnused && members[referenceLabel[r]] == 0)
+      boxes[referenceLabel[r]].extend(reference.position(r));
+  for (size_t t = 0; t < reference.triangleCount(); ++t) {
+    const uint32_t* tri = &reference.indices[3 * t];
+    if (members[referenceLabel[tri[0]]] != 0) continue;
+    const glm::dvec3 a(reference.position(tri[0])), b(reference.position(tri[1])), c(reference.position(tri[2]));
+    volume6[referenceLabel[tri[0]]] += glm::dot(a, glm::cross(b, c));
+  }
+  for (size_t c = 0; c < members.size(); ++c) {
+    match.cutOff += members[c] > 1 ? members[c] - 1 : 0;
+    if (members[c] != 0) continue;
+    ++match.missing;
+    match.missingCavities += volume6[c] < 0.0;
+    match.largestMissing = std::max(match.largestMissing, glm::length(boxes[c].hi - boxes[c].lo));
   }
   return match;
 }

@@ -171,17 +171,29 @@ std::string particleCoverage(const Mesh& mesh, const Field& field, const Tessela
     (*json)["unusedParticles"] = t.unusedVertices;
     (*json)["marchingCubesComponents"] = match.referenceComponents;
     (*json)["missingComponents"] = match.missing;
+    (*json)["missingCavities"] = match.missingCavities;
+    (*json)["largestMissingComponent"] = match.largestMissing;
     (*json)["cutOffComponents"] = match.cutOff;
   } else {
-    std::printf("coverage: %zu of %zu particles in no triangle; %zu components (Marching Cubes at %g m: %zu; %zu "
-                "missing, %zu cut off)\n",
-                t.unusedVertices, mesh.vertexCount(), match.components, double(mc.cellSize),
-                match.referenceComponents, match.missing, match.cutOff);
+    char largest[96] = "", cavities[48] = "";
+    if (match.missingCavities == 1) std::snprintf(cavities, sizeof cavities, "1 an enclosed cavity; ");
+    if (match.missingCavities > 1)
+      std::snprintf(cavities, sizeof cavities, "%zu enclosed cavities; ", match.missingCavities);
+    if (match.missing > 0)
+      std::snprintf(largest, sizeof largest, " (%sthe largest %.3g m across)", cavities, double(match.largestMissing));
+    std::printf(
+        "coverage: %zu of %zu particles in no triangle; %zu components (Marching Cubes at %g m: %zu; %zu "
+        "missing%s, %zu cut off)\n",
+        t.unusedVertices, mesh.vertexCount(), match.components, double(mc.cellSize), match.referenceComponents,
+        match.missing, largest, match.cutOff);
   }
   std::vector<std::string> wrong;
   if (match.missing > 0)
-    wrong.push_back("misses " + std::to_string(match.missing) + " of the " +
-                    std::to_string(match.referenceComponents) + " components Marching Cubes finds");
+    wrong.push_back("misses " + std::to_string(match.missing) + " of the " + std::to_string(match.referenceComponents) +
+                    " components Marching Cubes finds" +
+                    (match.missingCavities > 0 ? " (" + std::to_string(match.missingCavities) +
+                                                     " of them cavities, air enclosed by the solid)"
+                                               : ""));
   if (match.cutOff > 0)
     wrong.push_back("cuts " + std::to_string(match.cutOff) + (match.cutOff == 1 ? " part" : " parts") +
                     " off (separate pieces where Marching Cubes finds one surface)");

@@ -82,6 +82,8 @@ struct RenderRow {
   // Against Marching Cubes of the same field at half desiredRadius (matchComponents): parts meshed as separate
   // pieces where the surface is one (a hand cut off at the wrist), and components not meshed at all.
   size_t cutOffParts = 0, missingComponents = 0;
+  size_t missingSolids = 0;     // of the missing, those that are not cavities (air enclosed by the solid)
+  double largestMissingMm = 0;  // the largest missing component's bounding-box diagonal (0: none missing)
 };
 
 struct Report {
@@ -122,6 +124,8 @@ void measureRender(const Mesh& mesh, const Field& field, const Mesh& reference, 
   const ComponentMatch match = matchComponents(mesh, reference);
   row.cutOffParts = match.cutOff;
   row.missingComponents = match.missing;
+  row.missingSolids = match.missing - match.missingCavities;
+  row.largestMissingMm = 1000.0 * double(match.largestMissing);
   const MeshTopology t = analyzeTopology(mesh);
   row.boundaryEdges = t.boundaryEdges;
   row.nonManifoldEdges = t.nonManifoldEdges;
@@ -386,16 +390,17 @@ std::string csvText(const std::vector<Report>& reports) {
   std::string out =
       "scene,render,seconds,particles,triangles,boundary_edges,nonmanifold_edges,nonmanifold_vertices,"
       "folded_triangles,worst_f_minus_iso,worst_offset_mm,fissions,fusions,fallback,particle_open_edges,"
-      "particle_pinched_vertices,cut_off_parts,missing_components\n";
+      "particle_pinched_vertices,cut_off_parts,missing_components,missing_cavities,largest_missing_mm\n";
   char line[512];
   for (const Report& r : reports)
     for (size_t f = 0; f < r.rows.size(); ++f) {
       const RenderRow& w = r.rows[f];
-      std::snprintf(line, sizeof line, "%s,%zu,%.4f,%zu,%zu,%zu,%zu,%zu,%zu,%.6g,%.4g,%llu,%llu,%zu,%zu,%zu,%zu,%zu\n",
-                    r.name.c_str(), f, w.seconds, w.particles, w.triangles, w.boundaryEdges, w.nonManifoldEdges,
-                    w.nonManifoldVertices, w.foldedTriangles, w.worstFieldError, w.worstOffsetMm,
-                    (unsigned long long)w.fissions, (unsigned long long)w.fusions, w.fallback, w.particleOpenEdges,
-                    w.particlePinchedVertices, w.cutOffParts, w.missingComponents);
+      std::snprintf(
+          line, sizeof line, "%s,%zu,%.4f,%zu,%zu,%zu,%zu,%zu,%zu,%.6g,%.4g,%llu,%llu,%zu,%zu,%zu,%zu,%zu,%zu,%.4g\n",
+          r.name.c_str(), f, w.seconds, w.particles, w.triangles, w.boundaryEdges, w.nonManifoldEdges,
+          w.nonManifoldVertices, w.foldedTriangles, w.worstFieldError, w.worstOffsetMm, (unsigned long long)w.fissions,
+          (unsigned long long)w.fusions, w.fallback, w.particleOpenEdges, w.particlePinchedVertices, w.cutOffParts,
+          w.missingComponents, w.missingComponents - w.missingSolids, w.largestMissingMm);
       out += line;
     }
   return out;
@@ -422,8 +427,18 @@ Json reportJson(const Report& r) {
               {"max_folded_triangles", r.max(&RenderRow::foldedTriangles)},
               {"worst_f_minus_iso", r.worst(&RenderRow::worstFieldError)},
               {"worst_offset_mm", r.worst(&RenderRow::worstOffsetMm)},
-              {"fissions", [&] { uint64_t n = 0; for (const RenderRow& w : r.rows) n += w.fissions; return n; }()},
-              {"fusions", [&] { uint64_t n = 0; for (const RenderRow& w : r.rows) n += w.fusions; return n; }()},
+              {"fissions",
+               [&] {
+                 uint64_t n = 0;
+                 for (const RenderRow& w : r.rows) n += w.fissions;
+                 return n;
+               }()},
+              {"fusions",
+               [&] {
+                 uint64_t n = 0;
+                 for (const RenderRow& w : r.rows) n += w.fusions;
+                 return n;
+               }()},
               {"renders_with_fallback", r.count(&RenderRow::fallback)},
               {"max_particle_open_edges", r.max(&RenderRow::particleOpenEdges)},
               {"max_particle_pinched_vertices", r.max(&RenderRow::particlePinchedVertices)},
@@ -431,6 +446,8 @@ Json reportJson(const Report& r) {
               {"max_cut_off_parts", r.max(&RenderRow::cutOffParts)},
               {"renders_with_missing_components", r.count(&RenderRow::missingComponents)},
               {"max_missing_components", r.max(&RenderRow::missingComponents)},
+              {"renders_with_missing_solids", r.count(&RenderRow::missingSolids)},
+              {"largest_missing_component_mm", r.worst(&RenderRow::largestMissingMm)},
               {"updates_to_settle", r.settleUpdates},
               {"updates_to_still", r.updatesToStill},
               {"fissions_per_update_settled", r.fissionsPerUpdateSettled},
@@ -474,6 +491,9 @@ void printTable(const BenchArgs& a, const std::vector<Report>& reports) {
   row("Renders with MC fallback", [&](const Report& r) { return pct(r, r.count(&RenderRow::fallback)); });
   row("Renders with parts cut off", [&](const Report& r) { return pct(r, r.count(&RenderRow::cutOffParts)); });
   row("Renders missing components", [&](const Report& r) { return pct(r, r.count(&RenderRow::missingComponents)); });
+  row("Renders missing solids", [&](const Report& r) { return pct(r, r.count(&RenderRow::missingSolids)); });
+  row("Largest missing (mm across)",
+      [&](const Report& r) { return fmt("%.3g", r.worst(&RenderRow::largestMissingMm)); });
   row("Worst |F-iso| at a vertex", [&](const Report& r) { return fmt("%.3g", r.worst(&RenderRow::worstFieldError)); });
   row("Worst vertex offset (mm)", [&](const Report& r) { return fmt("%.3g", r.worst(&RenderRow::worstOffsetMm)); });
   row("Worst sample dist (mm)", [&](const Report& r) { return fmt("%.2f", r.worstMm); });

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <utility>
 
 namespace imps {
@@ -165,13 +166,37 @@ TEST(MatchComponents, FindsPartsCutOffAndPartsMissingThatTheCountHides) {
   EXPECT_EQ(m.referenceComponents, 2u);
   EXPECT_EQ(m.cutOff, 1u);
   EXPECT_EQ(m.missing, 1u);
+  EXPECT_FLOAT_EQ(m.largestMissing, std::sqrt(3.0f)) << "the unit cube's diagonal";
   const ComponentMatch same = matchComponents(reference, reference);
   EXPECT_EQ(same.components, 2u);
   EXPECT_EQ(same.cutOff, 0u);
   EXPECT_EQ(same.missing, 0u);
+  EXPECT_EQ(same.largestMissing, 0.0f);
   const ComponentMatch none = matchComponents(Mesh{}, reference);
   EXPECT_EQ(none.components, 0u);
   EXPECT_EQ(none.missing, 2u);
+  EXPECT_FLOAT_EQ(none.largestMissing, std::sqrt(11.0f)) << "the 3 x 1 x 1 bar's diagonal";
+  EXPECT_EQ(none.missingCavities, 0u);
+}
+
+// A missing component that faces inward (negative signed volume) is a cavity: air enclosed by the solid.
+TEST(MatchComponents, ToldCavitiesFromSolidsAmongTheMissing) {
+  Mesh box = cube();
+  for (float& x : box.positions) x = 4.0f * x - 1.5f;  // [-1.5, 2.5]^3, round the cavity
+  Mesh cavity = cube();
+  for (size_t t = 0; t < cavity.triangleCount(); ++t) std::swap(cavity.indices[3 * t + 1], cavity.indices[3 * t + 2]);
+  Mesh reference = box;
+  appendMesh(reference, cavity);
+  appendMesh(reference, cube({10.0f, 0.0f, 0.0f}));
+  ASSERT_LT(signedVolume(cavity), 0.0);
+  const ComponentMatch m = matchComponents(box, reference);
+  EXPECT_EQ(m.referenceComponents, 3u);
+  EXPECT_EQ(m.missing, 2u);
+  EXPECT_EQ(m.missingCavities, 1u);
+  EXPECT_EQ(m.cutOff, 0u);
+  const ComponentMatch withCavity = matchComponents(reference, reference);
+  EXPECT_EQ(withCavity.missing, 0u);
+  EXPECT_EQ(withCavity.missingCavities, 0u);
 }
 
 TEST(MeshTopology, DegenerateTrianglesAndUnusedVerticesAreCounted) {

@@ -318,6 +318,7 @@ TEST(MeshCommand, AParticleMeshMissingPartOfTheSurfaceExits4) {
       {"mesh", (dir / "blobs12.wrl").string(), "--polygonizer", "particles", "-o", (dir / "blobs12.ply").string()});
   EXPECT_EQ(run.exitCode, kCliCheckFailed) << run.err;
   EXPECT_TRUE(contains(run.err, "Marching Cubes finds"));
+  EXPECT_TRUE(contains(run.out, " missing (the largest 0.")) << run.out;  // balls 0.3-0.7 m across
   EXPECT_TRUE(fs::exists(dir / "blobs12.ply"));
   write(dir / "blobs12_default.wrl", "#VRML V2.0 utf8\n" + balls);
   const test::ProgramRun fine = runPuppeteer({"mesh", (dir / "blobs12_default.wrl").string(), "--polygonizer",
