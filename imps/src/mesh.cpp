@@ -140,6 +140,18 @@ size_t vertexComponents(const Mesh& mesh, std::vector<uint32_t>& label) {
   return count;
 }
 
+// Each component's signed volume (six times: the tetrahedra to the origin, as signedVolume), by vertexComponents'
+// labels.
+std::vector<double> componentVolumes(const Mesh& mesh, const std::vector<uint32_t>& label, size_t count) {
+  std::vector<double> volume6(count, 0.0);
+  for (size_t t = 0; t < mesh.triangleCount(); ++t) {
+    const uint32_t* tri = &mesh.indices[3 * t];
+    const glm::dvec3 a(mesh.position(tri[0])), b(mesh.position(tri[1])), c(mesh.position(tri[2]));
+    volume6[label[tri[0]]] += glm::dot(a, glm::cross(b, c));
+  }
+  return volume6;
+}
+
 }  // namespace
 
 ComponentMatch matchComponents(const Mesh& mesh, const Mesh& reference) {
@@ -147,7 +159,8 @@ ComponentMatch matchComponents(const Mesh& mesh, const Mesh& reference) {
   std::vector<uint32_t> label, referenceLabel;
   match.components = vertexComponents(mesh, label);
   match.referenceComponents = vertexComponents(reference, referenceLabel);
-  std::vector<size_t> members(match.referenceComponents, 0);
+  std::vector<size_t> members(match.referenceComponents, 0), cavities(match.referenceComponents, 0);
+  const std::vector<double> volume = componentVolumes(mesh, label, match.components);
   std::vector<uint8_t> seen(match.components, 0);
   for (uint32_t v = 0; v < label.size(); ++v) {
     if (label[v] == kUnused || seen[label[v]]) continue;
@@ -161,25 +174,22 @@ ComponentMatch matchComponents(const Mesh& mesh, const Mesh& reference) {
       const float d2 = glm::dot(d, d);
       if (d2 < best) best = d2, nearest = referenceLabel[r];
     }
-    if (nearest != kUnused) ++members[nearest];
+    if (nearest == kUnused) continue;
+    ++members[nearest];
+    cavities[nearest] += volume[label[v]] < 0.0;
   }
-  // The missing components' sizes and signed volumes (six times: the tetrahedra to the origin, as signedVolume).
+  const std::vector<double> referenceVolume = componentVolumes(reference, referenceLabel, match.referenceComponents);
   std::vector<Box> boxes(match.referenceComponents);
-  std::vector<double> volume6(match.referenceComponents, 0.0);
   for (uint32_t r = 0; r < referenceLabel.size(); ++r)
-    if (referenceLabel[r] != kUnused && members[referenceLabel[r]] == 0)
-      boxes[referenceLabel[r]].extend(reference.position(r));
-  for (size_t t = 0; t < reference.triangleCount(); ++t) {
-    const uint32_t* tri = &reference.indices[3 * t];
-    if (members[referenceLabel[tri[0]]] != 0) continue;
-    const glm::dvec3 a(reference.position(tri[0])), b(reference.position(tri[1])), c(reference.position(tri[2]));
-    volume6[referenceLabel[tri[0]]] += glm::dot(a, glm::cross(b, c));
-  }
+    if (referenceLabel[r] != kUnused) boxes[referenceLabel[r]].extend(reference.position(r));
   for (size_t c = 0; c < members.size(); ++c) {
-    match.cutOff += members[c] > 1 ? members[c] - 1 : 0;
+    if (members[c] > 1) {
+      match.cutOff += members[c] - 1;
+      match.cutOffCavities += std::min(cavities[c], members[c] - 1);
+    }
     if (members[c] != 0) continue;
     ++match.missing;
-    match.missingCavities += volume6[c] < 0.0;
+    match.missingCavities += referenceVolume[c] < 0.0;
     match.largestMissing = std::max(match.largestMissing, glm::length(boxes[c].hi - boxes[c].lo));
   }
   return match;

@@ -154,6 +154,11 @@ std::string resolutionSource(float cell, int res, const MarchingCubesNode* node)
   return text;
 }
 
+// "1 air pocket", "2 air pockets".
+std::string count(size_t n, const char* one, const char* many) {
+  return std::to_string(n) + " " + (n == 1 ? one : many);
+}
+
 // Whether a particle mesh covers the surface: its components match those Marching Cubes finds at half desiredRadius
 // one for one (matchComponents: none missing, none cut off), and at least 90 % of the particles are in a triangle (a
 // settled mesh leaves out only the few particles that are off the surface this render, 0-2 %). "" if so, else what
@@ -174,29 +179,36 @@ std::string particleCoverage(const Mesh& mesh, const Field& field, const Tessela
     (*json)["missingCavities"] = match.missingCavities;
     (*json)["largestMissingComponent"] = match.largestMissing;
     (*json)["cutOffComponents"] = match.cutOff;
+    (*json)["cutOffCavities"] = match.cutOffCavities;
   } else {
-    char largest[96] = "", cavities[48] = "";
-    if (match.missingCavities == 1) std::snprintf(cavities, sizeof cavities, "1 an enclosed cavity; ");
-    if (match.missingCavities > 1)
-      std::snprintf(cavities, sizeof cavities, "%zu enclosed cavities; ", match.missingCavities);
+    std::string missing = std::to_string(match.missing) + " missing", cut = std::to_string(match.cutOff) + " cut off";
+    char largest[64];
+    std::snprintf(largest, sizeof largest, "the largest %.3g m across", double(match.largestMissing));
     if (match.missing > 0)
-      std::snprintf(largest, sizeof largest, " (%sthe largest %.3g m across)", cavities, double(match.largestMissing));
-    std::printf(
-        "coverage: %zu of %zu particles in no triangle; %zu components (Marching Cubes at %g m: %zu; %zu "
-        "missing%s, %zu cut off)\n",
-        t.unusedVertices, mesh.vertexCount(), match.components, double(mc.cellSize), match.referenceComponents,
-        match.missing, largest, match.cutOff);
+      missing +=
+          " (" +
+          (match.missingCavities > 0 ? count(match.missingCavities, "enclosed cavity", "enclosed cavities") + "; "
+                                     : "") +
+          largest + ")";
+    if (match.cutOffCavities > 0) cut += " (" + count(match.cutOffCavities, "air pocket", "air pockets") + ", closed)";
+    std::printf("coverage: %zu of %zu particles in no triangle; %zu components (Marching Cubes at %g m: %zu; %s, %s)\n",
+                t.unusedVertices, mesh.vertexCount(), match.components, double(mc.cellSize), match.referenceComponents,
+                missing.c_str(), cut.c_str());
   }
   std::vector<std::string> wrong;
   if (match.missing > 0)
-    wrong.push_back("misses " + std::to_string(match.missing) + " of the " + std::to_string(match.referenceComponents) +
-                    " components Marching Cubes finds" +
-                    (match.missingCavities > 0 ? " (" + std::to_string(match.missingCavities) +
-                                                     " of them cavities, air enclosed by the solid)"
-                                               : ""));
+    wrong.push_back(
+        "misses " + std::to_string(match.missing) + " of the " + std::to_string(match.referenceComponents) +
+        " components Marching Cubes finds" +
+        (match.missingCavities > 0
+             ? " (" + count(match.missingCavities, "enclosed cavity", "enclosed cavities") + ": air inside the solid)"
+             : ""));
   if (match.cutOff > 0)
     wrong.push_back("cuts " + std::to_string(match.cutOff) + (match.cutOff == 1 ? " part" : " parts") +
-                    " off (separate pieces where Marching Cubes finds one surface)");
+                    " off (separate pieces where Marching Cubes finds one surface" +
+                    (match.cutOffCavities > 0 ? "; " + count(match.cutOffCavities, "air pocket", "air pockets") +
+                                                    " closed by the particles, open in Marching Cubes)"
+                                              : ")"));
   if (t.unusedVertices * 10 > mesh.vertexCount())
     wrong.push_back("leaves " + std::to_string(t.unusedVertices) + " of " + std::to_string(mesh.vertexCount()) +
                     " particles out of every triangle (parts of the surface are missing)");

@@ -82,6 +82,7 @@ struct RenderRow {
   // Against Marching Cubes of the same field at half desiredRadius (matchComponents): parts meshed as separate
   // pieces where the surface is one (a hand cut off at the wrist), and components not meshed at all.
   size_t cutOffParts = 0, missingComponents = 0;
+  size_t cutOffSolids = 0;      // of the parts cut off, those that are not cavities (air pockets closed)
   size_t missingSolids = 0;     // of the missing, those that are not cavities (air enclosed by the solid)
   double largestMissingMm = 0;  // the largest missing component's bounding-box diagonal (0: none missing)
 };
@@ -125,6 +126,7 @@ void measureRender(const Mesh& mesh, const Field& field, const Mesh& reference, 
   row.cutOffParts = match.cutOff;
   row.missingComponents = match.missing;
   row.missingSolids = match.missing - match.missingCavities;
+  row.cutOffSolids = match.cutOff - match.cutOffCavities;
   row.largestMissingMm = 1000.0 * double(match.largestMissing);
   const MeshTopology t = analyzeTopology(mesh);
   row.boundaryEdges = t.boundaryEdges;
@@ -390,17 +392,19 @@ std::string csvText(const std::vector<Report>& reports) {
   std::string out =
       "scene,render,seconds,particles,triangles,boundary_edges,nonmanifold_edges,nonmanifold_vertices,"
       "folded_triangles,worst_f_minus_iso,worst_offset_mm,fissions,fusions,fallback,particle_open_edges,"
-      "particle_pinched_vertices,cut_off_parts,missing_components,missing_cavities,largest_missing_mm\n";
+      "particle_pinched_vertices,cut_off_parts,cut_off_cavities,missing_components,missing_cavities,"
+      "largest_missing_mm\n";
   char line[512];
   for (const Report& r : reports)
     for (size_t f = 0; f < r.rows.size(); ++f) {
       const RenderRow& w = r.rows[f];
-      std::snprintf(
-          line, sizeof line, "%s,%zu,%.4f,%zu,%zu,%zu,%zu,%zu,%zu,%.6g,%.4g,%llu,%llu,%zu,%zu,%zu,%zu,%zu,%zu,%.4g\n",
-          r.name.c_str(), f, w.seconds, w.particles, w.triangles, w.boundaryEdges, w.nonManifoldEdges,
-          w.nonManifoldVertices, w.foldedTriangles, w.worstFieldError, w.worstOffsetMm, (unsigned long long)w.fissions,
-          (unsigned long long)w.fusions, w.fallback, w.particleOpenEdges, w.particlePinchedVertices, w.cutOffParts,
-          w.missingComponents, w.missingComponents - w.missingSolids, w.largestMissingMm);
+      std::snprintf(line, sizeof line,
+                    "%s,%zu,%.4f,%zu,%zu,%zu,%zu,%zu,%zu,%.6g,%.4g,%llu,%llu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%.4g\n",
+                    r.name.c_str(), f, w.seconds, w.particles, w.triangles, w.boundaryEdges, w.nonManifoldEdges,
+                    w.nonManifoldVertices, w.foldedTriangles, w.worstFieldError, w.worstOffsetMm,
+                    (unsigned long long)w.fissions, (unsigned long long)w.fusions, w.fallback, w.particleOpenEdges,
+                    w.particlePinchedVertices, w.cutOffParts, w.cutOffParts - w.cutOffSolids, w.missingComponents,
+                    w.missingComponents - w.missingSolids, w.largestMissingMm);
       out += line;
     }
   return out;
@@ -444,6 +448,7 @@ Json reportJson(const Report& r) {
               {"max_particle_pinched_vertices", r.max(&RenderRow::particlePinchedVertices)},
               {"renders_with_cut_off_parts", r.count(&RenderRow::cutOffParts)},
               {"max_cut_off_parts", r.max(&RenderRow::cutOffParts)},
+              {"renders_with_cut_off_solids", r.count(&RenderRow::cutOffSolids)},
               {"renders_with_missing_components", r.count(&RenderRow::missingComponents)},
               {"max_missing_components", r.max(&RenderRow::missingComponents)},
               {"renders_with_missing_solids", r.count(&RenderRow::missingSolids)},

@@ -179,8 +179,9 @@ TEST(MatchComponents, FindsPartsCutOffAndPartsMissingThatTheCountHides) {
   EXPECT_EQ(none.missingCavities, 0u);
 }
 
-// A missing component that faces inward (negative signed volume) is a cavity: air enclosed by the solid.
-TEST(MatchComponents, ToldCavitiesFromSolidsAmongTheMissing) {
+// A missing component, or a piece cut off, that faces inward (negative signed volume) is a cavity: air enclosed by the
+// solid.
+TEST(MatchComponents, ToldCavitiesFromSolidsAmongTheMissingAndTheCutOff) {
   Mesh box = cube();
   for (float& x : box.positions) x = 4.0f * x - 1.5f;  // [-1.5, 2.5]^3, round the cavity
   Mesh cavity = cube();
@@ -197,6 +198,16 @@ TEST(MatchComponents, ToldCavitiesFromSolidsAmongTheMissing) {
   const ComponentMatch withCavity = matchComponents(reference, reference);
   EXPECT_EQ(withCavity.missing, 0u);
   EXPECT_EQ(withCavity.missingCavities, 0u);
+  // A pocket closed where the reference is one surface: a piece cut off that faces inward.
+  Mesh pocket = cube({0.25f, 0.25f, 0.25f});
+  for (float& x : pocket.positions) x *= 0.5f;
+  for (size_t t = 0; t < pocket.triangleCount(); ++t) std::swap(pocket.indices[3 * t + 1], pocket.indices[3 * t + 2]);
+  Mesh closed = box;
+  appendMesh(closed, pocket);
+  const ComponentMatch pocketed = matchComponents(closed, box);
+  EXPECT_EQ(pocketed.cutOff, 1u);
+  EXPECT_EQ(pocketed.cutOffCavities, 1u);
+  EXPECT_EQ(m.cutOffCavities, 0u);
 }
 
 TEST(MeshTopology, DegenerateTrianglesAndUnusedVerticesAreCounted) {

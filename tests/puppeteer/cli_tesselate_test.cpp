@@ -50,7 +50,8 @@ TEST(BenchCommand, ChecksEveryRenderOfASwingAClipAndASession) {
          {"renders", "renders_with_holes", "max_boundary_edges", "renders_with_nonmanifold", "max_nonmanifold_edges",
           "max_nonmanifold_vertices", "renders_with_folds", "fissions_per_update_settled", "worst_f_minus_iso",
           "renders_with_fallback", "renders_with_cut_off_parts", "max_cut_off_parts", "renders_with_missing_components",
-          "max_missing_components", "renders_with_missing_solids", "largest_missing_component_mm"})
+          "max_missing_components", "renders_with_missing_solids", "renders_with_cut_off_solids",
+          "largest_missing_component_mm"})
       EXPECT_TRUE(scene.contains(key)) << c.motion << ": " << key;
     EXPECT_EQ(scene["renders"], c.renders) << c.motion;
     EXPECT_EQ(scene["renders_with_holes"], 0) << c.motion;
@@ -59,11 +60,14 @@ TEST(BenchCommand, ChecksEveryRenderOfASwingAClipAndASession) {
     std::string line;
     std::getline(csv, line);
     EXPECT_EQ(line.rfind("scene,render,seconds,particles,triangles,boundary_edges,", 0), 0u) << line;
-    EXPECT_TRUE(line.ends_with(",cut_off_parts,missing_components,missing_cavities,largest_missing_mm")) << line;
-    // The last four columns are each render's parts cut off, components missing (against Marching Cubes), how many
-    // of those are cavities, and the largest missing one's size: the JSON counts the renders with parts cut off,
-    // with components missing and with solids (not cavities) missing, and gives the largest size.
-    int rows = 0, cut = 0, missing = 0, solids = 0;
+    EXPECT_TRUE(
+        line.ends_with(",cut_off_parts,cut_off_cavities,missing_components,missing_cavities,largest_missing_mm"))
+        << line;
+    // The last five columns are each render's parts cut off and how many of those are cavities, components missing
+    // (against Marching Cubes) and how many of those are cavities, and the largest missing one's size: the JSON
+    // counts the renders with parts cut off, with solids (not cavities) cut off, with components missing and with
+    // solids missing, and gives the largest size.
+    int rows = 0, cut = 0, cutSolids = 0, missing = 0, solids = 0;
     double largest = 0;
     while (std::getline(csv, line)) {
       ++rows;
@@ -72,19 +76,23 @@ TEST(BenchCommand, ChecksEveryRenderOfASwingAClipAndASession) {
         comma = std::min(line.find(',', at), line.size());
         cells.push_back(line.substr(at, comma - at));
       }
-      ASSERT_GE(cells.size(), 4u) << line;
-      const size_t k = cells.size() - 4;
-      cut += std::stoi(cells[k]) > 0;
-      const int missingHere = std::stoi(cells[k + 1]), cavitiesHere = std::stoi(cells[k + 2]);
+      ASSERT_GE(cells.size(), 5u) << line;
+      const size_t k = cells.size() - 5;
+      const int cutHere = std::stoi(cells[k]), pocketsHere = std::stoi(cells[k + 1]);
+      EXPECT_LE(pocketsHere, cutHere) << line;
+      cut += cutHere > 0;
+      cutSolids += cutHere > pocketsHere;
+      const int missingHere = std::stoi(cells[k + 2]), cavitiesHere = std::stoi(cells[k + 3]);
       EXPECT_LE(cavitiesHere, missingHere) << line;
       missing += missingHere > 0;
       solids += missingHere > cavitiesHere;
-      const double sizeHere = std::stod(cells[k + 3]);
+      const double sizeHere = std::stod(cells[k + 4]);
       EXPECT_EQ(sizeHere > 0, missingHere > 0) << line;
       largest = std::max(largest, sizeHere);
     }
     EXPECT_EQ(rows, c.renders) << c.motion;
     EXPECT_EQ(scene["renders_with_cut_off_parts"], cut) << c.motion;
+    EXPECT_EQ(scene["renders_with_cut_off_solids"], cutSolids) << c.motion;
     EXPECT_EQ(scene["renders_with_missing_components"], missing) << c.motion;
     EXPECT_EQ(scene["renders_with_missing_solids"], solids) << c.motion;
     EXPECT_NEAR(scene["largest_missing_component_mm"].get<double>(), largest, 1e-3 * largest) << c.motion;

@@ -105,6 +105,7 @@ struct ComponentMatch {
   size_t referenceComponents = 0;  // of `reference`
   size_t missing = 0;  // reference components no component of `mesh` belongs to: parts of the surface not meshed
   size_t cutOff = 0;   // components of `mesh` beyond the first in one reference component: parts meshed apart
+  size_t cutOffCavities = 0;    // of those, cavities: air pockets closed where the reference finds them open
   size_t missingCavities = 0;   // of the missing, those that are cavities (facing inward: negative signed volume), air
                                 // enclosed by the solid, as where a limb presses into the body; not seen from outside
   float largestMissing = 0.0f;  // the diagonal of the largest missing component's bounding box (0: none missing)
