@@ -431,18 +431,8 @@ Json reportJson(const Report& r) {
               {"max_folded_triangles", r.max(&RenderRow::foldedTriangles)},
               {"worst_f_minus_iso", r.worst(&RenderRow::worstFieldError)},
               {"worst_offset_mm", r.worst(&RenderRow::worstOffsetMm)},
-              {"fissions",
-               [&] {
-                 uint64_t n = 0;
-                 for (const RenderRow& w : r.rows) n += w.fissions;
-                 return n;
-               }()},
-              {"fusions",
-               [&] {
-                 uint64_t n = 0;
-                 for (const RenderRow& w : r.rows) n += w.fusions;
-                 return n;
-               }()},
+              {"fissions", [&] { uint64_t n = 0; for (const RenderRow& w : r.rows) n += w.fissions; return n; }()},
+              {"fusions", [&] { uint64_t n = 0; for (const RenderRow& w : r.rows) n += w.fusions; return n; }()},
               {"renders_with_fallback", r.count(&RenderRow::fallback)},
               {"max_particle_open_edges", r.max(&RenderRow::particleOpenEdges)},
               {"max_particle_pinched_vertices", r.max(&RenderRow::particlePinchedVertices)},
@@ -495,6 +485,7 @@ void printTable(const BenchArgs& a, const std::vector<Report>& reports) {
   row("Folded triangles (max)", [&](const Report& r) { return num(r.max(&RenderRow::foldedTriangles)); });
   row("Renders with MC fallback", [&](const Report& r) { return pct(r, r.count(&RenderRow::fallback)); });
   row("Renders with parts cut off", [&](const Report& r) { return pct(r, r.count(&RenderRow::cutOffParts)); });
+  row("Renders with solids cut off", [&](const Report& r) { return pct(r, r.count(&RenderRow::cutOffSolids)); });
   row("Renders missing components", [&](const Report& r) { return pct(r, r.count(&RenderRow::missingComponents)); });
   row("Renders missing solids", [&](const Report& r) { return pct(r, r.count(&RenderRow::missingSolids)); });
   row("Largest missing (mm across)",
