@@ -20,6 +20,8 @@
 //     tube are joined by strips, every other loop is closed by ear clipping, choosing each time the ear with the
 //     shortest new edge whose normal agrees with the vertex normals.
 //  F. pinches: vertices whose triangles form more than one fan lose the smaller fans; the holes are repaired again;
+//  I. pockets (after F): particles in no triangle that make up a small closed sheet of their own (an air pocket's wall,
+//     its neighbours in front of each other's tangent planes, which the fans never join) get its convex hull;
 //  G. the fallback: a triangulation still open or pinched is replaced by Marching Cubes (never a hole);
 //  H. folds (sequential, closed triangulations only): a triangle winding against the field normal at its centroid
 //     gets an edge flip, else one of its corners is removed and its ring re-triangulated, when that unfolds it.
@@ -1148,6 +1150,101 @@ void removeSmallerFans(Tesselator::State& s, size_t& boundary) {
 
 }  // namespace
 
+namespace {
+
+// Whether particles u and v lie on one small closed sheet of the given side, by their chord: a pocket's (air enclosed
+// by the solid, the normals pointing into it) runs in front of both tangent planes through air; a blob's behind both
+// through the solid.
+bool onePocketSheet(Tesselator::State& s, uint32_t u, uint32_t v, bool air) {
+  const glm::vec3 d = s.vpos[v] - s.vpos[u];
+  const float front = glm::dot(d, s.nrm[u]), back = glm::dot(d, s.nrm[v]);
+  if (air ? !(front > 0.0f && back < 0.0f) : !(front < 0.0f && back > 0.0f)) return false;
+  return (sampleAmongVertices(s, s.vpos[u] + 0.5f * d).value < s.field->iso()) == air;
+}
+
+// The convex hull of s.pocket's vertices into s.strip (outward faces, wound counter-clockwise seen from outside), by
+// brute force over every triple (a pocket has at most kMaxPocket vertices). False unless it is a closed 2-manifold
+// over at least four of them (no four coplanar on a face).
+bool pocketHull(Tesselator::State& s, float h) {
+  const std::vector<uint32_t>& P = s.pocket;
+  const float eps = 1e-6f * h * h * h;
+  s.strip.clear();
+  for (size_t i = 0; i < P.size(); ++i)
+    for (size_t j = i + 1; j < P.size(); ++j)
+      for (size_t k = j + 1; k < P.size(); ++k) {
+        const glm::vec3 a = s.vpos[P[i]], n = glm::cross(s.vpos[P[j]] - a, s.vpos[P[k]] - a);
+        int above = 0, below = 0;
+        for (size_t m = 0; m < P.size(); ++m) {
+          if (m == i || m == j || m == k) continue;
+          const float side = glm::dot(n, s.vpos[P[m]] - a);
+          above += side > eps, below += side < -eps;
+          if (std::fabs(side) <= eps) ++above, ++below;  // coplanar: neither face is certain
+        }
+        if (above == 0)
+          s.strip.insert(s.strip.end(), {P[i], P[j], P[k]});
+        else if (below == 0)
+          s.strip.insert(s.strip.end(), {P[i], P[k], P[j]});
+      }
+  // Closed 2-manifold: every directed edge once, with its twin; V - E + F = 2.
+  std::vector<uint64_t>& edges = s.stripEdges;
+  edges.clear();
+  for (size_t t = 0; t < s.strip.size(); t += 3)
+    for (size_t q = 0; q < 3; ++q) edges.push_back(uint64_t(s.strip[t + q]) << 32 | s.strip[t + (q + 1) % 3]);
+  std::sort(edges.begin(), edges.end());
+  if (edges.size() < 12 || std::adjacent_find(edges.begin(), edges.end()) != edges.end()) return false;
+  for (const uint64_t e : edges)
+    if (!std::binary_search(edges.begin(), edges.end(), e << 32 | e >> 32)) return false;
+  std::vector<uint32_t> corners(s.strip);
+  std::sort(corners.begin(), corners.end());
+  const size_t vertices = size_t(std::unique(corners.begin(), corners.end()) - corners.begin());
+  return vertices + s.strip.size() / 3 == edges.size() / 2 + 2;
+}
+
+}  // namespace
+
+size_t closePockets(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary) {
+  const size_t n = s.size();
+  const float h = o.desiredRadius;
+  const auto loose = [&](uint32_t u) { return s.heCount[u] == 0 && s.vok[u]; };
+  size_t closed = 0;
+  for (const bool air : {true, false}) {
+    s.pocketSeen.assign(n, 0);
+    for (uint32_t start = 0; start < n; ++start) {
+      if (!loose(start) || s.pocketSeen[start]) continue;
+      // The sheet: loose particles joined by chords of the side; none of them on the side of a particle in a
+      // triangle (then it is part of a larger surface with a hole, the repair's).
+      std::vector<uint32_t>& P = s.pocket;
+      P.assign(1, start);
+      s.pocketSeen[start] = 1;
+      bool open = false;
+      // Stops as soon as the sheet is open or too large (its particles reached so far stay marked: not a pocket).
+      for (size_t head = 0; head < P.size() && !open && P.size() <= kMaxPocket; ++head)
+        for (size_t q = 0; q < s.nbrCount[P[head]] && !open; ++q) {
+          const uint32_t v = s.nbr[size_t(P[head]) * kMaxNeighbours + q];
+          if (!s.vok[v] || (loose(v) && s.pocketSeen[v]) || !onePocketSheet(s, P[head], v, air)) continue;
+          open = !loose(v);
+          s.pocketSeen[v] = 1;
+          P.push_back(v);
+        }
+      if (open || P.size() < 4 || P.size() > kMaxPocket || !pocketHull(s, h)) continue;
+      // Outward for a blob; for a pocket the surface's outward normal points into it, so the hull turns inside out.
+      if (air)
+        for (size_t t = 0; t < s.strip.size(); t += 3) std::swap(s.strip[t + 1], s.strip[t + 2]);
+      bool fits = true;
+      for (size_t t = 0; t < s.strip.size() && fits; t += 3) {
+        const uint32_t* c = &s.strip[t];
+        const glm::vec3 face = glm::cross(s.vpos[c[1]] - s.vpos[c[0]], s.vpos[c[2]] - s.vpos[c[0]]);
+        fits = glm::dot(face, s.nrm[c[0]] + s.nrm[c[1]] + s.nrm[c[2]]) > 0.0f;
+      }
+      if (!fits || !stripFits(s, h)) continue;
+      for (size_t t = 0; t < s.strip.size(); t += 3)
+        addTriangle(s, s.strip[t], s.strip[t + 1], s.strip[t + 2], &boundary);
+      ++closed;
+    }
+  }
+  return closed;
+}
+
 size_t unpinchVertices(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary, size_t& unfilled) {
   size_t pinched = markPinchedVertices(s, o);
   // First only the smaller fans go (the vertex keeps its main disk, and the caps the repair lays where they were
@@ -1581,6 +1678,7 @@ void Tesselator::triangulate(Mesh& mesh) {
   const size_t assembled = s.tris.size() / 3;
   size_t unfilled = repairHoles(s, o, boundary);  // E
   const size_t pinched = unpinchVertices(s, o, boundary, unfilled);  // F
+  closePockets(s, o, boundary);                                      // I
   stats_.filledTriangles = s.tris.size() / 3 > assembled ? s.tris.size() / 3 - assembled : 0;
   stats_.unfilledLoops = unfilled;
   stats_.pinchedVertices = pinched;

@@ -141,6 +141,9 @@ struct Tesselator::State {
   std::vector<uint32_t> strip;       // bridgeLoops: the strip's triangles before they are added
   std::vector<uint32_t> ring;        // bridgeLoops: rows of the band's particles round the tube, in order
   std::vector<size_t> ringStart;     // bridgeLoops: row k of several is ring[ringStart[k], ringStart[k + 1])
+  std::vector<uint32_t> pocket;      // closePockets: one sheet's particles
+  std::vector<uint8_t> pocketSeen;   // closePockets: per particle, taken into a sheet of this side
+  std::vector<uint64_t> stripEdges;  // pocketHull: the hull's half-edges, sorted
   std::vector<uint32_t> band;        // bridgeLoops: the particles without triangles between two rims
   std::vector<uint8_t> inBand;       // per particle, bandParticles' mark (all 0 between calls)
   std::vector<uint32_t> heTri;   // unfoldTriangles: per half-edge slot the index of its triangle in s.tris / 3
@@ -208,6 +211,16 @@ size_t repairHoles(Tesselator::State& s, const TesselatorOptions& o, size_t& bou
 // around it) and the holes are repaired again (E). Returns the pinched vertices left (0: the triangulation is a
 // 2-manifold wherever it is closed).
 size_t unpinchVertices(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary, size_t& unfilled);
+// I. pockets (after F): particles left in no triangle that make up, on their own, a small closed sheet too curved for
+// the fans (a blob, or an air pocket enclosed by the solid, 4 to kMaxPocket particles whose neighbours are 60-120
+// degrees apart; the fans take no neighbour in front of the tangent plane, so a pocket's particles never connect)
+// get its convex hull, oriented with the field (turned inside out for a pocket), when every hull triangle agrees with
+// its corners' normals and lies within kBridgeOff desiredRadius of the surface (stripFits). The particles of one
+// sheet are those joined by chords on its side (onePocketSheet), none of them so joined to a particle in a
+// triangle. Each hull is a closed 2-manifold of its own, so the triangulation stays closed and manifold. Returns the
+// sheets closed.
+inline constexpr size_t kMaxPocket = 16;  // particles in a small closed sheet, at most
+size_t closePockets(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary);
 // Counts the vertices whose triangles do not form a single fan (a disk, or a half-disk on the boundary), marking them
 // in s.openUp and the half-edge slots of all but their largest fan in s.dropSlot. Parallel; reads the half-edge table.
 size_t markPinchedVertices(Tesselator::State& s, const TesselatorOptions& o);

@@ -292,6 +292,27 @@ TEST(TesselatorMesh, HoleRepairDoesNotJoinHolesFacingEachOtherAcrossAGap) {
     EXPECT_GT(s.vpos[s.tris[k]].x * s.vpos[s.tris[k + 1]].x, 0.0f);
 }
 
+// Pass I (closePockets; the pocket it closes: Tesselator.AnAirPocketInsideTheSwarmIsMeshedInsideOut). Particles left
+// without a triangle in a hole of a larger surface are not a sheet of their own (they are joined, by chords behind
+// both tangent planes through the solid, to particles in triangles): pass I leaves them to the repair.
+TEST(TesselatorMesh, ParticlesInAHoleOfALargerSurfaceAreNoPocket) {
+  Sphere sphere(300);
+  auto& s = sphere.s;
+  sphere.options.maxHoleLoop = 0;  // the hole stays
+  std::vector<uint8_t> marked(s.size(), 0);
+  size_t capped = 0;
+  for (uint32_t i = 0; i < s.size(); ++i) capped += marked[i] = s.pos[i].z > 0.9f;  // a cap
+  ASSERT_GE(capped, 4u);
+  ASSERT_LE(capped, kMaxPocket) << "small enough to be a pocket by its size";
+  sphere.fansAndVotes();
+  withdrawAround(sphere, marked);
+  size_t boundary = assembleTriangles(s, sphere.options);
+  ASSERT_GT(boundary, 0u);
+  const size_t before = s.tris.size();
+  EXPECT_EQ(closePockets(s, sphere.options, boundary), 0u);
+  EXPECT_EQ(s.tris.size(), before);
+}
+
 // F: a vertex whose triangles form two closed fans (a square pyramid and a tetrahedron sharing their apex 0: every
 // edge has its twin, yet the mesh is pinched at 0) is found, the smaller fan's slots are marked, and the pass leaves
 // no pinched vertex, with the larger fan untouched.
