@@ -292,6 +292,26 @@ TEST(TesselatorMesh, HoleRepairDoesNotJoinHolesFacingEachOtherAcrossAGap) {
     EXPECT_GT(s.vpos[s.tris[k]].x * s.vpos[s.tris[k + 1]].x, 0.0f);
 }
 
+// Pass I on a blob: four particles on a sphere (neighbours 109 degrees apart) are beyond even the fans' convex band, so
+// A-F leave them without a triangle; closePockets gives them their hull, a tetrahedron facing outward.
+TEST(TesselatorMesh, ABlobOfFourParticlesGetsItsHull) {
+  Sphere blob(4);
+  auto& s = blob.s;
+  blob.fansAndVotes();
+  size_t boundary = assembleTriangles(s, blob.options);
+  size_t unfilled = repairHoles(s, blob.options, boundary);
+  unpinchVertices(s, blob.options, boundary, unfilled);
+  ASSERT_EQ(s.tris.size(), 0u) << "the fans must leave the blob for pass I to mean anything";
+  EXPECT_EQ(closePockets(s, blob.options, boundary), 1u);
+  Mesh mesh;
+  writeMesh(s, blob.options, mesh);
+  const MeshTopology t = analyzeTopology(mesh);
+  EXPECT_TRUE(t.closedManifold());
+  EXPECT_EQ(mesh.triangleCount(), 4u);
+  EXPECT_EQ(t.unusedVertices, 0u);
+  EXPECT_GT(signedVolume(mesh), 0.0) << "a blob's surface faces outward";
+}
+
 // Pass I (closePockets; the pocket it closes: Tesselator.AnAirPocketInsideTheSwarmIsMeshedInsideOut). Particles left
 // without a triangle in a hole of a larger surface are not a sheet of their own (they are joined, by chords behind
 // both tangent planes through the solid, to particles in triangles): pass I leaves them to the repair.
