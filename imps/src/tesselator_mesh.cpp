@@ -1678,10 +1678,10 @@ void Tesselator::triangulate(Mesh& mesh) {
   const size_t assembled = s.tris.size() / 3;
   size_t unfilled = repairHoles(s, o, boundary);  // E
   const size_t pinched = unpinchVertices(s, o, boundary, unfilled);  // F
-  closePockets(s, o, boundary);                                      // I
   stats_.filledTriangles = s.tris.size() / 3 > assembled ? s.tris.size() / 3 - assembled : 0;
   stats_.unfilledLoops = unfilled;
   stats_.pinchedVertices = pinched;
+  closePockets(s, o, boundary);  // I (its hulls are closed: boundary stays)
   stats_.openEdges = boundary;
   s.lastMeshOpen = boundary > 0 || pinched > 0;
   stats_.foldedTriangles = s.lastMeshOpen || !o.unfold ? 0 : unfoldTriangles(s);  // H
