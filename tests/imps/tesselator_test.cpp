@@ -37,9 +37,9 @@ struct Example {
   TesselatorOptions options;
 };
 
-Example load(const std::string& name) {
+// The scene and its character from a read (a file, or text), failing the test on errors.
+Example fromRead(std::expected<Scene, Diagnostics> read) {
   Example e;
-  auto read = readSceneFile(std::string(IMPS_SOURCE_DIR) + "/examples/" + name);
   if (!read) ADD_FAILURE() << read.error().str();
   e.scene = std::move(*read);
   auto c = Character::fromScene(e.scene);
@@ -48,6 +48,10 @@ Example load(const std::string& name) {
   if (const auto* node = std::get_if<Tesselator3MPNode>(&e.scene.polygonizer))
     e.options = TesselatorOptions::fromNode(*node);
   return e;
+}
+
+Example load(const std::string& name) {
+  return fromRead(readSceneFile(std::string(IMPS_SOURCE_DIR) + "/examples/" + name));
 }
 
 // Max over vertices of |F - iso| / |grad F| (metres): distance to the surface to first order.
@@ -854,12 +858,10 @@ TEST(Tesselator, AnAirPocketInsideTheSwarmIsMeshedInsideOut) {
       "    variance 0.25\n    children [\n";
   for (const char* b : balls) text += std::string("      Metaball { center ") + b + " }\n";
   text += "    ]\n  }\n}\n";
-  auto scene = readScene(text, "swarm_pocket.wrl");
-  ASSERT_TRUE(scene) << scene.error().str();
-  auto character = Character::fromScene(*scene);
-  ASSERT_TRUE(character) << character.error().str();
-  SkeletonCache skel(*character);
-  TesselatorOptions o = TesselatorOptions::forScene(*scene, skel.field());
+  Example e = fromRead(readScene(text, "swarm_pocket.wrl"));
+  ASSERT_TRUE(e.character);
+  SkeletonCache skel(*e.character);
+  TesselatorOptions o = TesselatorOptions::forScene(e.scene, skel.field());
   EXPECT_FLOAT_EQ(o.desiredRadius, 0.05f);  // twice the scene's cellSize, as the swarm's
   MarchingCubesOptions mc;
   mc.cellSize = 0.5f * o.desiredRadius;
@@ -920,11 +922,9 @@ TEST(Tesselator, ManySmallBlobsMeshClosedWithEveryComponent) {
       ball(2.0f * float(c) + uniform(-0.3f, 0.3f), uniform(-0.3f, 0.3f), 2.0f + uniform(-0.3f, 0.3f),
            uniform(0.15f, 0.35f));
   text += "  ]\n}\n";
-  auto scene = readScene(text, "many_blobs.wrl");
-  ASSERT_TRUE(scene) << scene.error().str();
-  auto character = Character::fromScene(*scene);
-  ASSERT_TRUE(character) << character.error().str();
-  SkeletonCache skel(*character);
+  Example e = fromRead(readScene(text, "many_blobs.wrl"));
+  ASSERT_TRUE(e.character);
+  SkeletonCache skel(*e.character);
 
   TesselatorOptions o = TesselatorOptions::forField(skel.field());
   EXPECT_NEAR(o.desiredRadius, 0.5f * 0.15f, 0.5f * 0.05f);  // half the smallest radius (>= 0.15 m)
