@@ -215,7 +215,7 @@ size_t unpinchVertices(Tesselator::State& s, const TesselatorOptions& o, size_t&
 // the fans (a blob, or an air pocket enclosed by the solid, 4 to kMaxPocket particles whose neighbours are 60-120
 // degrees apart; the fans take no neighbour in front of the tangent plane, so a pocket's particles never connect)
 // get its convex hull, oriented with the field (turned inside out for a pocket), when every hull triangle agrees with
-// its corners' normals and lies within kBridgeOff desiredRadius of the surface (stripFits). The particles of one
+// the sum of its corners' normals and lies within kBridgeOff desiredRadius of the surface (stripFits). The particles of one
 // sheet are those joined by chords on its side (onePocketSheet), none of them so joined to a particle in a
 // triangle. Each hull is a closed 2-manifold of its own, so the triangulation stays closed and manifold. Returns the
 // sheets closed.
