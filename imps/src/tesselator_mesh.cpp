@@ -267,7 +267,7 @@ bool fanHas(const Tesselator::State& s, uint32_t a, uint32_t b, uint32_t c) {
 // Collects the boundary loops' directed edges: b -> a for every used a -> b whose twin is missing. Only vertices
 // flagged in s.openOut can have such edges; they are visited in particle order.
 void collectHoles(Tesselator::State& s) {
-  const size_t n = s.size();
+  const size_t n = s.vertexCount();
   s.holeCount.assign(n, 0);
   for (uint32_t a = 0; a < n; ++a) {
     if (!s.openOut[a]) continue;
@@ -370,12 +370,11 @@ void projectVertex(Tesselator::State& s, const Field& field, float h, size_t i, 
   s.vpos[i] = finite3(v) ? v : p;
 }
 
-// Particle i's colour: primitive colours weighted by term^(1/colorWidth) over `winner`, the local blend set of
-// `scratch` winning at the particle (wider = smoother), so only primitives that blend there mix their colours;
-// fs.color where no term is positive.
-glm::vec3 vertexColor(const Tesselator::State& s, const Field& field, float colorExp, size_t i,
-                      const FieldScratch& scratch, const FieldSample& fs, uint32_t winner) {
-  const glm::vec3 p = s.pos[i];
+// A vertex's colour at p (a particle's position, with its owner): primitive colours weighted by term^(1/colorWidth)
+// over `winner`, the local blend set of `scratch` winning there (wider = smoother), so only primitives that blend
+// there mix their colours; fs.color where no term is positive.
+glm::vec3 vertexColor(const Field& field, float colorExp, glm::vec3 p, int32_t owner, const FieldScratch& scratch,
+                      const FieldSample& fs, uint32_t winner) {
   glm::vec3 col(0.0f);
   float wsum = 0.0f;
   auto addColor = [&](uint32_t k) {
@@ -386,8 +385,7 @@ glm::vec3 vertexColor(const Tesselator::State& s, const Field& field, float colo
     col += w * field.color(k);
     wsum += w;
   };
-  const int32_t ow = s.owner[i];
-  if (ow >= 0 && scratch.setCount() > 0) {
+  if (owner >= 0 && scratch.setCount() > 0) {
     for (uint32_t m = scratch.setOffsets[winner]; m < scratch.setOffsets[winner + 1]; ++m)
       addColor(scratch.candidates[scratch.setMembers[m]]);
   } else {
@@ -764,6 +762,36 @@ bool stripFits(Tesselator::State& s, float h) {
   return true;
 }
 
+// Appends a vertex that is no particle (a surface row's, this render only) to every per-vertex array of passes D-H.
+// `from`: a particle near it, whose carried texture coordinates it follows.
+uint32_t addVertex(Tesselator::State& s, glm::vec3 p, glm::vec3 normal, glm::vec3 color, uint32_t from) {
+  const size_t v = s.vertexCount(), n = v + 1;
+  s.addedFrom.push_back(from < s.size() ? from : s.addedFrom[from - s.size()]);
+  s.vpos.push_back(p);
+  s.nrm.push_back(normal);
+  s.vcol.push_back(color);
+  s.vok.push_back(1);
+  s.heTo.resize(n * kMaxHalfEdges);
+  s.heThird.resize(n * kMaxHalfEdges);
+  s.heCount.resize(n, 0);
+  s.openOut.resize(n, 0);
+  s.holeTo.resize(n * 4);
+  s.holeCount.resize(n, 0);
+  s.holeUsed.resize(n * 4, 0);
+  s.openUp.resize(n, 0);
+  return uint32_t(v);
+}
+
+// Drops the vertices from `first` on (added by addVertex, in no triangle yet).
+void dropVerticesFrom(Tesselator::State& s, size_t first) {
+  s.addedFrom.resize(first - s.size());
+  s.vpos.resize(first);
+  s.nrm.resize(first);
+  s.vcol.resize(first);
+  s.vok.resize(first);
+  s.heCount.resize(first);
+}
+
 // A tube between hole loops A and B (bridgeTubes): the axis joining their centroids, and the angle round it.
 struct Tube {
   glm::vec3 from, axis, b0, b1;
@@ -793,7 +821,8 @@ void bandParticles(Tesselator::State& s, const uint32_t* A, size_t na, const uin
   };
   for (const auto& [L, m] : {std::pair{A, na}, std::pair{B, nb}})
     for (size_t k = 0; k < m; ++k)
-      for (size_t q = 0; q < s.nbrCount[L[k]]; ++q) add(s.nbr[size_t(L[k]) * kMaxNeighbours + q]);
+      if (L[k] < s.size())  // (a surface-row vertex has no neighbour list)
+        for (size_t q = 0; q < s.nbrCount[L[k]]; ++q) add(s.nbr[size_t(L[k]) * kMaxNeighbours + q]);
   for (size_t head = 0; !near && head < band.size() && band.size() < kMaxBand; ++head)
     for (size_t q = 0; q < s.nbrCount[band[head]]; ++q) add(s.nbr[size_t(band[head]) * kMaxNeighbours + q]);
   for (uint32_t u : band) s.inBand[u] = 0;
@@ -845,14 +874,151 @@ bool bandRows(Tesselator::State& s, size_t na, size_t nb, const Tube& tube, cons
   return true;
 }
 
+constexpr float kRowSpacing = 1.5f;  // surface rows: at most this far apart along the tube (desiredRadius)
+constexpr size_t kMinRowVertices = 4, kMaxRowVertices = 32;
+
+// Loop L (m vertices) resampled at `count` points evenly spaced along its length, from its first vertex on, walked
+// forwards or backwards; `nearest` gets the loop vertex nearer each point.
+void resampleLoop(const Tesselator::State& s, const uint32_t* L, size_t m, bool backwards, size_t count, glm::vec3* out,
+                  uint32_t* nearest) {
+  const auto vertex = [&](size_t k) { return L[backwards ? (m - k % m) % m : k % m]; };
+  const auto at = [&](size_t k) { return s.vpos[vertex(k)]; };
+  float total = 0.0f;
+  for (size_t k = 0; k < m; ++k) total += glm::length(at(k + 1) - at(k));
+  size_t seg = 0;
+  float walked = 0.0f;
+  for (size_t q = 0; q < count; ++q) {
+    const float want = total * float(q) / float(count);
+    float len = glm::length(at(seg + 1) - at(seg));
+    while (seg + 1 < m && walked + len < want) {
+      walked += len;
+      ++seg;
+      len = glm::length(at(seg + 1) - at(seg));
+    }
+    const float f = len > 0.0f ? std::clamp((want - walked) / len, 0.0f, 1.0f) : 0.0f;
+    out[q] = at(seg) + f * (at(seg + 1) - at(seg));
+    nearest[q] = vertex(f < 0.5f ? seg : seg + 1);
+  }
+}
+
+// Where the ray from `from` (inside the solid: F > iso) along unit `dir` first leaves it, within `reach`: stepped a
+// quarter desiredRadius at a time, then regula falsi (Illinois) on F - iso to 1e-4 desiredRadius. False if `from` is
+// not inside or the ray does not leave the solid within reach.
+bool rayExit(const Field& field, FieldScratch& scratch, glm::vec3 from, glm::vec3 dir, float reach, float h,
+             glm::vec3& out) {
+  const float iso = field.iso(), step = 0.25f * h;
+  float tIn = 0.0f, fIn = field.value(from, scratch) - iso;
+  if (!(fIn > 0.0f)) return false;
+  for (float t = step; t < reach + step; t += step) {
+    const float f = field.value(from + t * dir, scratch) - iso;
+    if (f > 0.0f) {
+      tIn = t, fIn = f;
+      continue;
+    }
+    float tOut = t, fOut = f;
+    for (int it = 0; it < 16 && tOut - tIn > 1e-4f * h; ++it) {
+      const float tm = tIn + (tOut - tIn) * fIn / (fIn - fOut);
+      const float fm = field.value(from + tm * dir, scratch) - iso;
+      if (fm > 0.0f) {
+        tIn = tm, fIn = fm;
+        fOut *= 0.5f;
+      } else {
+        tOut = tm, fOut = fm;
+        fIn *= 0.5f;
+      }
+    }
+    out = from + (fIn < -fOut ? tIn : tOut) * dir;  // the nearer to the surface
+    return true;
+  }
+  return false;
+}
+
+// `rows` rows of new vertices on the surface between rims A and B (addVertex) into s.ring / s.ringStart, for rims
+// whose band holds too few particles for rows of its own (a neck, wrist or ankle about as thin as the particle
+// spacing: rings of three or four particles the fans could not mesh). Both rims are resampled at the same number of
+// points evenly along their length (as many as space a ring of their mean radius about a desiredRadius apart,
+// kMinRowVertices to kMaxRowVertices), B's way round, A's turned to lie closest to B's; row k takes the points a
+// fraction (k + 1) / (rows + 1) of the way from A's to B's, each moved onto the surface by Newton steps
+// (projectOntoSurface), with the field's normal and the particles' colour rule there. False (adding nothing) if a
+// point does not reach the surface or its normal faces away from both rims' normals there.
+bool surfaceRows(Tesselator::State& s, const uint32_t* A, size_t na, const uint32_t* B, size_t nb, const Tube& tube,
+                 const LoopShape& sa, const LoopShape& sb, size_t rows, float h, float colorExp) {
+  const Field& field = *s.field;
+  const float radius = 0.5f * (sa.radius + sb.radius);
+  const size_t count = std::clamp(size_t(std::lround(6.2831853f * radius / h)), kMinRowVertices, kMaxRowVertices);
+  glm::vec3 ra[kMaxRowVertices], rb[kMaxRowVertices];
+  uint32_t va[kMaxRowVertices], vb[kMaxRowVertices];
+  resampleLoop(s, A, na, /*backwards=*/true, count, ra, va);
+  resampleLoop(s, B, nb, /*backwards=*/false, count, rb, vb);
+  size_t shift = 0;
+  float best = FLT_MAX;
+  for (size_t q = 0; q < count; ++q) {
+    float cost = 0.0f;
+    for (size_t k = 0; k < count; ++k) {
+      const glm::vec3 d = ra[(k + q) % count] - rb[k];
+      cost += glm::dot(d, d);
+    }
+    if (cost < best) best = cost, shift = q;
+  }
+  Box box;
+  for (size_t k = 0; k < count; ++k) box.extend(ra[k]), box.extend(rb[k]);
+  box.lo -= glm::vec3(3.0f * h);  // room for the Newton steps
+  box.hi += glm::vec3(3.0f * h);
+  field.prepare(box, s.rowScratch);
+  const size_t first = s.vertexCount();
+  s.ring.clear();
+  s.ringStart.assign(1, 0);
+  for (size_t r = 0; r < rows; ++r) {
+    const float t = float(r + 1) / float(rows + 1);
+    for (size_t k = 0; k < count; ++k) {
+      const glm::vec3 a = ra[(k + shift) % count], b = rb[k];
+      const glm::vec3 towards = a + t * (b - a), centre = tube.from + tube.along(towards) * tube.axis;
+      const float away = glm::length(towards - centre);
+      glm::vec3 p;
+      if (!(away > 0.0f) || !rayExit(field, s.rowScratch, centre, (towards - centre) / away, away + 2.0f * h, h, p))
+        break;
+      const FieldSample fs = field.sample(p, s.rowScratch);
+      const glm::vec3 normal = -glm::normalize(fs.gradient);
+      // Facing the axis: the steps reached another surface (or the tube turned inside out).
+      const glm::vec3 radial = p - tube.from - tube.along(p) * tube.axis;
+      if (!(glm::dot(normal, radial) > -0.25f * glm::length(radial))) break;
+      const glm::vec3 color = vertexColor(field, colorExp, p, fs.owner, s.rowScratch, fs, s.rowScratch.lastWinner);
+      s.ring.push_back(
+          addVertex(s, p, normal, glm::clamp(color, 0.0f, 1.0f), t < 0.5f ? va[(k + shift) % count] : vb[k]));
+    }
+    if (s.ring.size() != (r + 1) * count) break;
+    s.ringStart.push_back(s.ring.size());
+  }
+  if (s.ringStart.size() == rows + 1) return true;
+  dropVerticesFrom(s, first);
+  return false;
+}
+
+// s.strip: A to the first row of s.ring, each row to the next, the last to B (appendStrip; each row's edges used once
+// each way), when it fits (stripFits).
+bool stripThroughRows(Tesselator::State& s, const uint32_t* A, size_t na, const uint32_t* B, size_t nb, size_t rows,
+                      float h) {
+  s.strip.clear();
+  const uint32_t* from = A;
+  size_t nFrom = na;
+  for (size_t r = 0; r < rows; ++r) {
+    uint32_t* row = s.ring.data() + s.ringStart[r];
+    const size_t nRow = s.ringStart[r + 1] - s.ringStart[r];
+    if (!appendStrip(s, from, nFrom, row, nRow, h)) return false;
+    std::reverse(row, row + nRow);  // the row's edges, the other way round for the next strip
+    from = row, nFrom = nRow;
+  }
+  return appendStrip(s, from, nFrom, B, nb, h) && stripFits(s, h);
+}
+
 // Joins hole loops A and B, the rims of one tube (bridgeTubes), by a strip (appendStrip). When that strip would lie
 // too far off the surface (the rims rings apart, where the particles between them made no triangle), through rows of
 // those particles: one middle ring of the rims' neighbours (bandRows over the near band), else 2 to kMaxRows rows of
-// the whole band (a neck opened up over several rings at the file's fidelity): A to the first row, each row to the
-// next, the last to B, each row's edges used once each way. All or nothing: returns false, adding nothing, when no
-// choice fits (stripFits).
+// the whole band (a neck opened up over several rings at the file's fidelity); else through surface rows of new
+// vertices about kRowSpacing desiredRadius apart (surfaceRows). All or nothing: returns false, adding nothing, when no
+// choice fits (stripThroughRows).
 bool bridgeLoops(Tesselator::State& s, const uint32_t* A, size_t na, const uint32_t* B, size_t nb, const LoopShape& sa,
-                 const LoopShape& sb, float h, size_t& boundary) {
+                 const LoopShape& sb, float h, float colorExp, size_t& boundary) {
   s.strip.clear();
   bool fits = appendStrip(s, A, na, B, nb, h) && stripFits(s, h);
   Tube tube{sa.centroid, sb.centroid - sa.centroid, {}, {}, 0.0f};
@@ -861,19 +1027,14 @@ bool bridgeLoops(Tesselator::State& s, const uint32_t* A, size_t na, const uint3
   tangentBasis(tube.axis / std::sqrt(tube.len2), tube.b0, tube.b1);
   for (size_t rows = 1; rows <= kMaxRows && !fits; ++rows) {
     if (rows <= 2) bandParticles(s, A, na, B, nb, tube, sa, sb, rows == 1);
-    if (!bandRows(s, na, nb, tube, sb, rows)) continue;
-    s.strip.clear();
-    const uint32_t* from = A;
-    size_t nFrom = na;
-    fits = true;
-    for (size_t r = 0; r < rows && fits; ++r) {
-      uint32_t* row = s.ring.data() + s.ringStart[r];
-      const size_t nRow = s.ringStart[r + 1] - s.ringStart[r];
-      fits = appendStrip(s, from, nFrom, row, nRow, h);
-      std::reverse(row, row + nRow);  // the row's edges, the other way round for the next strip
-      from = row, nFrom = nRow;
-    }
-    fits = fits && appendStrip(s, from, nFrom, B, nb, h) && stripFits(s, h);
+    fits = bandRows(s, na, nb, tube, sb, rows) && stripThroughRows(s, A, na, B, nb, rows, h);
+  }
+  if (!fits) {
+    const size_t first = s.vertexCount();
+    const size_t rows =
+        std::clamp<size_t>(size_t(std::ceil(std::sqrt(tube.len2) / (kRowSpacing * h))), 2, kMaxRows + 1) - 1;
+    fits = surfaceRows(s, A, na, B, nb, tube, sa, sb, rows, h, colorExp) && stripThroughRows(s, A, na, B, nb, rows, h);
+    if (!fits) dropVerticesFrom(s, first);
   }
   if (!fits) return false;
   for (size_t t = 0; t < s.strip.size(); t += 3) addTriangle(s, s.strip[t], s.strip[t + 1], s.strip[t + 2], &boundary);
@@ -883,7 +1044,7 @@ bool bridgeLoops(Tesselator::State& s, const uint32_t* A, size_t na, const uint3
 // The round's hole loops into s.loops / s.loopStart: the closed ones of 3 to maxHoleLoop edges. The others are marked
 // to be opened up (s.openUp); returns how many.
 size_t collectLoops(Tesselator::State& s, const TesselatorOptions& o) {
-  const size_t n = s.size();
+  const size_t n = s.vertexCount();
   size_t open = 0;
   s.loops.clear();
   s.loopStart.assign(1, 0);
@@ -907,37 +1068,39 @@ size_t collectLoops(Tesselator::State& s, const TesselatorOptions& o) {
 // s.loopBridged: capping them would cut the limb off. Two loops are rims of one tube when they face each other
 // (facingRims), lie on different pieces of the mesh (joining two holes of one piece would make a handle) and the solid
 // runs between them (solidBetween).
-void bridgeTubes(Tesselator::State& s, float h, size_t& boundary) {
-  const size_t loopCount = s.loopStart.size() - 1, n = s.size();
+void bridgeTubes(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary) {
+  const size_t loopCount = s.loopStart.size() - 1;
   if (loopCount < 2) return;
   std::vector<LoopShape> shapes(loopCount);
   for (size_t k = 0; k < loopCount; ++k)
     shapes[k] = loopShape(s, &s.loops[s.loopStart[k]], s.loopStart[k + 1] - s.loopStart[k]);
-  // The pieces (built on first need: most rounds have no facing pair): vertices joined by triangles, but never
-  // through a vertex on two loops (or twice on one), where a piece cut off may still touch the rest.
-  std::vector<uint8_t>& onLoops = s.onLoops;
+  // The pieces (built on first need: most rounds have no facing pair): triangles joined across their shared edges, so
+  // that a piece which touches the rest at a vertex only (one on two loops, or a pinch that pass F will cut) is a
+  // piece of its own. s.heTri gets every half-edge's triangle (unfoldTriangles builds its own again).
   std::optional<DisjointSets> pieces;
-  const auto buildPieces = [&] {
-    pieces.emplace(n);
-    onLoops.assign(n, 0);
-    for (uint32_t v : s.loops) onLoops[v] = uint8_t(std::min(onLoops[v] + 1, 2));
-    for (size_t t = 0; t < s.tris.size(); t += 3) {
-      uint32_t first = ~0u;
-      for (size_t k = 0; k < 3; ++k) {
-        const uint32_t v = s.tris[t + k];
-        if (onLoops[v] > 1) continue;
-        if (first == ~0u)
-          first = v;
-        else
-          pieces->unite(first, v);
-      }
-    }
+  const auto slotOf = [&](uint32_t a, uint32_t b) {  // a -> b's half-edge slot, or SIZE_MAX
+    const uint32_t* to = &s.heTo[size_t(a) * kMaxHalfEdges];
+    for (size_t k = 0; k < s.heCount[a]; ++k)
+      if (to[k] == b) return size_t(a) * kMaxHalfEdges + k;
+    return SIZE_MAX;
   };
-  // A loop's piece: that of its first vertex on no other loop (~0u: none).
+  const auto buildPieces = [&] {
+    const size_t triangles = s.tris.size() / 3;
+    pieces.emplace(triangles);
+    s.heTri.resize(s.heTo.size());
+    for (uint32_t t = 0; t < triangles; ++t)
+      for (size_t k = 0; k < 3; ++k) s.heTri[slotOf(s.tris[3 * t + k], s.tris[3 * t + (k + 1) % 3])] = t;
+    for (uint32_t t = 0; t < triangles; ++t)
+      for (size_t k = 0; k < 3; ++k) {
+        const size_t twin = slotOf(s.tris[3 * t + (k + 1) % 3], s.tris[3 * t + k]);
+        if (twin != SIZE_MAX) pieces->unite(t, s.heTri[twin]);
+      }
+  };
+  // A loop's piece: that of the triangle along its first edge (hole edge u -> w borders the triangle of w -> u).
   const auto pieceOf = [&](size_t k) {
-    for (size_t q = s.loopStart[k]; q < s.loopStart[k + 1]; ++q)
-      if (onLoops[s.loops[q]] == 1) return pieces->find(s.loops[q]);
-    return ~0u;
+    const size_t slot = slotOf(s.loops[s.loopStart[k] + 1], s.loops[s.loopStart[k]]);
+    IMPS_DCHECK(slot != SIZE_MAX);
+    return slot == SIZE_MAX ? ~0u : pieces->find(s.heTri[slot]);
   };
   std::vector<std::pair<float, std::pair<uint32_t, uint32_t>>> pairs;
   for (uint32_t a = 0; a < loopCount; ++a)
@@ -951,10 +1114,13 @@ void bridgeTubes(Tesselator::State& s, float h, size_t& boundary) {
   std::sort(pairs.begin(), pairs.end());
   for (const auto& [dist, ab] : pairs) {
     const auto [a, b] = ab;
-    if (s.loopBridged[a] || s.loopBridged[b]) continue;
+    if (s.loopBridged[a] || s.loopBridged[b] || pieceOf(a) == pieceOf(b)) continue;  // (joined by an earlier strip)
     const size_t na = s.loopStart[a + 1] - s.loopStart[a], nb = s.loopStart[b + 1] - s.loopStart[b];
-    if (bridgeLoops(s, &s.loops[s.loopStart[a]], na, &s.loops[s.loopStart[b]], nb, shapes[a], shapes[b], h, boundary))
+    if (bridgeLoops(s, &s.loops[s.loopStart[a]], na, &s.loops[s.loopStart[b]], nb, shapes[a], shapes[b],
+                    o.desiredRadius, 1.0f / o.colorWidth, boundary)) {
       s.loopBridged[a] = s.loopBridged[b] = 1;
+      pieces->unite(pieceOf(a), pieceOf(b));
+    }
   }
 }
 
@@ -987,7 +1153,7 @@ void projectVertices(Tesselator::State& s, const TesselatorOptions& o) {
       FieldSample fs;
       uint32_t winner = 0;
       projectVertex(s, field, h, i, scratch, fs, winner);
-      s.vcol[i] = vertexColor(s, field, colorExp, i, scratch, fs, winner);
+      s.vcol[i] = vertexColor(field, colorExp, s.pos[i], s.owner[i], scratch, fs, winner);
     }
   });
   s.cacheValid = true;
@@ -1072,15 +1238,15 @@ size_t assembleTriangles(Tesselator::State& s, const TesselatorOptions& o) {
 }
 
 size_t repairHoles(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary) {
-  const size_t n = s.size();
-  s.holeTo.resize(n * 4);
   size_t unfilled = 0;
   for (int round = 0; round < 4 && boundary > 0; ++round) {
+    const size_t n = s.vertexCount();  // (the surface rows of an earlier round or call add vertices)
+    s.holeTo.resize(n * 4);
     collectHoles(s);
     s.holeUsed.assign(n * 4, 0);
     s.openUp.assign(n, 0);
     unfilled = collectLoops(s, o);
-    bridgeTubes(s, o.desiredRadius, boundary);
+    bridgeTubes(s, o, boundary);
     // Every loop not bridged is capped by ear clipping.
     for (size_t k = 0; k + 1 < s.loopStart.size(); ++k) {
       if (s.loopBridged[k]) continue;
@@ -1101,7 +1267,7 @@ size_t repairHoles(Tesselator::State& s, const TesselatorOptions& o, size_t& bou
 }
 
 size_t markPinchedVertices(Tesselator::State& s, const TesselatorOptions& o) {
-  const size_t n = s.size(), chunks = (n + kChunk - 1) / kChunk;
+  const size_t n = s.vertexCount(), chunks = (n + kChunk - 1) / kChunk;
   s.openUp.resize(n);
   s.dropSlot.resize(n * kMaxHalfEdges);
   s.chunkOpen.assign(chunks, 0);
@@ -1602,7 +1768,7 @@ size_t unfoldTriangles(Tesselator::State& s) {
   // The triangle of each half-edge out of a fold's corners (the repairs look up no other, but for corners a flip
   // brings in: knowTrianglesAround), in one scan; the repairs keep them up to date.
   s.heTri.resize(s.heTo.size());
-  s.heTriKnown.assign(s.size(), 0);
+  s.heTriKnown.assign(s.vertexCount(), 0);
   s.heTriAll = false;
   for (uint32_t t : s.folded)
     for (size_t k = 0; k < 3; ++k) s.heTriKnown[s.tris[3 * size_t(t) + k]] = 1;
@@ -1637,7 +1803,7 @@ size_t unfoldTriangles(Tesselator::State& s) {
 }
 
 void writeMesh(const Tesselator::State& s, const TesselatorOptions& o, Mesh& mesh) {
-  const size_t n = s.size();
+  const size_t n = s.vertexCount();
   mesh.positions.resize(3 * n);
   mesh.normals.resize(3 * n);
   mesh.colors.resize(3 * n);
@@ -1664,6 +1830,8 @@ void Tesselator::triangulate(Mesh& mesh) {
   const TesselatorOptions& o = options_;
   const auto t0 = std::chrono::steady_clock::now();
   mesh.clear();
+  s.addedFrom.clear();
+  stats_.surfaceRowVertices = 0;
   if (s.size() == 0 || s.field == nullptr) {
     stats_.triangles = stats_.boundaryEdges = stats_.filledTriangles = stats_.unfilledLoops = 0;
     stats_.meshMs = 0.0;
@@ -1693,6 +1861,12 @@ void Tesselator::triangulate(Mesh& mesh) {
   } else {
     writeMesh(s, o, mesh);
   }
+  // The surface rows' vertices were this render's: the arrays shared with the particles (s.nrm) are n long again.
+  // s.addedFrom stays for carryTexcoords.
+  stats_.surfaceRowVertices = stats_.fallback ? 0 : s.vertexCount() - s.size();
+  if (stats_.fallback) s.addedFrom.clear();
+  for (auto* v : {&s.vpos, &s.nrm, &s.vcol}) v->resize(s.size());
+  s.vok.resize(s.size());
   stats_.triangles = mesh.triangleCount();
   stats_.boundaryEdges = boundary;
   stats_.meshMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

@@ -137,7 +137,6 @@ struct Tesselator::State {
   std::vector<uint32_t> loops;       // repairHoles: one round's closed hole loops, concatenated
   std::vector<size_t> loopStart;     // repairHoles: loop k is loops[loopStart[k], loopStart[k + 1])
   std::vector<uint8_t> loopBridged;  // repairHoles: per loop, joined to another by bridgeTubes
-  std::vector<uint8_t> onLoops;      // bridgeTubes: per vertex, on how many loops (2: two or more)
   std::vector<uint32_t> strip;       // bridgeLoops: the strip's triangles before they are added
   std::vector<uint32_t> ring;        // bridgeLoops: rows of the band's particles round the tube, in order
   std::vector<size_t> ringStart;     // bridgeLoops: row k of several is ring[ringStart[k], ringStart[k + 1])
@@ -152,6 +151,10 @@ struct Tesselator::State {
   std::vector<uint32_t> folded;  // unfoldTriangles: the triangles winding against their corners' normals
   FieldScratch foldScratch;      // E and H: the field prepared over the vertices' box, on first use after pass A
   bool foldScratchReady = false;
+  FieldScratch rowScratch;  // surfaceRows: the field prepared round one tube (never a chunk's: see computeForces)
+  // The last triangulation's surface-row vertices (after the particles' in its mesh): for each, the particle whose
+  // carried texture coordinates it follows (carryTexcoords). Kept until the next triangulate().
+  std::vector<uint32_t> addedFrom;
   std::vector<size_t> chunkUnanimous;  // voteTriangles: per chunk its emitted unanimous triangles, then offsets
   std::vector<size_t> chunkOpen;       // assembleTriangles: per chunk its open directed edges
   // Per-update scratch (step's phases).
@@ -160,6 +163,9 @@ struct Tesselator::State {
 
   explicit State(const TesselatorOptions& o) : hash(o.cubeSize, o.bitsPerDim) {}
   size_t size() const { return pos.size(); }
+  // The triangulation's vertices: the particles (pass A), then the vertices the hole repair put on the surface for
+  // this render only (surface rows, pass E), at the end of s.vpos, s.nrm and s.vcol until triangulate() returns.
+  size_t vertexCount() const { return vpos.size(); }
   void resizeParticles(size_t n);
   // Appends a particle on the surface (grad: field gradient there).
   // Appends a particle. Takes its vectors by value: callers pass elements of the arrays this grows.

@@ -62,7 +62,8 @@ void Tesselator::carryTexcoords(Mesh& mesh) {
     if (s.carry) s.dropTexcoords();  // no textures: nothing to carry, nothing to pay for
     return;
   }
-  if (stats_.fallback || mesh.vertexCount() != s.size()) return;  // not one vertex per particle: projective
+  // Not a vertex per particle then the surface rows': projective.
+  if (stats_.fallback || mesh.vertexCount() != s.size() + s.addedFrom.size()) return;
   if (!s.carry || s.carryLayers != mesh.layerGens.size()) {
     s.dropTexcoords();
     s.carry = true;
@@ -71,7 +72,7 @@ void Tesselator::carryTexcoords(Mesh& mesh) {
   }
   s.texGens = mesh.layerGens;  // the pose of this mesh; update(skeleton) refreshes them
   const size_t n = s.size();
-  mesh.layerTexcoords.assign(4 * n, 0.0f);
+  mesh.layerTexcoords.assign(4 * mesh.vertexCount(), 0.0f);
   parallelFor((n + kChunk - 1) / kChunk, options_.threads, [&](size_t c) {
     for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
       const int32_t oldLayer[2] = {s.texLayer[2 * i], s.texLayer[2 * i + 1]};
@@ -95,6 +96,32 @@ void Tesselator::carryTexcoords(Mesh& mesh) {
       }
     }
   });
+  // The surface rows' vertices: the coordinates of the particle each follows, moved by what the layer's generator maps
+  // the step from that particle's vertex to it (a sphere generator's u unwrapped, as advectTexcoords does); the
+  // generator's own mapping for a layer the particle does not carry.
+  for (size_t v = n; v < mesh.vertexCount(); ++v) {
+    const uint32_t p = s.addedFrom[v - n];
+    for (size_t k = 0; k < 2; ++k) {
+      const int32_t l = mesh.layers[2 * v + k];
+      glm::vec2 uv(0.0f);
+      if (l >= 0) {
+        const TexGen& gen = mesh.layerGens[size_t(l)];
+        uv = gen.map(mesh.position(v));
+        const size_t slot = s.texLayer[2 * p] == l ? 0 : (s.texLayer[2 * p + 1] == l ? 1 : 2);
+        if (slot < 2) {
+          glm::vec2 step = uv - gen.map(mesh.position(p));
+          step.x -= std::round(step.x);
+          uv = s.texUv[2 * p + slot] + step;
+        }
+      }
+      mesh.layerTexcoords[4 * v + 2 * k] = uv.x;
+      mesh.layerTexcoords[4 * v + 2 * k + 1] = uv.y;
+    }
+    if (mesh.layers[2 * v] >= 0) {
+      mesh.texcoords[2 * v] = mesh.layerTexcoords[4 * v];
+      mesh.texcoords[2 * v + 1] = mesh.layerTexcoords[4 * v + 1];
+    }
+  }
 }
 
 }  // namespace imps

@@ -58,9 +58,9 @@ void particles(const imps::Scene& scene, const imps::SkeletonCache& skeleton) {
   }
   imps::Mesh mesh;
   tess.triangulate(mesh);
-  // One vertex per particle, unless the triangulation could not be closed and Marching Cubes stood in for it
-  // (Tesselator::triangulate's fallback, e.g. a radius-3 ball capped at 512 particles).
-  FUZZ_CHECK(tess.stats().fallback || mesh.vertexCount() == tess.particles().size());
+  // One vertex per particle then the surface rows', unless the triangulation could not be closed and Marching Cubes
+  // stood in for it (Tesselator::triangulate's fallback, e.g. a radius-3 ball capped at 512 particles).
+  FUZZ_CHECK(tess.stats().fallback || mesh.vertexCount() == tess.particles().size() + tess.stats().surfaceRowVertices);
   // Textures (and, with textureMode "carried", the particles' carried coordinates): one more update carries them.
   imps::textureMesh(mesh, skeleton, 1);
   tess.carryTexcoords(mesh);

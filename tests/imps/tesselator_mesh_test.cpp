@@ -257,6 +257,101 @@ TEST(TesselatorMesh, HoleRepairJoinsTheTwoRimsOfATubeInsteadOfCappingThem) {
   }
 }
 
+// E, tube rims on pieces that touch at one vertex: the sphere's two caps of the test above, with the south pole's
+// particle merged into the north pole's (the lower cap's fan at it now has that corner too: a vertex with two fans, as
+// where the repair's caps met at the biped's chin). The caps are still two pieces across their edges, so the rims are
+// joined by a strip; pass F then cuts the pinch, and the sphere stays one closed surface (capping the rims would have
+// left two).
+TEST(TesselatorMesh, HoleRepairJoinsTubeRimsWhosePiecesTouchOnlyAtAVertex) {
+  Sphere sphere(300);
+  auto& s = sphere.s;
+  const float h = sphere.options.desiredRadius;
+  sphere.fansAndVotes();
+  std::vector<uint8_t> inBand(s.size(), 0);
+  for (uint32_t i = 0; i < s.size(); ++i) inBand[i] = std::fabs(s.vpos[i].z) < 0.5f * h;
+  withdrawAround(sphere, inBand);
+  assembleTriangles(s, sphere.options);
+  uint32_t north = 0, south = 0;
+  for (uint32_t i = 0; i < s.size(); ++i) {
+    if (s.vpos[i].z > s.vpos[north].z) north = i;
+    if (s.vpos[i].z < s.vpos[south].z) south = i;
+  }
+  std::vector<uint32_t> tris = s.tris;
+  std::replace(tris.begin(), tris.end(), south, north);
+  setTriangles(s, tris);
+  size_t boundary = openEdges(s);
+  ASSERT_EQ(markPinchedVertices(s, sphere.options), 1u) << "the poles' merge is the one pinch";
+  size_t unfilled = repairHoles(s, sphere.options, boundary);
+  EXPECT_EQ(unfilled, 0u);
+  EXPECT_EQ(unpinchVertices(s, sphere.options, boundary, unfilled), 0u);
+  EXPECT_EQ(boundary, 0u);
+  Mesh mesh;
+  writeMesh(s, sphere.options, mesh);
+  const MeshTopology t = analyzeTopology(mesh);
+  EXPECT_TRUE(t.closedManifold());
+  EXPECT_EQ(t.components, 1u) << "the rims were capped: the sphere is meshed as two pieces";
+}
+
+// E, surface rows: a peanut (two unit metaballs a distance 2 apart, blended: a waist of radius 0.29 between lobes of
+// radius 1) with particles on the lobes only, none within 0.8 of the waist's plane. The rims (radius 0.98, 1.6 apart,
+// nine desiredRadius) are too far apart for one strip (it would pass 0.7 outside the waist) and there are no particles
+// between them for rows of their own: the repair joins them through rows of new vertices on the surface, and the
+// peanut stays one closed surface whose every vertex lies on it. (Without the surface rows: two pieces.)
+TEST(TesselatorMesh, HoleRepairJoinsRimsWithNoParticlesBetweenThroughSurfaceRows) {
+  const size_t perLobe = 400;
+  std::vector<glm::vec3> points;
+  for (const float side : {-1.0f, 1.0f})
+    for (const glm::vec3& p : test::fibonacciSphere(perLobe)) {
+      const glm::vec3 q = p + glm::vec3(side, 0.0f, 0.0f);
+      if (q.x * side > 0.8f) points.push_back(q);  // the lobe's far side, clear of the waist
+    }
+  Sphere peanut(points, test::sphereOptions(perLobe));
+  BlendFunction blend;
+  blend.defaultParam = -8.0f;
+  peanut.field =
+      Field({Primitive::metaball(glm::vec3(-1, 0, 0), kRadius), Primitive::metaball(glm::vec3(1, 0, 0), kRadius)},
+            {-8.0f, -8.0f}, {glm::vec3(0.5f), glm::vec3(0.5f)}, blend, BlendSets::all(2));
+  auto& s = peanut.s;
+  s.field = &peanut.field;
+  const float h = peanut.options.desiredRadius;
+  peanut.fansAndVotes();
+  size_t boundary = assembleTriangles(s, peanut.options);
+  {
+    Mesh before;
+    writeMesh(s, peanut.options, before);
+    ASSERT_EQ(analyzeTopology(before).components, 2u) << "the lobes are meshed apart";
+  }
+  const size_t particles = s.size(), assembled = s.tris.size() / 3;
+  EXPECT_EQ(repairHoles(s, peanut.options, boundary), 0u);
+  EXPECT_EQ(boundary, 0u);
+  ASSERT_GT(s.vertexCount(), particles) << "no surface rows were added";
+  EXPECT_EQ(s.addedFrom.size(), s.vertexCount() - particles);
+  for (uint32_t p : s.addedFrom) EXPECT_LT(p, particles) << "a surface-row vertex follows a particle";
+  Mesh mesh;
+  writeMesh(s, peanut.options, mesh);
+  const MeshTopology t = analyzeTopology(mesh);
+  EXPECT_TRUE(t.closedManifold());
+  EXPECT_EQ(t.components, 1u) << "the rims were capped: the peanut is meshed as two pieces";
+  EXPECT_EQ(t.eulerCharacteristic, 2);
+  EXPECT_EQ(mesh.vertexCount(), s.vertexCount());
+  for (size_t v = particles; v < mesh.vertexCount(); ++v) {  // on the surface, outward normals, the field's colour
+    const FieldSample fs = peanut.field.sample(mesh.position(v));
+    EXPECT_LT(std::fabs(fs.value - 1.0f) / glm::length(fs.gradient), 1e-3f * h) << "vertex " << v;
+    EXPECT_GT(glm::dot(mesh.normal(v), -glm::normalize(fs.gradient)), 0.999f) << "vertex " << v;
+    EXPECT_EQ(mesh.color(v), glm::vec3(0.5f)) << "vertex " << v;
+  }
+  size_t waist = 0;
+  for (size_t k = assembled; k < s.tris.size() / 3; ++k) {  // the strips: outward, and near the surface
+    const glm::vec3 a = s.vpos[s.tris[3 * k]], b = s.vpos[s.tris[3 * k + 1]], c = s.vpos[s.tris[3 * k + 2]];
+    const glm::vec3 centroid = (a + b + c) / 3.0f;
+    const FieldSample fs = peanut.field.sample(centroid);
+    EXPECT_LT(glm::dot(glm::cross(b - a, c - a), fs.gradient), 0.0f) << "strip triangle " << k << " faces inward";
+    EXPECT_LT(std::fabs(fs.value - 1.0f) / glm::length(fs.gradient), 2.0f * h) << "strip triangle " << k;
+    waist += std::fabs(centroid.x) < 0.1f;
+  }
+  EXPECT_GT(waist, 0u) << "no triangle runs round the waist";
+}
+
 // ... but two holes that face each other on two bodies (two spheres 0.1 apart, the holes on their facing sides) are not
 // the rims of a tube: the air between them is no solid to join across. Each is capped; the bodies stay two.
 TEST(TesselatorMesh, HoleRepairDoesNotJoinHolesFacingEachOtherAcrossAGap) {

@@ -105,6 +105,65 @@ TEST(CarriedTexcoords, UnderARigidMotionTheCarriedCoordinatesAgreeWithTheGenerat
   EXPECT_LT(worst, 0.02) << "over " << compared << " vertex layers";
 }
 
+// At the thesis's fidelity (~900 particles) the repair joins a wrist's rims through rows of new vertices on the
+// surface in some renders (Tesselator::triangulate). Those vertices carry coordinates too: a nearby particle's, moved
+// by what the layer's generator maps the step to. So each one's offset from its generator's mapping is that of a
+// particle within a few desiredRadius (to rounding), and some of those offsets are not zero (the coordinates really
+// are carried, not projected).
+TEST(CarriedTexcoords, SurfaceRowVerticesContinueTheParticlesCoordinates) {
+  Loaded l = load("textured_biped.wrl");
+  l.options.textureMode = TextureMode::Carried;
+  for (float* v : {&l.options.desiredRadius, &l.options.queryRadius, &l.options.cubeSize}) *v *= 1.728f;
+  const float h = l.options.desiredRadius;
+  SkeletonCache cache(l.character);
+  Tesselator tess(l.options);
+  Mesh mesh;
+  std::vector<int> joints;
+  std::vector<glm::quat> rest;
+  for (const char* name : {"L_UpperArm", "R_UpperArm", "L_Forearm", "R_Forearm", "L_Thigh", "R_Thigh"}) {
+    joints.push_back(l.character.findJoint(name));
+    rest.push_back(cache.local(joints.back()).rotation);
+  }
+  // Vertex v's offset from its layer's generator in its slot k (a sphere generator's u unwrapped).
+  const auto offset = [&](size_t v, size_t k) {
+    const glm::vec2 uv(mesh.layerTexcoords[4 * v + 2 * k], mesh.layerTexcoords[4 * v + 2 * k + 1]);
+    glm::vec2 d = uv - mesh.layerGens[size_t(mesh.layers[2 * v + k])].map(mesh.position(v));
+    d.x -= std::round(d.x);
+    return d;
+  };
+  size_t withRows = 0, checked = 0, moved = 0;
+  for (int f = 0; f < 300; ++f) {
+    const float angle = glm::radians(45.0f * std::sin(0.2f * float(f)));
+    for (size_t k = 0; k < joints.size(); ++k)
+      cache.setRotation(joints[k], rest[k] * glm::angleAxis(k % 2 ? -angle : angle, glm::vec3(0, 0, 1)));
+    cache.update();
+    drawFrame(tess, cache, mesh);
+    if (tess.stats().fallback) continue;
+    const size_t particles = tess.particles().size();
+    ASSERT_EQ(mesh.vertexCount(), particles + tess.stats().surfaceRowVertices);
+    ASSERT_EQ(mesh.layerTexcoords.size(), 4 * mesh.vertexCount()) << "render " << f << " is no longer carried";
+    withRows += tess.stats().surfaceRowVertices > 0;
+    for (size_t v = particles; v < mesh.vertexCount(); ++v)
+      for (size_t k = 0; k < 2; ++k) {
+        const int32_t layer = mesh.layers[2 * v + k];
+        if (layer < 0) continue;
+        const glm::vec2 own = offset(v, k);
+        bool found = false;
+        for (size_t p = 0; p < particles && !found; ++p)
+          if (glm::length(mesh.position(p) - mesh.position(v)) < 4.0f * h)
+            for (size_t q = 0; q < 2 && !found; ++q)
+              found = mesh.layers[2 * p + q] == layer && glm::length(offset(p, q) - own) < 1e-4f;
+        EXPECT_TRUE(found) << "render " << f << ": vertex " << v << "'s layer " << layer << " offset (" << own.x << ", "
+                           << own.y << ") is no nearby particle's";
+        ++checked;
+        moved += glm::length(own) > 1e-3f;
+      }
+  }
+  std::printf("%zu renders with surface rows; %zu textured row vertex layers, %zu of them off their generator\n",
+              withRows, checked, moved);
+  EXPECT_GT(moved, 0u) << "no carried coordinates on a surface row: nothing was checked";
+}
+
 TEST(CarriedTexcoords, ProjectiveModeAndUntexturedCharactersCarryNothing) {
   Loaded biped = load("textured_biped.wrl");
   biped.options.textureMode = TextureMode::Projective;

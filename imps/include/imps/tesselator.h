@@ -113,6 +113,8 @@ struct TesselatorStats {
   size_t openEdges = 0;        // last triangulate(): the particle triangulation's edges with one triangle after repair
   size_t pinchedVertices = 0;  // last triangulate(): its vertices whose triangles form more than one fan
   size_t foldedTriangles = 0;  // last triangulate(): triangles still winding against their corners' normals
+  size_t surfaceRowVertices = 0;  // last triangulate(): vertices the hole repair added on the surface (after the
+                                  // particles' own in the mesh; 0 for the fallback)
   bool fallback = false;       // last triangulate(): the mesh is the Marching Cubes fallback (see closedFallback)
   uint64_t fallbacks = 0;      // triangulations that fell back, since reset
   uint64_t updates = 0;        // total update() calls since reset
@@ -153,25 +155,28 @@ class Tesselator {
   void update(const Field& field);
 
   // Triangulates the current particles into `mesh` (replaced): one vertex per particle, in particle order, projected
-  // onto the surface with a Newton step; outward normals; colours blended over colorWidth. Uses the field of the last
-  // update (which must have happened). If that triangulation still has a hole or a pinched vertex after repair and
-  // options().closedFallback is set, `mesh` is instead Marching Cubes of the field at cell desiredRadius (closed and
-  // manifold; not one vertex per particle) and stats().fallback is set.
+  // onto the surface with a Newton step; outward normals; colours blended over colorWidth. Then, where the hole
+  // repair joined the two rims of a tube too thin for the particles (a neck or wrist about as thick as their spacing)
+  // through rows of new vertices on the surface, those stats().surfaceRowVertices vertices (this render's only).
+  // Uses the field of the last update (which must have happened). If that triangulation still has a hole or a pinched
+  // vertex after repair and options().closedFallback is set, `mesh` is instead Marching Cubes of the field at cell
+  // desiredRadius (closed and manifold; not one vertex per particle) and stats().fallback is set.
   void triangulate(Mesh& mesh);
 
   // updatesPerRender updates then one triangulation.
   void frame(const SkeletonCache& skeleton, Mesh& mesh);
 
   // Carried texture coordinates (options().textureMode == Carried; otherwise a no-op). Call after textureMesh() on
-  // the mesh triangulate() just made (one vertex per particle). Each particle keeps a (layer, u, v) for each of its
-  // vertex's two layers: a layer it already carries keeps its coordinates, a new one (a particle born by seeding, or
-  // a layer it did not have) takes its generator's mapping of the vertex; the mesh gets them all in
-  // mesh.layerTexcoords (and texcoords). Between calls the coordinates ride with the particles: unchanged through the
-  // differential transforms (the skin moves, the texture with it); when a particle moves over the surface on its own
-  // (repulsion, projection) they change by what the layer's generator maps that step to (the texture must not be
-  // dragged along); a fission's two particles get the parent's, moved by what their offsets map to; fusion keeps the
-  // survivor's. A mesh that is the Marching
-  // Cubes fallback, or one without layers, is left projective (a character without textures costs nothing).
+  // the mesh triangulate() just made. Each particle keeps a (layer, u, v) for each of its vertex's two layers: a layer
+  // it already carries keeps its coordinates, a new one (a particle born by seeding, or a layer it did not have)
+  // takes its generator's mapping of the vertex; the mesh gets them all in mesh.layerTexcoords (and texcoords).
+  // Between calls the coordinates ride with the particles: unchanged through the differential transforms (the skin
+  // moves, the texture with it); when a particle moves over the surface on its own (repulsion, projection) they
+  // change by what the layer's generator maps that step to (the texture must not be dragged along); a fission's two
+  // particles get the parent's, moved by what their offsets map to; fusion keeps the survivor's. A surface-row vertex
+  // (after the particles' in the mesh) takes a nearby particle's coordinates moved by what the generator maps the step
+  // from that particle's vertex to it, so the texture runs on across the rows. A mesh that is the Marching Cubes
+  // fallback, or one without layers, is left projective (a character without textures costs nothing).
   // Deterministic for any thread count, as every pass of the tesselator.
   void carryTexcoords(Mesh& mesh);
 
