@@ -938,9 +938,11 @@ bool rayExit(const Field& field, FieldScratch& scratch, glm::vec3 from, glm::vec
 // spacing: rings of three or four particles the fans could not mesh). Both rims are resampled at the same number of
 // points evenly along their length (as many as space a ring of their mean radius about a desiredRadius apart,
 // kMinRowVertices to kMaxRowVertices), B's way round, A's turned to lie closest to B's; row k takes the points a
-// fraction (k + 1) / (rows + 1) of the way from A's to B's, each moved onto the surface by Newton steps
-// (projectOntoSurface), with the field's normal and the particles' colour rule there. False (adding nothing) if a
-// point does not reach the surface or its normal faces away from both rims' normals there.
+// fraction (k + 1) / (rows + 1) of the way from A's to B's, each put on the surface where the ray from the tube's axis
+// through it leaves the solid (rayExit), with the field's normal and the particles' colour rule there; each follows
+// the rim vertex nearer its point on the nearer rim (s.addedFrom). False (adding nothing) if a ray finds no surface
+// within its point's distance plus two desiredRadius (the axis point outside, or the solid running on) or a vertex's
+// normal faces the axis (the ray reached another surface).
 bool surfaceRows(Tesselator::State& s, const uint32_t* A, size_t na, const uint32_t* B, size_t nb, const Tube& tube,
                  const LoopShape& sa, const LoopShape& sb, size_t rows, float h, float colorExp) {
   const Field& field = *s.field;
@@ -962,7 +964,7 @@ bool surfaceRows(Tesselator::State& s, const uint32_t* A, size_t na, const uint3
   }
   Box box;
   for (size_t k = 0; k < count; ++k) box.extend(ra[k]), box.extend(rb[k]);
-  box.lo -= glm::vec3(3.0f * h);  // room for the Newton steps
+  box.lo -= glm::vec3(3.0f * h);  // room for the rays beyond the rims' points
   box.hi += glm::vec3(3.0f * h);
   field.prepare(box, s.rowScratch);
   const size_t first = s.vertexCount();
@@ -979,7 +981,6 @@ bool surfaceRows(Tesselator::State& s, const uint32_t* A, size_t na, const uint3
         break;
       const FieldSample fs = field.sample(p, s.rowScratch);
       const glm::vec3 normal = -glm::normalize(fs.gradient);
-      // Facing the axis: the steps reached another surface (or the tube turned inside out).
       const glm::vec3 radial = p - tube.from - tube.along(p) * tube.axis;
       if (!(glm::dot(normal, radial) > -0.25f * glm::length(radial))) break;
       const glm::vec3 color = vertexColor(field, colorExp, p, fs.owner, s.rowScratch, fs, s.rowScratch.lastWinner);
@@ -1105,10 +1106,10 @@ void bridgeTubes(Tesselator::State& s, const TesselatorOptions& o, size_t& bound
   std::vector<std::pair<float, std::pair<uint32_t, uint32_t>>> pairs;
   for (uint32_t a = 0; a < loopCount; ++a)
     for (uint32_t b = a + 1; b < loopCount; ++b) {
-      if (!facingRims(shapes[a], shapes[b])) continue;
+      if (!facingRims(shapes[a], shapes[b]) || !solidBetween(s, shapes[a], shapes[b])) continue;
       if (!pieces) buildPieces();
       const uint32_t pa = pieceOf(a), pb = pieceOf(b);
-      if (pa == ~0u || pb == ~0u || pa == pb || !solidBetween(s, shapes[a], shapes[b])) continue;
+      if (pa == ~0u || pb == ~0u || pa == pb) continue;
       pairs.push_back({glm::length(shapes[b].centroid - shapes[a].centroid), {a, b}});
     }
   std::sort(pairs.begin(), pairs.end());
