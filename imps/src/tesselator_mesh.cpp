@@ -1065,6 +1065,35 @@ size_t collectLoops(Tesselator::State& s, const TesselatorOptions& o) {
   return open;
 }
 
+// The slot of directed edge a -> b in a's half-edge table, SIZE_MAX if there is none.
+size_t findHalfEdge(const Tesselator::State& s, uint32_t a, uint32_t b) {
+  const uint32_t* to = &s.heTo[size_t(a) * kMaxHalfEdges];
+  for (size_t k = 0; k < s.heCount[a]; ++k)
+    if (to[k] == b) return size_t(a) * kMaxHalfEdges + k;
+  return SIZE_MAX;
+}
+
+// The pieces of the triangulation: its triangles (indices into s.tris / 3) joined across shared edges, so that pieces
+// which touch at one vertex only (one on two loops, or a pinch) are pieces of their own. s.heTri gets every half-edge
+// slot's triangle (unfoldTriangles builds its own again).
+DisjointSets trianglePieces(Tesselator::State& s) {
+  const size_t triangles = s.tris.size() / 3;
+  DisjointSets pieces(triangles);
+  s.heTri.resize(s.heTo.size());
+  for (uint32_t t = 0; t < triangles; ++t)
+    for (size_t k = 0; k < 3; ++k) {
+      const size_t slot = findHalfEdge(s, s.tris[3 * t + k], s.tris[3 * t + (k + 1) % 3]);
+      IMPS_DCHECK(slot != SIZE_MAX);  // every triangle's half-edges are in the table
+      if (slot != SIZE_MAX) s.heTri[slot] = t;
+    }
+  for (uint32_t t = 0; t < triangles; ++t)
+    for (size_t k = 0; k < 3; ++k) {
+      const size_t twin = findHalfEdge(s, s.tris[3 * t + (k + 1) % 3], s.tris[3 * t + k]);
+      if (twin != SIZE_MAX) pieces.unite(t, s.heTri[twin]);
+    }
+  return pieces;
+}
+
 // Joins the loops that are the two rims of one tube by strips (bridgeLoops), nearest pairs first, setting
 // s.loopBridged: capping them would cut the limb off. Two loops are rims of one tube when they face each other
 // (facingRims), lie on different pieces of the mesh (joining two holes of one piece would make a handle) and the solid
@@ -1075,31 +1104,11 @@ void bridgeTubes(Tesselator::State& s, const TesselatorOptions& o, size_t& bound
   std::vector<LoopShape> shapes(loopCount);
   for (size_t k = 0; k < loopCount; ++k)
     shapes[k] = loopShape(s, &s.loops[s.loopStart[k]], s.loopStart[k + 1] - s.loopStart[k]);
-  // The pieces (built on first need: most rounds have no facing pair): triangles joined across their shared edges, so
-  // that a piece which touches the rest at a vertex only (one on two loops, or a pinch that pass F will cut) is a
-  // piece of its own. s.heTri gets every half-edge's triangle (unfoldTriangles builds its own again).
+  // The pieces (trianglePieces), built on first need: most rounds have no facing pair.
   std::optional<DisjointSets> pieces;
-  const auto slotOf = [&](uint32_t a, uint32_t b) {  // a -> b's half-edge slot, or SIZE_MAX
-    const uint32_t* to = &s.heTo[size_t(a) * kMaxHalfEdges];
-    for (size_t k = 0; k < s.heCount[a]; ++k)
-      if (to[k] == b) return size_t(a) * kMaxHalfEdges + k;
-    return SIZE_MAX;
-  };
-  const auto buildPieces = [&] {
-    const size_t triangles = s.tris.size() / 3;
-    pieces.emplace(triangles);
-    s.heTri.resize(s.heTo.size());
-    for (uint32_t t = 0; t < triangles; ++t)
-      for (size_t k = 0; k < 3; ++k) s.heTri[slotOf(s.tris[3 * t + k], s.tris[3 * t + (k + 1) % 3])] = t;
-    for (uint32_t t = 0; t < triangles; ++t)
-      for (size_t k = 0; k < 3; ++k) {
-        const size_t twin = slotOf(s.tris[3 * t + (k + 1) % 3], s.tris[3 * t + k]);
-        if (twin != SIZE_MAX) pieces->unite(t, s.heTri[twin]);
-      }
-  };
   // A loop's piece: that of the triangle along its first edge (hole edge u -> w borders the triangle of w -> u).
   const auto pieceOf = [&](size_t k) {
-    const size_t slot = slotOf(s.loops[s.loopStart[k] + 1], s.loops[s.loopStart[k]]);
+    const size_t slot = findHalfEdge(s, s.loops[s.loopStart[k] + 1], s.loops[s.loopStart[k]]);
     IMPS_DCHECK(slot != SIZE_MAX);
     return slot == SIZE_MAX ? ~0u : pieces->find(s.heTri[slot]);
   };
@@ -1107,7 +1116,7 @@ void bridgeTubes(Tesselator::State& s, const TesselatorOptions& o, size_t& bound
   for (uint32_t a = 0; a < loopCount; ++a)
     for (uint32_t b = a + 1; b < loopCount; ++b) {
       if (!facingRims(shapes[a], shapes[b]) || !solidBetween(s, shapes[a], shapes[b])) continue;
-      if (!pieces) buildPieces();
+      if (!pieces) pieces.emplace(trianglePieces(s));
       const uint32_t pa = pieceOf(a), pb = pieceOf(b);
       if (pa == ~0u || pb == ~0u || pa == pb) continue;
       pairs.push_back({glm::length(shapes[b].centroid - shapes[a].centroid), {a, b}});
@@ -1287,6 +1296,18 @@ namespace {
 // Removes the triangles that s.dropSlot marks at one of their corners (the pinched vertices' smaller fans), with
 // their half-edges, keeping `boundary` and s.openOut up to date as removeAround does.
 void removeSmallerFans(Tesselator::State& s, size_t& boundary) {
+  // A pinch whose fans lie on different pieces is all that joins them (where the repair's caps over a neck met at one
+  // vertex): cutting its smaller fan and capping the hole would leave a head or a hand apart for good. Every triangle
+  // round it goes instead, so that the repair sees both pieces' holes there and joins them as the rims of a tube.
+  DisjointSets pieces = trianglePieces(s);
+  for (uint32_t v = 0; v < s.vertexCount(); ++v) {
+    if (!s.openUp[v]) continue;
+    const size_t first = size_t(v) * kMaxHalfEdges;
+    bool apart = false;
+    for (size_t q = 1; q < s.heCount[v] && !apart; ++q)
+      apart = pieces.find(s.heTri[first + q]) != pieces.find(s.heTri[first]);
+    if (apart) std::fill_n(s.dropSlot.begin() + std::ptrdiff_t(first), s.heCount[v], uint8_t(1));
+  }
   std::vector<uint8_t>& drop = s.holeUsed;  // per triangle (scratch: the repair rebuilds it)
   drop.assign(s.tris.size() / 3, 0);
   for (size_t t = 0; t < s.tris.size(); t += 3)

@@ -292,6 +292,76 @@ TEST(TesselatorMesh, HoleRepairJoinsTubeRimsWhosePiecesTouchOnlyAtAVertex) {
   EXPECT_EQ(t.components, 1u) << "the rims were capped: the sphere is meshed as two pieces";
 }
 
+// F, a pinch that is all that joins two pieces: the sphere's band withdrawn as above, but each half capped on its own
+// (as when the repair saw no partner for either rim), and a vertex of the lower cap merged into the upper cap's
+// nearest: two fans at it, on two pieces. Cutting the smaller fan would leave the halves apart; pass F takes every
+// triangle round the pinch instead, so that the repair joins the two holes there as the rims of a tube: one closed
+// surface.
+TEST(TesselatorMesh, APinchThatIsAllThatJoinsTwoPiecesIsOpenedAndTheHolesJoined) {
+  Sphere sphere(300);
+  auto& s = sphere.s;
+  const float h = sphere.options.desiredRadius;
+  sphere.fansAndVotes();
+  std::vector<uint8_t> inBand(s.size(), 0);
+  for (uint32_t i = 0; i < s.size(); ++i) inBand[i] = std::fabs(s.vpos[i].z) < 0.5f * h;
+  withdrawAround(sphere, inBand);
+  assembleTriangles(s, sphere.options);
+  const std::vector<uint32_t> assembled = s.tris;
+  std::vector<uint32_t> halves[2];  // each half, capped alone
+  for (int upper = 0; upper < 2; ++upper) {
+    std::vector<uint32_t> half;
+    for (size_t t = 0; t < assembled.size(); t += 3)
+      if ((s.vpos[assembled[t]].z > 0.0f) == (upper == 1)) half.insert(half.end(), &assembled[t], &assembled[t] + 3);
+    // Its one hole loop (each open edge a -> b gives the hole edge b -> a), capped by a zigzag (no vertex gets more
+    // than a few of the cap's triangles: the half-edge table has room for kMaxHalfEdges).
+    std::map<uint32_t, uint32_t> hole;
+    std::set<std::pair<uint32_t, uint32_t>> edges;
+    for (size_t t = 0; t < half.size(); t += 3)
+      for (size_t k = 0; k < 3; ++k) edges.insert({half[t + k], half[t + (k + 1) % 3]});
+    for (const auto& [a, b] : edges)
+      if (!edges.count({b, a})) hole[b] = a;
+    ASSERT_GE(hole.size(), 3u);
+    std::vector<uint32_t> loop{hole.begin()->first};
+    while (hole.at(loop.back()) != loop.front()) loop.push_back(hole.at(loop.back()));
+    ASSERT_EQ(loop.size(), hole.size()) << "one hole loop";
+    for (size_t l = 0, r = loop.size() - 1, k = 0; r - l >= 2; ++k)
+      if (k % 2 == 0) {
+        half.insert(half.end(), {loop[l], loop[l + 1], loop[r]});
+        ++l;
+      } else {
+        half.insert(half.end(), {loop[l], loop[r - 1], loop[r]});
+        --r;
+      }
+    halves[upper] = half;
+  }
+  size_t pinchedBefore = 0;  // (the assembly beside the band leaves a few pinches of its own, within each half)
+  {
+    std::vector<uint32_t> both = halves[1];
+    both.insert(both.end(), halves[0].begin(), halves[0].end());
+    setTriangles(s, both);
+    ASSERT_EQ(openEdges(s), 0u);
+    pinchedBefore = markPinchedVertices(s, sphere.options);
+  }
+  // The upper piece's lowest vertex and the lower piece's highest: the lower's merged into the upper's.
+  uint32_t top = halves[1][0], bottom = halves[0][0];
+  for (uint32_t v : halves[1]) top = s.vpos[v].z < s.vpos[top].z ? v : top;
+  for (uint32_t v : halves[0]) bottom = s.vpos[v].z > s.vpos[bottom].z ? v : bottom;
+  std::replace(halves[0].begin(), halves[0].end(), bottom, top);
+  std::vector<uint32_t> both = halves[1];
+  both.insert(both.end(), halves[0].begin(), halves[0].end());
+  setTriangles(s, both);
+  size_t boundary = openEdges(s), unfilled = 0;
+  ASSERT_EQ(boundary, 0u);
+  ASSERT_EQ(markPinchedVertices(s, sphere.options), pinchedBefore + 1) << "the merged vertex is one more pinch";
+  EXPECT_EQ(unpinchVertices(s, sphere.options, boundary, unfilled), 0u);
+  EXPECT_EQ(boundary, 0u);
+  Mesh mesh;
+  writeMesh(s, sphere.options, mesh);
+  const MeshTopology t = analyzeTopology(mesh);
+  EXPECT_TRUE(t.closedManifold());
+  EXPECT_EQ(t.components, 1u) << "the pinch's smaller fan was cut: the halves are apart";
+}
+
 // E, surface rows: a peanut (two unit metaballs a distance 2 apart, blended: a waist of radius 0.29 between lobes of
 // radius 1) with particles on the lobes only, none within 0.8 of the waist's plane. The rims (radius 0.98, 1.6 apart,
 // nine desiredRadius) are too far apart for one strip (it would pass 0.7 outside the waist) and there are no particles
@@ -428,10 +498,48 @@ TEST(TesselatorMesh, ParticlesInAHoleOfALargerSurfaceAreNoPocket) {
   EXPECT_EQ(s.tris.size(), before);
 }
 
-// F: a vertex whose triangles form two closed fans (a square pyramid and a tetrahedron sharing their apex 0: every
-// edge has its twin, yet the mesh is pinched at 0) is found, the smaller fan's slots are marked, and the pass leaves
-// no pinched vertex, with the larger fan untouched.
+// F: a vertex whose triangles form two fans of one piece (the closed sphere with a particle of its southern half merged
+// into its north pole's: every edge has its twin, yet the mesh is pinched there) is found, the smaller fan's slots are
+// marked, and the pass leaves no pinched vertex, with the larger fan untouched.
 TEST(TesselatorMesh, PinchedVertexLosesItsSmallerFan) {
+  Sphere sphere(300);
+  auto& s = sphere.s;
+  sphere.fansAndVotes();
+  size_t boundary = assembleTriangles(s, sphere.options), unfilled = repairHoles(s, sphere.options, boundary);
+  ASSERT_EQ(unpinchVertices(s, sphere.options, boundary, unfilled), 0u);
+  ASSERT_EQ(boundary, 0u) << "a closed sphere to start from";
+  // The north pole, and the southernmost vertex with another number of triangles.
+  uint32_t north = 0;
+  for (uint32_t i = 0; i < s.size(); ++i) north = s.vpos[i].z > s.vpos[north].z ? i : north;
+  uint32_t south = north;
+  for (uint32_t i = 0; i < s.size(); ++i)
+    if (s.heCount[i] != s.heCount[north] && (south == north || s.vpos[i].z < s.vpos[south].z)) south = i;
+  ASSERT_LT(s.vpos[south].z, 0.0f);
+  std::vector<uint32_t> tris = s.tris, northFan, southFan;
+  for (size_t t = 0; t < tris.size(); t += 3)
+    for (const auto& [pole, fan] : {std::pair{north, &northFan}, std::pair{south, &southFan}})
+      if (tris[t] == pole || tris[t + 1] == pole || tris[t + 2] == pole)
+        fan->insert(fan->end(), &tris[t], &tris[t] + 3);
+  std::replace(tris.begin(), tris.end(), south, north);
+  setTriangles(s, tris);
+  ASSERT_EQ(markPinchedVertices(s, sphere.options), 1u);
+  EXPECT_TRUE(s.openUp[north]);
+  const bool northLarger = northFan.size() > southFan.size();
+  size_t dropped = 0;
+  for (size_t k = 0; k < s.heCount[north]; ++k) dropped += s.dropSlot[size_t(north) * kMaxHalfEdges + k];
+  EXPECT_EQ(dropped, (northLarger ? southFan : northFan).size() / 3) << "only the smaller fan's slots are marked";
+  EXPECT_EQ(unpinchVertices(s, sphere.options, boundary, unfilled), 0u);
+  EXPECT_EQ(boundary, 0u);
+  std::vector<uint32_t> larger = northLarger ? northFan : southFan;
+  if (!northLarger) std::replace(larger.begin(), larger.end(), south, north);
+  const auto left = triangleSet(s.tris);
+  for (const auto& t : triangleSet(larger)) EXPECT_TRUE(left.count(t)) << "a triangle of the larger fan is gone";
+}
+
+// F: a vertex whose fans lie on two closed bodies (a square pyramid and a tetrahedron sharing their apex 0) is all that
+// joins them: every triangle round it goes (not only the smaller fan's), the repair closes what is left, and no
+// pinched vertex remains; vertex 0 is in no triangle any more.
+TEST(TesselatorMesh, APinchBetweenTwoBodiesLosesEveryTriangleRoundIt) {
   Sphere sphere(600);
   auto& s = sphere.s;
   projectVertices(s, sphere.options);
@@ -442,23 +550,15 @@ TEST(TesselatorMesh, PinchedVertexLosesItsSmallerFan) {
   setTriangles(s, both);
   ASSERT_EQ(markPinchedVertices(s, sphere.options), 1u);
   EXPECT_TRUE(s.openUp[0]);
-  size_t dropped = 0;
-  for (size_t k = 0; k < s.heCount[0]; ++k) {
-    const uint32_t to = s.heTo[k];
-    EXPECT_EQ(bool(s.dropSlot[k]), to >= 5) << "slot to " << to << ": only the tetrahedron's (smaller) fan goes";
-    dropped += s.dropSlot[k];
-  }
-  EXPECT_EQ(dropped, 3u);
   size_t boundary = 0, unfilled = 0;
   EXPECT_EQ(unpinchVertices(s, sphere.options, boundary, unfilled), 0u);
+  EXPECT_EQ(boundary, 0u);
   EXPECT_EQ(markPinchedVertices(s, sphere.options), 0u);
-  const auto left = triangleSet(s.tris);
-  for (const auto& t : triangleSet(pyramid)) EXPECT_TRUE(left.count(t)) << "a pyramid triangle is gone";
-  for (size_t t = 0; t < s.tris.size(); t += 3) {
-    const uint32_t* c = &s.tris[t];
-    const bool apex = c[0] == 0 || c[1] == 0 || c[2] == 0, tetra = c[0] >= 5 || c[1] >= 5 || c[2] >= 5;
-    EXPECT_FALSE(apex && tetra) << "a tetrahedron triangle at the apex is left";
-  }
+  for (size_t t = 0; t < s.tris.size(); t += 3)
+    EXPECT_FALSE(s.tris[t] == 0 || s.tris[t + 1] == 0 || s.tris[t + 2] == 0) << "a triangle at the pinch is left";
+  Mesh mesh;
+  writeMesh(s, sphere.options, mesh);
+  EXPECT_TRUE(analyzeTopology(mesh).closedManifold());
 }
 
 // ---- Hand-built meshes: the octahedron on the unit sphere (vertices +x -x +y -y +z -z) --------------------------
