@@ -216,10 +216,10 @@ size_t assembleTriangles(Tesselator::State& s, const TesselatorOptions& o);
 size_t repairHoles(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary);
 // F. pinches: a vertex whose triangles form more than one fan (two disks touching at a point, which the edge-based
 // assembly and repair cannot see) loses the triangles of its smaller fans (twice; the third time every triangle
-// around it) and the holes are repaired again (E). A pinch whose fans lie on different pieces (trianglePieces: it is
-// all that joins them) loses every triangle around it from the first time, so that the repair can join the two holes
-// as a tube's rims instead of capping one. Returns the pinched vertices left (0: the triangulation is a 2-manifold
-// wherever it is closed).
+// around it) and the holes are repaired again (E). A pinch whose fans lie on different pieces (vertices joined by
+// triangles, never through a pinched one: it is all that joins them) loses every triangle around it from the first
+// time, so that the repair can join the two holes as a tube's rims instead of capping one. Returns the pinched
+// vertices left (0: the triangulation is a 2-manifold wherever it is closed).
 size_t unpinchVertices(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary, size_t& unfilled);
 // I. pockets (after F): particles left in no triangle that make up, on their own, a small closed sheet too curved for
 // the fans (a blob, or an air pocket enclosed by the solid, 4 to kMaxPocket particles whose neighbours are 60-120
