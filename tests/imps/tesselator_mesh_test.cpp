@@ -182,6 +182,27 @@ void punchHoles(Sphere& sphere, std::initializer_list<uint32_t> centres) {
   withdrawAround(sphere, marked);
 }
 
+// Passes A-C, then every triangle touching a particle of the band |z| < desiredRadius / 2 round the equator withdrawn
+// and the rest assembled: two caps whose rims face each other across the band (as a neck or wrist whose ring of
+// particles made no triangle). Returns the band's particle count; `boundary` gets the assembly's open edges.
+size_t assembleWithoutEquator(Sphere& sphere, size_t& boundary) {
+  auto& s = sphere.s;
+  sphere.fansAndVotes();
+  std::vector<uint8_t> inBand(s.size(), 0);
+  size_t banded = 0;
+  for (uint32_t i = 0; i < s.size(); ++i) banded += inBand[i] = std::fabs(s.vpos[i].z) < 0.5f * sphere.options.desiredRadius;
+  withdrawAround(sphere, inBand);
+  boundary = assembleTriangles(s, sphere.options);
+  return banded;
+}
+
+// The topology of the mesh pass G would write from s.
+MeshTopology topologyOf(const Sphere& sphere) {
+  Mesh mesh;
+  writeMesh(sphere.s, sphere.options, mesh);
+  return analyzeTopology(mesh);
+}
+
 TEST(TesselatorMesh, HoleRepairClosesTheHolesAroundMissingTriangles) {
   Sphere sphere(600);
   auto& s = sphere.s;
@@ -224,18 +245,10 @@ TEST(TesselatorMesh, HoleRepairJoinsTheTwoRimsOfATubeInsteadOfCappingThem) {
   Sphere sphere(300);
   auto& s = sphere.s;
   const float h = sphere.options.desiredRadius;
-  sphere.fansAndVotes();
-  std::vector<uint8_t> inBand(s.size(), 0);
-  size_t banded = 0;
-  for (uint32_t i = 0; i < s.size(); ++i) banded += inBand[i] = std::fabs(s.vpos[i].z) < 0.5f * h;
+  size_t boundary = 0;
+  const size_t banded = assembleWithoutEquator(sphere, boundary);
   ASSERT_GT(banded, 5u);
-  withdrawAround(sphere, inBand);
-  size_t boundary = assembleTriangles(s, sphere.options);
-  {
-    Mesh before;
-    writeMesh(s, sphere.options, before);
-    ASSERT_EQ(analyzeTopology(before).components, 2u) << "the band cuts the sphere in two";
-  }
+  ASSERT_EQ(topologyOf(sphere).components, 2u) << "the band cuts the sphere in two";
   const size_t assembled = s.tris.size() / 3;
   EXPECT_EQ(repairHoles(s, sphere.options, boundary), 0u);
   EXPECT_EQ(boundary, 0u);
@@ -265,12 +278,8 @@ TEST(TesselatorMesh, HoleRepairJoinsTheTwoRimsOfATubeInsteadOfCappingThem) {
 TEST(TesselatorMesh, HoleRepairJoinsTubeRimsWhosePiecesTouchOnlyAtAVertex) {
   Sphere sphere(300);
   auto& s = sphere.s;
-  const float h = sphere.options.desiredRadius;
-  sphere.fansAndVotes();
-  std::vector<uint8_t> inBand(s.size(), 0);
-  for (uint32_t i = 0; i < s.size(); ++i) inBand[i] = std::fabs(s.vpos[i].z) < 0.5f * h;
-  withdrawAround(sphere, inBand);
-  assembleTriangles(s, sphere.options);
+  size_t boundary = 0;
+  assembleWithoutEquator(sphere, boundary);
   uint32_t north = 0, south = 0;
   for (uint32_t i = 0; i < s.size(); ++i) {
     if (s.vpos[i].z > s.vpos[north].z) north = i;
@@ -279,15 +288,13 @@ TEST(TesselatorMesh, HoleRepairJoinsTubeRimsWhosePiecesTouchOnlyAtAVertex) {
   std::vector<uint32_t> tris = s.tris;
   std::replace(tris.begin(), tris.end(), south, north);
   setTriangles(s, tris);
-  size_t boundary = openEdges(s);
+  boundary = openEdges(s);
   ASSERT_EQ(markPinchedVertices(s, sphere.options), 1u) << "the poles' merge is the one pinch";
   size_t unfilled = repairHoles(s, sphere.options, boundary);
   EXPECT_EQ(unfilled, 0u);
   EXPECT_EQ(unpinchVertices(s, sphere.options, boundary, unfilled), 0u);
   EXPECT_EQ(boundary, 0u);
-  Mesh mesh;
-  writeMesh(s, sphere.options, mesh);
-  const MeshTopology t = analyzeTopology(mesh);
+  const MeshTopology t = topologyOf(sphere);
   EXPECT_TRUE(t.closedManifold());
   EXPECT_EQ(t.components, 1u) << "the rims were capped: the sphere is meshed as two pieces";
 }
@@ -300,12 +307,8 @@ TEST(TesselatorMesh, HoleRepairJoinsTubeRimsWhosePiecesTouchOnlyAtAVertex) {
 TEST(TesselatorMesh, APinchThatIsAllThatJoinsTwoPiecesIsOpenedAndTheHolesJoined) {
   Sphere sphere(300);
   auto& s = sphere.s;
-  const float h = sphere.options.desiredRadius;
-  sphere.fansAndVotes();
-  std::vector<uint8_t> inBand(s.size(), 0);
-  for (uint32_t i = 0; i < s.size(); ++i) inBand[i] = std::fabs(s.vpos[i].z) < 0.5f * h;
-  withdrawAround(sphere, inBand);
-  assembleTriangles(s, sphere.options);
+  size_t assembledBoundary = 0;
+  assembleWithoutEquator(sphere, assembledBoundary);
   const std::vector<uint32_t> assembled = s.tris;
   std::vector<uint32_t> halves[2];  // each half, capped alone
   for (int upper = 0; upper < 2; ++upper) {
@@ -355,9 +358,7 @@ TEST(TesselatorMesh, APinchThatIsAllThatJoinsTwoPiecesIsOpenedAndTheHolesJoined)
   ASSERT_EQ(markPinchedVertices(s, sphere.options), pinchedBefore + 1) << "the merged vertex is one more pinch";
   EXPECT_EQ(unpinchVertices(s, sphere.options, boundary, unfilled), 0u);
   EXPECT_EQ(boundary, 0u);
-  Mesh mesh;
-  writeMesh(s, sphere.options, mesh);
-  const MeshTopology t = analyzeTopology(mesh);
+  const MeshTopology t = topologyOf(sphere);
   EXPECT_TRUE(t.closedManifold());
   EXPECT_EQ(t.components, 1u) << "the pinch's smaller fan was cut: the halves are apart";
 }
