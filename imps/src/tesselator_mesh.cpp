@@ -1018,8 +1018,8 @@ bool stripThroughRows(Tesselator::State& s, const uint32_t* A, size_t na, const 
 // the whole band (a neck opened up over several rings at the file's fidelity); else through surface rows of new
 // vertices about kRowSpacing desiredRadius apart (surfaceRows). All or nothing: returns false, adding nothing, when no
 // choice fits (stripThroughRows).
-bool bridgeLoops(Tesselator::State& s, const uint32_t* A, size_t na, const uint32_t* B, size_t nb, const LoopShape& sa,
-                 const LoopShape& sb, float h, float colorExp, size_t& boundary) {
+bool tubeStrip(Tesselator::State& s, const uint32_t* A, size_t na, const uint32_t* B, size_t nb, const LoopShape& sa,
+               const LoopShape& sb, float h, float colorExp) {
   s.strip.clear();
   bool fits = appendStrip(s, A, na, B, nb, h) && stripFits(s, h);
   Tube tube{sa.centroid, sb.centroid - sa.centroid, {}, {}, 0.0f};
@@ -1037,8 +1037,73 @@ bool bridgeLoops(Tesselator::State& s, const uint32_t* A, size_t na, const uint3
     fits = surfaceRows(s, A, na, B, nb, tube, sa, sb, rows, h, colorExp) && stripThroughRows(s, A, na, B, nb, rows, h);
     if (!fits) dropVerticesFrom(s, first);
   }
-  if (!fits) return false;
+  return fits;
+}
+
+bool bridgeLoops(Tesselator::State& s, const uint32_t* A, size_t na, const uint32_t* B, size_t nb, const LoopShape& sa,
+                 const LoopShape& sb, float h, float colorExp, size_t& boundary) {
+  if (!tubeStrip(s, A, na, B, nb, sa, sb, h, colorExp)) return false;
   for (size_t t = 0; t < s.strip.size(); t += 3) addTriangle(s, s.strip[t], s.strip[t + 1], s.strip[t + 2], &boundary);
+  return true;
+}
+
+// Joins hole loop A to two loops B and C on two more pieces (a body's hole opened round both a neck and a shoulder):
+// A is split by a chord between two of its vertices into two loops of at least three vertices (the chord run once
+// each way), the split and the assignment that put the halves' centroids nearest their partners', and each half is
+// joined to its partner by tubeStrip. Both strips must fit, use no directed edge twice and leave every vertex room in
+// its half-edge table; else nothing is added.
+bool forkTube(Tesselator::State& s, const uint32_t* A, size_t na, const uint32_t* B, size_t nb, const uint32_t* C,
+              size_t nc, const LoopShape& sb, const LoopShape& sc, float h, float colorExp, size_t& boundary) {
+  std::vector<glm::vec3> prefix(na + 1, glm::vec3(0.0f));  // sums of A's positions, for the halves' centroids
+  for (size_t k = 0; k < na; ++k) prefix[k + 1] = prefix[k] + s.vpos[A[k]];
+  const auto centroid = [&](size_t i, size_t j) {  // of A[i..j] round the loop (j may pass na)
+    const glm::vec3 sum = j < na ? prefix[j + 1] - prefix[i] : prefix[na] - prefix[i] + prefix[j - na + 1];
+    return sum / float(j - i + 1);
+  };
+  float best = FLT_MAX;
+  size_t bi = 0, bj = 0;
+  bool swap = false;
+  for (size_t i = 0; i < na; ++i)
+    for (size_t j = i + 2; j + 2 <= i + na; ++j) {
+      const glm::vec3 c1 = centroid(i, j), c2 = centroid(j, i + na);
+      const float straight =
+          glm::dot(c1 - sb.centroid, c1 - sb.centroid) + glm::dot(c2 - sc.centroid, c2 - sc.centroid);
+      const float crossed = glm::dot(c1 - sc.centroid, c1 - sc.centroid) + glm::dot(c2 - sb.centroid, c2 - sb.centroid);
+      if (std::min(straight, crossed) < best)
+        best = std::min(straight, crossed), bi = i, bj = j, swap = crossed < straight;
+    }
+  if (best == FLT_MAX) return false;
+  std::vector<uint32_t> half[2];
+  for (size_t k = bi; k <= bj; ++k) half[0].push_back(A[k % na]);
+  for (size_t k = bj; k <= bi + na; ++k) half[1].push_back(A[k % na]);
+  const size_t first = s.vertexCount();
+  std::vector<uint32_t> strips;
+  for (int k = 0; k < 2; ++k) {
+    const bool toB = (k == 0) != swap;
+    const uint32_t* P = toB ? B : C;
+    const size_t np = toB ? nb : nc;
+    if (!tubeStrip(s, half[k].data(), half[k].size(), P, np, loopShape(s, half[k].data(), half[k].size()),
+                   toB ? sb : sc, h, colorExp)) {
+      dropVerticesFrom(s, first);
+      return false;
+    }
+    strips.insert(strips.end(), s.strip.begin(), s.strip.end());
+  }
+  std::vector<uint64_t> edges;
+  std::vector<uint8_t> added(s.vertexCount(), 0);
+  for (size_t t = 0; t < strips.size(); t += 3)
+    for (size_t k = 0; k < 3; ++k) {
+      edges.push_back(uint64_t(strips[t + k]) << 32 | strips[t + (k + 1) % 3]);
+      ++added[strips[t + k]];
+    }
+  std::sort(edges.begin(), edges.end());
+  bool room = std::adjacent_find(edges.begin(), edges.end()) == edges.end();
+  for (uint32_t v = 0; v < added.size() && room; ++v) room = size_t(s.heCount[v]) + added[v] <= kMaxHalfEdges;
+  if (!room) {
+    dropVerticesFrom(s, first);
+    return false;
+  }
+  for (size_t t = 0; t < strips.size(); t += 3) addTriangle(s, strips[t], strips[t + 1], strips[t + 2], &boundary);
   return true;
 }
 
@@ -1122,6 +1187,28 @@ void bridgeTubes(Tesselator::State& s, const TesselatorOptions& o, size_t& bound
       pairs.push_back({glm::length(shapes[b].centroid - shapes[a].centroid), {a, b}});
     }
   std::sort(pairs.begin(), pairs.end());
+  // A loop with partners on two more pieces: one split strip to both (forkTube), nearest partners first.
+  for (uint32_t a = 0; a < loopCount; ++a) {
+    uint32_t partner[2] = {~0u, ~0u};
+    for (const auto& [dist, bc] : pairs) {
+      const uint32_t other = bc.first == a ? bc.second : bc.second == a ? bc.first : ~0u;
+      if (other == ~0u || s.loopBridged[other]) continue;
+      if (partner[0] == ~0u)
+        partner[0] = other;
+      else if (partner[1] == ~0u && pieceOf(other) != pieceOf(partner[0]))
+        partner[1] = other;
+    }
+    if (s.loopBridged[a] || partner[1] == ~0u) continue;
+    const auto loop = [&](uint32_t k) { return &s.loops[s.loopStart[k]]; };
+    const auto size = [&](uint32_t k) { return s.loopStart[k + 1] - s.loopStart[k]; };
+    const uint32_t b = partner[0], c = partner[1];
+    if (forkTube(s, loop(a), size(a), loop(b), size(b), loop(c), size(c), shapes[b], shapes[c], o.desiredRadius,
+                 1.0f / o.colorWidth, boundary)) {
+      s.loopBridged[a] = s.loopBridged[b] = s.loopBridged[c] = 1;
+      pieces->unite(pieceOf(a), pieceOf(b));
+      pieces->unite(pieceOf(a), pieceOf(c));
+    }
+  }
   for (const auto& [dist, ab] : pairs) {
     const auto [a, b] = ab;
     if (s.loopBridged[a] || s.loopBridged[b] || pieceOf(a) == pieceOf(b)) continue;  // (joined by an earlier strip)

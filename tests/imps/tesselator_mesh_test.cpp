@@ -363,6 +363,50 @@ TEST(TesselatorMesh, APinchThatIsAllThatJoinsTwoPiecesIsOpenedAndTheHolesJoined)
   EXPECT_EQ(t.components, 1u) << "the pinch's smaller fan was cut: the halves are apart";
 }
 
+// E, a rim facing two pieces: a body (a unit metaball) with two heads (metaballs of radius 0.35 at x = +-0.6, z = 1.1,
+// all blended) whose particles are withdrawn from z = 0.7 to 1.05: the body's one hole faces both heads' rims, on two
+// more pieces. Joined greedily, the nearer head takes the whole hole and the other is capped apart; the repair splits
+// the body's rim by a chord into one half for each head (forkTube) and the surface stays one closed piece.
+TEST(TesselatorMesh, HoleRepairSplitsARimFacingTwoPiecesBetweenThem) {
+  BlendFunction blend;
+  blend.defaultParam = -3.0f;
+  const Field field({Primitive::metaball(glm::vec3(0.0f), 1.0f), Primitive::metaball(glm::vec3(-0.6f, 0, 1.1f), 0.35f),
+                     Primitive::metaball(glm::vec3(0.6f, 0, 1.1f), 0.35f)},
+                    {-3.0f, -3.0f, -3.0f}, {glm::vec3(0.5f), glm::vec3(0.5f), glm::vec3(0.5f)}, blend,
+                    BlendSets::all(3));
+  const size_t n = 600;
+  const float spacing = 0.5f * test::sphereOptions(n).desiredRadius;
+  std::vector<glm::vec3> points;  // each ball's Fibonacci points moved onto the surface, none closer than `spacing`
+  for (const auto& [centre, radius] : {std::pair{glm::vec3(0.0f), 1.0f}, std::pair{glm::vec3(-0.6f, 0, 1.1f), 0.35f},
+                                       std::pair{glm::vec3(0.6f, 0, 1.1f), 0.35f}})
+    for (const glm::vec3& p : test::fibonacciSphere(size_t(float(n) * radius * radius))) {
+      glm::vec3 q = centre + radius * p;
+      for (int it = 0; it < 20; ++it) {
+        const FieldSample fs = field.sample(q);
+        const float g2 = glm::dot(fs.gradient, fs.gradient);
+        if (!(g2 > 1e-12f)) break;
+        q += (1.0f - fs.value) / g2 * fs.gradient;
+      }
+      const bool near = std::ranges::any_of(points, [&](const glm::vec3& o) { return glm::length(o - q) < spacing; });
+      if (std::fabs(field.value(q) - 1.0f) < 1e-3f && !near && (q.z < 0.7f || q.z > 1.05f)) points.push_back(q);
+    }
+  Sphere body(points, test::sphereOptions(n));
+  body.field = field;
+  auto& s = body.s;
+  s.field = &body.field;
+  body.fansAndVotes();
+  size_t boundary = assembleTriangles(s, body.options);
+  ASSERT_EQ(topologyOf(body).components, 3u) << "the body and the two heads are meshed apart";
+  size_t unfilled = repairHoles(s, body.options, boundary);
+  EXPECT_EQ(unfilled, 0u);
+  EXPECT_EQ(unpinchVertices(s, body.options, boundary, unfilled), 0u);
+  EXPECT_EQ(boundary, 0u);
+  const MeshTopology t = topologyOf(body);
+  EXPECT_TRUE(t.closedManifold());
+  EXPECT_EQ(t.components, 1u) << "a head was capped apart";
+  EXPECT_EQ(t.eulerCharacteristic, 2);
+}
+
 // E, surface rows: a peanut (two unit metaballs a distance 2 apart, blended: a waist of radius 0.29 between lobes of
 // radius 1) with particles on the lobes only, none within 0.8 of the waist's plane. The rims (radius 0.98, 1.6 apart,
 // nine desiredRadius) are too far apart for one strip (it would pass 0.7 outside the waist) and there are no particles
