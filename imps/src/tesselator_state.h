@@ -209,10 +209,11 @@ size_t assembleTriangles(Tesselator::State& s, const TesselatorOptions& o);
 // E. hole repair: up to four rounds of closing boundary loops of at most maxHoleLoop edges: the two rims of a tube
 // left open all round (on pieces not joined across an edge) are joined by a strip (through one ring, or up to
 // kMaxRows rows, of the particles left between them when they are far apart, else through rows of new vertices on the
-// surface: addVertex, after the particles in s.vpos / s.nrm / s.vcol, with s.addedFrom), every other loop is capped
-// by ear clipping; loops it cannot close are opened up (the triangles around them removed) for the next round. Keeps
-// `boundary` (directed edges without a twin) up to date; returns the loops left unfilled. The passes from here on
-// take s.vertexCount() vertices; triangulate() cuts the arrays back to the particles' when it is done.
+// surface: addVertex, after the particles in s.vpos / s.nrm / s.vcol, with s.addedFrom); a rim facing two pieces is
+// first split between them (forkTube); every other loop is capped by ear clipping; loops it cannot close are opened
+// up (the triangles around them removed) for the next round. Keeps `boundary` (directed edges without a twin) up to
+// date; returns the loops left unfilled. The passes from here on take s.vertexCount() vertices; triangulate() cuts
+// the arrays back to the particles' when it is done.
 size_t repairHoles(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary);
 // F. pinches: a vertex whose triangles form more than one fan (two disks touching at a point, which the edge-based
 // assembly and repair cannot see) loses the triangles of its smaller fans (twice; the third time every triangle
