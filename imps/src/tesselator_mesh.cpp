@@ -1030,10 +1030,12 @@ bool tubeStrip(Tesselator::State& s, const uint32_t* A, size_t na, const uint32_
     if (rows <= 2) bandParticles(s, A, na, B, nb, tube, sa, sb, rows == 1);
     fits = bandRows(s, na, nb, tube, sb, rows) && stripThroughRows(s, A, na, B, nb, rows, h);
   }
-  if (!fits) {
+  // Surface rows about kRowSpacing apart, else one more, one fewer or two more: the first choice that fits.
+  const size_t spaced =
+      std::clamp<size_t>(size_t(std::ceil(std::sqrt(tube.len2) / (kRowSpacing * h))), 2, kMaxRows + 1) - 1;
+  for (const size_t rows : {spaced, spaced + 1, spaced - 1, spaced + 2}) {
+    if (fits || rows < 1 || rows > kMaxRows) continue;
     const size_t first = s.vertexCount();
-    const size_t rows =
-        std::clamp<size_t>(size_t(std::ceil(std::sqrt(tube.len2) / (kRowSpacing * h))), 2, kMaxRows + 1) - 1;
     fits = surfaceRows(s, A, na, B, nb, tube, sa, sb, rows, h, colorExp) && stripThroughRows(s, A, na, B, nb, rows, h);
     if (!fits) dropVerticesFrom(s, first);
   }
