@@ -1164,7 +1164,8 @@ DisjointSets trianglePieces(Tesselator::State& s) {
 // Joins the loops that are the two rims of one tube by strips (bridgeLoops), nearest pairs first, setting
 // s.loopBridged: capping them would cut the limb off. Two loops are rims of one tube when they face each other
 // (facingRims), lie on different pieces of the mesh (joining two holes of one piece would make a handle) and the solid
-// runs between them (solidBetween).
+// runs between them (solidBetween). A loop that is the rim of two such tubes at once, to two more pieces, is first
+// split between them (forkTube).
 void bridgeTubes(Tesselator::State& s, const TesselatorOptions& o, size_t& boundary) {
   const size_t loopCount = s.loopStart.size() - 1;
   if (loopCount < 2) return;
@@ -1194,7 +1195,7 @@ void bridgeTubes(Tesselator::State& s, const TesselatorOptions& o, size_t& bound
     uint32_t partner[2] = {~0u, ~0u};
     for (const auto& [dist, bc] : pairs) {
       const uint32_t other = bc.first == a ? bc.second : bc.second == a ? bc.first : ~0u;
-      if (other == ~0u || s.loopBridged[other]) continue;
+      if (other == ~0u || s.loopBridged[other] || pieceOf(other) == pieceOf(a)) continue;  // (an earlier fork)
       if (partner[0] == ~0u)
         partner[0] = other;
       else if (partner[1] == ~0u && pieceOf(other) != pieceOf(partner[0]))
