@@ -1058,7 +1058,8 @@ bool forkTube(Tesselator::State& s, const uint32_t* A, size_t na, const uint32_t
               size_t nc, const LoopShape& sb, const LoopShape& sc, float h, float colorExp, size_t& boundary) {
   std::vector<glm::vec3> prefix(na + 1, glm::vec3(0.0f));  // sums of A's positions, for the halves' centroids
   for (size_t k = 0; k < na; ++k) prefix[k + 1] = prefix[k] + s.vpos[A[k]];
-  const auto centroid = [&](size_t i, size_t j) {  // of A[i..j] round the loop (j may pass na)
+  const auto centroid = [&](size_t i, size_t j) {  // of A[i..j] round the loop (i <= j < i + na, either may pass na)
+    if (i >= na) i -= na, j -= na;
     const glm::vec3 sum = j < na ? prefix[j + 1] - prefix[i] : prefix[na] - prefix[i] + prefix[j - na + 1];
     return sum / float(j - i + 1);
   };
