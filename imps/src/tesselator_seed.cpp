@@ -23,19 +23,23 @@ void fibonacciSphere(size_t n, std::vector<glm::vec3>& out) {
   }
 }
 
+// ceil(x) points, or none where x is not a number or beyond any budget (a segment too long for float: its length and
+// the spacing seedSpacing widens for it are both infinite).
+size_t pointCount(float x) { return x >= 0.0f && x < 1e7f ? size_t(std::ceil(x)) : 0; }
+
 // Candidate points on primitive p's own d = 1 surface, about `spacing` apart.
 void primitivePoints(const Primitive& p, float spacing, std::vector<glm::vec3>& out) {
   std::vector<glm::vec3> unit;
   const float area = spacing * spacing;
   switch (p.kind) {
     case PrimitiveKind::Metaball: {
-      fibonacciSphere(size_t(std::ceil(4.0f * 3.14159265f * p.radius * p.radius / area)) + 4, unit);
+      fibonacciSphere(pointCount(4.0f * 3.14159265f * p.radius * p.radius / area) + 4, unit);
       for (const glm::vec3& u : unit) out.push_back(p.center + p.radius * u);
       break;
     }
     case PrimitiveKind::Ellipsoid: {
       const float r = (p.radii.x + p.radii.y + p.radii.z) / 3.0f;
-      fibonacciSphere(size_t(std::ceil(4.0f * 3.14159265f * r * r / area)) + 4, unit);
+      fibonacciSphere(pointCount(4.0f * 3.14159265f * r * r / area) + 4, unit);
       for (const glm::vec3& u : unit) out.push_back(p.center + p.rotation * (p.radii * u));
       break;
     }
@@ -44,16 +48,16 @@ void primitivePoints(const Primitive& p, float spacing, std::vector<glm::vec3>& 
         const float r = end == 0 ? p.r1 : p.r2;
         const glm::vec3 c = end == 0 ? p.p1 : p.p2;
         unit.clear();
-        fibonacciSphere(size_t(std::ceil(4.0f * 3.14159265f * r * r / area)) + 4, unit);
+        fibonacciSphere(pointCount(4.0f * 3.14159265f * r * r / area) + 4, unit);
         for (const glm::vec3& u : unit) out.push_back(c + r * u);
       }
       glm::vec3 b0, b1;
       tangentBasis(p.axis, b0, b1);
-      const int rings = int(std::ceil(p.length / spacing));
+      const int rings = int(pointCount(p.length / spacing));
       for (int k = 1; k < rings; ++k) {
         const float t = p.length * float(k) / float(rings);
         const float r = p.r1 + p.slope * t;
-        const int m = std::max(3, int(std::ceil(2.0f * 3.14159265f * r / spacing)));
+        const int m = std::max(3, int(pointCount(2.0f * 3.14159265f * r / spacing)));
         for (int j = 0; j < m; ++j) {
           const float a = 2.0f * 3.14159265f * (float(j) + 0.5f * float(k & 1)) / float(m);
           out.push_back(p.p1 + t * p.axis + r * (std::cos(a) * b0 + std::sin(a) * b1));

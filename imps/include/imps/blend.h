@@ -35,7 +35,7 @@ inline constexpr float kExponentialCutoff = 1e-4f;
 // exp(x) to within 2 ulp of std::exp for x in [-87, 88], as a branch-free polynomial so that loops over it
 // vectorise and every code path (vector lane, scalar tail, block, thread) gives bit-identical values.
 inline float expAccurate(float x) {
-  x = std::min(std::max(x, -87.0f), 88.0f);
+  x = std::min(88.0f, std::max(-87.0f, x));  // (in this order a NaN, from a degenerate primitive, becomes -87)
   // Round x / ln 2 to the nearest integer with the 1.5 * 2^23 trick (exact for |x| < 2^22; no libm call).
   const float n = (x * 1.44269504088896341f + 12582912.0f) - 12582912.0f;
   // Cody-Waite reduction: r = x - n ln2 with ln2 split in two for accuracy.
@@ -59,7 +59,7 @@ inline float expAccurate(float x) {
 // Schraudolph's approximation: writes a*x + b straight into a float's exponent and mantissa bits. About 4% maximum
 // relative error; the thesis's fast exponential.
 inline float expFast(float x) {
-  x = std::min(std::max(x, -87.0f), 88.0f);
+  x = std::min(88.0f, std::max(-87.0f, x));  // (a NaN becomes -87, as in expAccurate)
   const int32_t bits =
       static_cast<int32_t>(12102203.0f * x) + 1064866808;  // 2^23/ln2; 127*2^23 - 486408 (Schraudolph's c)
   float y;
