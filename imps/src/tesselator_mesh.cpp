@@ -1034,7 +1034,8 @@ bool tubeStrip(Tesselator::State& s, const uint32_t* A, size_t na, const uint32_
   const size_t spaced =
       std::clamp<size_t>(size_t(std::ceil(std::sqrt(tube.len2) / (kRowSpacing * h))), 2, kMaxRows + 1) - 1;
   for (const size_t rows : {spaced, spaced + 1, spaced - 1, spaced + 2}) {
-    if (fits || rows < 1 || rows > kMaxRows) continue;
+    if (fits) break;
+    if (rows < 1 || rows > kMaxRows) continue;
     const size_t first = s.vertexCount();
     fits = surfaceRows(s, A, na, B, nb, tube, sa, sb, rows, h, colorExp) && stripThroughRows(s, A, na, B, nb, rows, h);
     if (!fits) dropVerticesFrom(s, first);
@@ -1141,6 +1142,13 @@ size_t findHalfEdge(const Tesselator::State& s, uint32_t a, uint32_t b) {
   return SIZE_MAX;
 }
 
+// The slot of directed edge a -> b in a's half-edge table (a -> b must exist).
+size_t halfEdgeSlot(const Tesselator::State& s, uint32_t a, uint32_t b) {
+  const size_t slot = findHalfEdge(s, a, b);
+  IMPS_DCHECK(slot != SIZE_MAX);
+  return slot;
+}
+
 // The pieces of the triangulation: its triangles (indices into s.tris / 3) joined across shared edges, so that pieces
 // which touch at one vertex only (one on two loops, or a pinch) are pieces of their own. s.heTri gets every half-edge
 // slot's triangle (unfoldTriangles builds its own again).
@@ -1149,11 +1157,7 @@ DisjointSets trianglePieces(Tesselator::State& s) {
   DisjointSets pieces(triangles);
   s.heTri.resize(s.heTo.size());
   for (uint32_t t = 0; t < triangles; ++t)
-    for (size_t k = 0; k < 3; ++k) {
-      const size_t slot = findHalfEdge(s, s.tris[3 * t + k], s.tris[3 * t + (k + 1) % 3]);
-      IMPS_DCHECK(slot != SIZE_MAX);  // every triangle's half-edges are in the table
-      if (slot != SIZE_MAX) s.heTri[slot] = t;
-    }
+    for (size_t k = 0; k < 3; ++k) s.heTri[halfEdgeSlot(s, s.tris[3 * t + k], s.tris[3 * t + (k + 1) % 3])] = t;
   for (uint32_t t = 0; t < triangles; ++t)
     for (size_t k = 0; k < 3; ++k) {
       const size_t twin = findHalfEdge(s, s.tris[3 * t + (k + 1) % 3], s.tris[3 * t + k]);
@@ -1565,15 +1569,6 @@ bool windsOutward(Tesselator::State& s, uint32_t a, uint32_t b, uint32_t c) {
   if (glm::dot(face, s.nrm[a]) > near && glm::dot(face, s.nrm[b]) > near && glm::dot(face, s.nrm[c]) > near)
     return true;
   return glm::dot(face, sampleAmongVertices(s, (pa + s.vpos[b] + s.vpos[c]) / 3.0f).gradient) < 0.0f;
-}
-
-// The slot of directed edge a -> b in a's half-edge table (a -> b must exist).
-size_t halfEdgeSlot(const Tesselator::State& s, uint32_t a, uint32_t b) {
-  const size_t base = size_t(a) * kMaxHalfEdges;
-  size_t k = 0;
-  while (k + 1 < s.heCount[a] && s.heTo[base + k] != b) ++k;
-  IMPS_DCHECK_EQ(s.heTo[base + k], b);
-  return base + k;
 }
 
 // Points the half-edge slot of a -> b at triangle t with third corner c, adding the slot if a -> b is new.
