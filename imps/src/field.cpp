@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "imps/check.h"
+#include "vector_clones.h"
 
 namespace imps {
 
@@ -323,15 +324,6 @@ inline float foldElliptical(float g, float x) {
   return g <= -1.0f ? x : (x <= -1.0f ? g : BlendFunction::roundedUnion(g, x));
 }
 
-// The loops are compiled twice, for AVX2 and for the baseline, and chosen at run time. Both give the same bits:
-// IEEE add, multiply, divide, min and max are exact per lane, and -ffp-contract=off rules out fused multiply-adds.
-// (clang 16 cannot clone templates; its builds, the fuzz targets, use the baseline only.)
-#if defined(__clang__)
-#define IMPS_VECTOR_CLONES
-#else
-#define IMPS_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
-#endif
-
 template <float (*Distance)(const Primitive&, float, float, float)>
 IMPS_VECTOR_CLONES void distanceLoop(const Primitive& p, const float* xs, const float* ys, const float* zs, size_t n,
                                      float* d) {
@@ -477,27 +469,36 @@ void atLeast(std::vector<float>& v, size_t size) {
   if (v.size() < size) v.resize(size);
 }
 
-// The points into scratch.xs, ys and zs (SoA, for the vectorised kernels).
-void splitPoints(std::span<const glm::vec3> points, FieldScratch& scratch) {
-  atLeast(scratch.xs, points.size());
-  atLeast(scratch.ys, points.size());
-  atLeast(scratch.zs, points.size());
-  for (size_t i = 0; i < points.size(); ++i) {
-    scratch.xs[i] = points[i].x;
-    scratch.ys[i] = points[i].y;
-    scratch.zs[i] = points[i].z;
+// The batched kernels run over whole vectors of points: a batch of n points is evaluated as padded(n), the last
+// point repeated. A batch is often short (a block's edges, the few a root-finding step still has): a scalar remainder
+// of up to 7 points, each a whole exponential's latency, would cost about as much as the vectors.
+constexpr size_t kLanes = 8;
+size_t padded(size_t n) { return (n + kLanes - 1) / kLanes * kLanes; }
+
+// The points into scratch.xs, ys and zs (SoA, for the vectorised kernels), padded; returns padded(points.size()).
+size_t splitPoints(std::span<const glm::vec3> points, FieldScratch& scratch) {
+  const size_t n = padded(points.size());
+  atLeast(scratch.xs, n);
+  atLeast(scratch.ys, n);
+  atLeast(scratch.zs, n);
+  for (size_t i = 0; i < n; ++i) {
+    const glm::vec3& x = points[std::min(i, points.size() - 1)];
+    scratch.xs[i] = x.x;
+    scratch.ys[i] = x.y;
+    scratch.zs[i] = x.z;
   }
+  return n;
 }
 
-// F at n points from their per-set accumulators (sets x points): the maximum over the sets.
-void maxOverSets(bool additive, size_t sets, size_t n, const float* accs, float* out) {
+// F at n points from their per-set accumulators (sets x points, `stride` apart): the maximum over the sets.
+void maxOverSets(bool additive, size_t sets, size_t n, size_t stride, const float* accs, float* out) {
   if (additive && sets > 0) {  // the first set's pass also clears: max(0, acc) is what max(out = 0, acc) gives
     for (size_t i = 0; i < n; ++i) out[i] = std::max(0.0f, accs[i]);
   } else {
     for (size_t i = 0; i < n; ++i) out[i] = 0.0f;
   }
   for (size_t s = additive && sets > 0 ? 1 : 0; s < sets; ++s) {
-    const float* acc = accs + s * n;
+    const float* acc = accs + s * stride;
     if (additive) {
       for (size_t i = 0; i < n; ++i) out[i] = std::max(out[i], acc[i]);
     } else {
@@ -545,8 +546,8 @@ void addTerms(const BlendFunction& blend, const Primitive& p, float param, const
 }  // namespace
 
 void Field::accumulate(std::span<const glm::vec3> points, FieldScratch& scratch, bool keepTerms) const {
-  const size_t n = points.size();
-  splitPoints(points, scratch);
+  if (points.empty()) return;
+  const size_t n = splitPoints(points, scratch);
   atLeast(scratch.term, n);
   const bool additive = blend_.additive();
   const size_t sets = scratch.setCount();
@@ -595,7 +596,8 @@ void Field::accumulate(std::span<const glm::vec3> points, FieldScratch& scratch,
 void Field::values(std::span<const glm::vec3> points, std::span<float> out, FieldScratch& scratch) const {
   IMPS_CHECK_EQ(points.size(), out.size());
   accumulate(points, scratch, /*keepTerms=*/false);
-  maxOverSets(blend_.additive(), scratch.setCount(), points.size(), scratch.acc.data(), out.data());
+  maxOverSets(blend_.additive(), scratch.setCount(), points.size(), padded(points.size()), scratch.acc.data(),
+              out.data());
 }
 
 namespace {
@@ -638,13 +640,9 @@ IMPS_VECTOR_CLONES void addSeparableMetaball(const float* ex, const float* ey, s
   }
 }
 
-// e^{scale v^2 + offset} for v = axis[q] - centre, q in [q0, q1), into out[q].
-IMPS_VECTOR_CLONES void axisExponentials(const float* axis, size_t q0, size_t q1, float centre, float scale,
-                                         float offset, float* __restrict out) {
-  for (size_t q = q0; q < q1; ++q) {
-    const float v = axis[q] - centre;
-    out[q] = expAccurate(scale * (v * v) + offset);
-  }
+// e^{a[q]} in place, q in [0, n).
+IMPS_VECTOR_CLONES void exponentials(size_t n, float* a) {
+  for (size_t q = 0; q < n; ++q) a[q] = expAccurate(a[q]);
 }
 
 }  // namespace
@@ -704,8 +702,33 @@ void Field::latticeValues(std::span<const float> xs, std::span<const float> ys, 
   for (size_t z = 0; z < nz && !rows.empty(); ++z)
     for (size_t j = 0; j < ny; ++j)
       if (rows[j + ny * z] == 0) wholeSlice[z] = 0;
-  atLeast(scratch.axisTerms, nx + ny + nz + nx * ny);
-  for (size_t k = 0; k < scratch.candidates.size(); ++k) {
+  // The separable candidates' per-axis exponentials e^{scale v^2 + offset} (v: the coordinate less the centre's; see
+  // addSeparableMetaball), nx + ny + nz per candidate, all in one vectorised pass: one short call per axis and
+  // candidate would wait on each exponential's latency.
+  const size_t axisLength = nx + ny + nz, candidates = scratch.candidates.size();
+  atLeast(scratch.axisTerms, candidates * axisLength + nx * ny);
+  float* const exy = scratch.axisTerms.data() + candidates * axisLength;
+  for (size_t k = 0; k < candidates; ++k) {
+    float* a = scratch.axisTerms.data() + k * axisLength;
+    const uint32_t p = scratch.candidates[k];
+    if (scratch.memberOffsets[k] == scratch.memberOffsets[k + 1] || !separableOnLattice(p)) {
+      std::fill_n(a, axisLength, 0.0f);
+      continue;
+    }
+    const Primitive& prim = primitives_[p];
+    const float scale = params_[p] / (prim.radius * prim.radius);
+    auto arguments = [&](std::span<const float> axis, float centre, float offset, float* to) {
+      for (size_t q = 0; q < axis.size(); ++q) {
+        const float v = axis[q] - centre;
+        to[q] = scale * (v * v) + offset;
+      }
+    };
+    arguments(xs, prim.center.x, 0.0f, a);
+    arguments(ys, prim.center.y, 0.0f, a + nx);
+    arguments(zs, prim.center.z, -params_[p], a + nx + ny);
+  }
+  exponentials(candidates * axisLength, scratch.axisTerms.data());
+  for (size_t k = 0; k < candidates; ++k) {
     const uint32_t first = scratch.memberOffsets[k], last = scratch.memberOffsets[k + 1];
     if (first == last) continue;
     const uint32_t p = scratch.candidates[k];
@@ -718,17 +741,14 @@ void Field::latticeValues(std::span<const float> xs, std::span<const float> ys, 
     const bool single = additive && last - first == 1;
     float* acc0 = accs + size_t(scratch.memberSets[first]) * n;
     if (separableOnLattice(p)) {
-      const float scale = params_[p] / (prim.radius * prim.radius);
-      float* ex = scratch.axisTerms.data();
-      float* ey = ex + nx;
-      float* ez = ey + ny;
-      std::fill_n(ex, nx, 0.0f);
-      axisExponentials(xs.data(), i0, i1, prim.center.x, scale, 0.0f, ex);
-      axisExponentials(ys.data(), j0, j1, prim.center.y, scale, 0.0f, ey);
-      axisExponentials(zs.data(), z0, z1, prim.center.z, scale, -params_[p], ez);
+      float* ex = scratch.axisTerms.data() + k * axisLength;
+      const float* ey = ex + nx;
+      const float* ez = ey + ny;
+      std::fill(ex, ex + i0, 0.0f);  // ex is 0 beyond the support box
+      std::fill(ex + i1, ex + nx, 0.0f);
       for (uint32_t m = first; m < last; ++m)
         addSeparableMetaball(ex, ey, j0, j1, ez, z0, z1, nx, ny, rows.empty() ? nullptr : rows.data(),
-                             wholeSlice.data(), ez + nz, accs + size_t(scratch.memberSets[m]) * n);
+                             wholeSlice.data(), exy, accs + size_t(scratch.memberSets[m]) * n);
       continue;
     }
     // Points [begin, end) take the candidate's terms.
@@ -801,7 +821,7 @@ void Field::latticeValues(std::span<const float> xs, std::span<const float> ys, 
     }
     if (pending) evaluate(i0 + nx * runFirst, i1 + nx * runLast);
   }
-  if (!direct) maxOverSets(additive, sets, n, accs, out.data());
+  if (!direct) maxOverSets(additive, sets, n, n, accs, out.data());
 }
 
 float Field::value(const glm::vec3& x, FieldScratch& scratch) const {
@@ -945,8 +965,8 @@ void Field::contributions(const glm::vec3& x, FieldScratch& scratch,
 
 void Field::samplesOfOneSet(std::span<const glm::vec3> points, std::span<FieldSample> out,
                             FieldScratch& scratch) const {
-  const size_t n = points.size();
-  splitPoints(points, scratch);
+  if (points.empty()) return;
+  const size_t n = splitPoints(points, scratch);
   FieldScratch::Lanes& l = scratch.lanes;
   for (auto* v : {&l.d, &l.gx, &l.gy, &l.gz, &l.cr, &l.cg, &l.cb, &l.weight, &l.bestWeight}) v->assign(n, 0.0f);
   // (l.d: the value; l.bestWeight from 0: only positive terms own a point)
@@ -972,7 +992,7 @@ void Field::samplesOfOneSet(std::span<const glm::vec3> points, std::span<FieldSa
         break;
     }
   }
-  for (size_t i = 0; i < n; ++i) {
+  for (size_t i = 0; i < points.size(); ++i) {
     out[i].value = std::max(l.d[i], 0.0f);
     out[i].gradient = glm::vec3(l.gx[i], l.gy[i], l.gz[i]);
     out[i].color = l.weight[i] > 0.0f ? glm::vec3(l.cr[i], l.cg[i], l.cb[i]) / l.weight[i] : glm::vec3(0.8f);
@@ -996,40 +1016,41 @@ void Field::samples(std::span<const glm::vec3> points, std::span<FieldSample> ou
     return;
   }
   // Pass 1: every candidate's terms, accumulated per set exactly as values() does.
+  // (The kernels run over the padded batch, np points; the winners and values of the padding are never read out.)
   accumulate(points, scratch, /*keepTerms=*/true);
+  const size_t np = padded(n);
   // The winning set of each point (the first maximum, as sample() picks it) and the value.
-  scratch.winner.assign(n, 0);
-  for (size_t i = 0; i < n; ++i) {
+  scratch.winner.assign(np, 0);
+  for (size_t i = 0; i < np; ++i) {
     float best = -1.0f;
     for (size_t s = 0; s < sets; ++s)
-      if (scratch.acc[s * n + i] > best) {
-        best = scratch.acc[s * n + i];
+      if (scratch.acc[s * np + i] > best) {
+        best = scratch.acc[s * np + i];
         scratch.winner[i] = uint32_t(s);
       }
-    out[i].value = std::max(best, 0.0f);
-    out[i].color = glm::vec3(0.0f);
+    if (i < n) out[i].value = std::max(best, 0.0f);
   }
   // Pass 2: gradient, colour and owner from the members of each point's winning set, one candidate at a time over
   // every point (vectorised): its distance gradient everywhere, then the points where it is a member of the
   // winning set with a positive term take its contribution. Per point this is sample()'s arithmetic in sample()'s
   // order (candidates ascending), so the bits are the same.
   auto& [d, dgx, dgy, dgz, gx, gy, gz, cr, cg, cb, weight, bestWeight, owner, use, isMember] = scratch.lanes;
-  for (auto* v : {&d, &dgx, &dgy, &dgz}) v->resize(n);
-  for (auto* v : {&gx, &gy, &gz, &cr, &cg, &cb, &weight}) v->assign(n, 0.0f);
-  bestWeight.assign(n, -1.0f);
-  owner.assign(n, -1);
-  use.resize(n);
+  for (auto* v : {&d, &dgx, &dgy, &dgz}) v->resize(np);
+  for (auto* v : {&gx, &gy, &gz, &cr, &cg, &cb, &weight}) v->assign(np, 0.0f);
+  bestWeight.assign(np, -1.0f);
+  owner.assign(np, -1);
+  use.resize(np);
   isMember.resize(sets);
   const float *xs = scratch.xs.data(), *ys = scratch.ys.data(), *zs = scratch.zs.data();  // accumulate()'s SoA copy
   for (size_t k = 0; k < cand.size(); ++k) {
     const uint32_t first = scratch.memberOffsets[k], last = scratch.memberOffsets[k + 1];
     if (first == last) continue;
     const uint32_t p = cand[k];
-    const float* t = scratch.terms.data() + k * n;
+    const float* t = scratch.terms.data() + k * np;
     std::fill(isMember.begin(), isMember.end(), uint8_t(0));
     for (uint32_t m = first; m < last; ++m) isMember[scratch.memberSets[m]] = 1;
     bool any = false;
-    for (size_t i = 0; i < n; ++i) {
+    for (size_t i = 0; i < np; ++i) {
       use[i] = t[i] > 0.0f && isMember[scratch.winner[i]];
       any |= use[i] != 0;
     }
@@ -1037,26 +1058,26 @@ void Field::samples(std::span<const glm::vec3> points, std::span<FieldSample> ou
     const Primitive& prim = primitives_[p];
     switch (prim.kind) {
       case PrimitiveKind::Metaball:
-        distanceGradientLoop<metaballDistanceGradient>(prim, xs, ys, zs, n, d.data(), dgx.data(), dgy.data(),
+        distanceGradientLoop<metaballDistanceGradient>(prim, xs, ys, zs, np, d.data(), dgx.data(), dgy.data(),
                                                        dgz.data());
         break;
       case PrimitiveKind::Ellipsoid:
-        distanceGradientLoop<ellipsoidDistanceGradient>(prim, xs, ys, zs, n, d.data(), dgx.data(), dgy.data(),
+        distanceGradientLoop<ellipsoidDistanceGradient>(prim, xs, ys, zs, np, d.data(), dgx.data(), dgy.data(),
                                                         dgz.data());
         break;
       case PrimitiveKind::LineSeg:
-        distanceGradientLoop<lineSegDistanceGradient>(prim, xs, ys, zs, n, d.data(), dgx.data(), dgy.data(),
+        distanceGradientLoop<lineSegDistanceGradient>(prim, xs, ys, zs, np, d.data(), dgx.data(), dgy.data(),
                                                       dgz.data());
         break;
     }
     const float param = params_[p];
     const glm::vec3 c = colors_[p];
     if (blend_.kind == BlendKind::Exponential) {
-      for (size_t i = 0; i < n; ++i) d[i] = param * t[i];  // kernelTermSlope(): no second exponential
+      for (size_t i = 0; i < np; ++i) d[i] = param * t[i];  // kernelTermSlope(): no second exponential
     } else {
-      for (size_t i = 0; i < n; ++i) d[i] = kernelTermSlope(blend_, param, d[i], t[i]);
+      for (size_t i = 0; i < np; ++i) d[i] = kernelTermSlope(blend_, param, d[i], t[i]);
     }
-    accumulateGradientColour(n, use.data(), t, d.data(), dgx.data(), dgy.data(), dgz.data(), c, int32_t(p), gx.data(),
+    accumulateGradientColour(np, use.data(), t, d.data(), dgx.data(), dgy.data(), dgz.data(), c, int32_t(p), gx.data(),
                              gy.data(), gz.data(), cr.data(), cg.data(), cb.data(), weight.data(), bestWeight.data(),
                              owner.data());
   }

@@ -19,6 +19,7 @@
 #include "imps/check.h"
 #include "imps/parallel.h"
 #include "marching_cubes_passes.h"
+#include "vector_clones.h"
 
 namespace imps::mc {
 namespace {
@@ -788,38 +789,38 @@ namespace {
 // Outer samples below this (near the cutoff, where the transform clamps) say nothing about g's shape.
 constexpr float kOuterMin = 4.0f * kExponentialCutoff;
 
-// An edge's first root estimate from g at its ends (ga at 0, gb at 1) and, where known (not NaN), just outside them
-// (gm at -1, gp at 2): the root in (0, 1) of the polynomial through the known values (cubic, quadratic or the line),
-// by Newton steps from the line's root; the line's root if those leave (0, 1). Curvature costs a cubic little, so
-// the first evaluation is mostly already within tolerance.
-float firstEstimate(float gm, float ga, float gb, float gp) {
-  const float linear = ga / (ga - gb);
-  float c1, c2, c3 = 0.0f;
-  const bool before = gm == gm, after = gp == gp;
-  if (before && after) {
-    c1 = -gm / 3.0f - ga / 2.0f + gb - gp / 6.0f;
-    c2 = gm / 2.0f - ga + gb / 2.0f;
-    c3 = -gm / 6.0f + ga / 2.0f - gb / 2.0f + gp / 6.0f;
-  } else if (before) {
-    c1 = (gb - gm) / 2.0f;
-    c2 = (gb + gm) / 2.0f - ga;
-  } else if (after) {
-    c2 = (ga - 2.0f * gb + gp) / 2.0f;
-    c1 = gb - ga - c2;
-  } else {
-    return linear;
+// Each edge's first root estimate from g at its ends (ga at 0, gb at 1: ends[2q], ends[2q + 1]) and, where known (not
+// NaN), just outside them (gm at -1, gp at 2: outer[2q], outer[2q + 1]): the root in (0, 1) of the polynomial through
+// the known values (cubic, quadratic or the line), by Newton steps from the line's root; the line's root if those
+// leave (0, 1). Curvature costs a cubic little, so the first evaluation is mostly already within tolerance. Every
+// case's coefficients are computed and the edge's chosen without branches, so the loop vectorises; each lane's
+// arithmetic is its case's alone (a case without gm or gp has c3 = 0, and no coefficient of an unknown value is
+// chosen), so the bits do not depend on the neighbours.
+IMPS_VECTOR_CLONES void firstEstimates(size_t n, const float* __restrict ends, const float* __restrict outer,
+                                       float* __restrict t) {
+  for (size_t q = 0; q < n; ++q) {
+    const float gm = outer[2 * q], ga = ends[2 * q], gb = ends[2 * q + 1], gp = outer[2 * q + 1];
+    const float linear = ga / (ga - gb);
+    const bool before = gm == gm, after = gp == gp;
+    const float c2After = (ga - 2.0f * gb + gp) / 2.0f;
+    const float c1 = before && after ? -gm / 3.0f - ga / 2.0f + gb - gp / 6.0f
+                     : before        ? (gb - gm) / 2.0f
+                                     : gb - ga - c2After;
+    const float c2 = before && after ? gm / 2.0f - ga + gb / 2.0f : before ? (gb + gm) / 2.0f - ga : c2After;
+    const float c3 = before && after ? -gm / 6.0f + ga / 2.0f - gb / 2.0f + gp / 6.0f : 0.0f;
+    float u = linear;
+    for (int step = 0; step < 3; ++step) {
+      const float p = ga + u * (c1 + u * (c2 + u * c3)), slope = c1 + u * (2.0f * c2 + u * 3.0f * c3);
+      u -= p / slope;
+    }
+    // (the line's also where a step divided by 0: NaN fails both tests)
+    t[q] = (before || after) && u > 0.0f && u < 1.0f ? u : linear;
   }
-  float t = linear;
-  for (int step = 0; step < 3; ++step) {
-    const float p = ga + t * (c1 + t * (c2 + t * c3)), slope = c1 + t * (2.0f * c2 + t * 3.0f * c3);
-    t -= p / slope;
-  }
-  return t > 0.0f && t < 1.0f ? t : linear;  // (also the line's when a step divided by 0: NaN fails both tests)
 }
 
 }  // namespace
 
-void findEdgeRoots(const Field& field, RootTransform tf, WorkerScratch& ws) {
+void findEdgeRoots(const Field& field, RootTransform tf, bool shade, WorkerScratch& ws) {
   // (tf is a by-value copy: a reference could alias the values it transforms, which would keep its loops scalar.)
   std::vector<EdgeRoot>& edges = ws.edges;
   // The ends' (and outer samples') transformed values in one vectorised pass, then each edge's first estimate. With
@@ -828,16 +829,25 @@ void findEdgeRoots(const Field& field, RootTransform tf, WorkerScratch& ws) {
   for (float& v : ws.ends) v = tf(v);
   if (cubic)
     for (float& v : ws.outer) v = v > kOuterMin && v < FLT_MAX ? tf(v) : NAN;
+  ws.values.resize(edges.size());
+  if (cubic) firstEstimates(edges.size(), ws.ends.data(), ws.outer.data(), ws.values.data());
   for (size_t q = 0; q < edges.size(); ++q) {
     EdgeRoot& e = edges[q];
     e.ga = ws.ends[2 * q];
     e.gb = ws.ends[2 * q + 1];
-    e.t = cubic ? firstEstimate(ws.outer[2 * q], e.ga, e.gb, ws.outer[2 * q + 1]) : e.ga / (e.ga - e.gb);
+    e.t = cubic ? ws.values[q] : e.ga / (e.ga - e.gb);
     // Scale-free stopping rule: |g| below 5e-4 of its change along the edge puts the vertex within about
     // 5e-4 of an edge of the root where g is near linear, which the transform makes it.
     e.tolerance = 5e-4f * std::abs(e.ga - e.gb);
   }
-  // Regula falsi on the true field, every unfinished edge of the block evaluated in one batch per step.
+  // Regula falsi on the true field, every unfinished edge of the block evaluated in one batch per step. With `shade`
+  // and the cubic estimate every evaluation is a whole sample: a vertex is where the step that met the tolerance
+  // evaluated, so that sample is its shading (most edges stop at the first step, and the separate evaluation shading
+  // would need costs more than the gradients of the steps that do not stop). From the line's root most edges take
+  // two or three steps: there the one separate evaluation costs less.
+  shade &= cubic;
+  ws.samples.resize(edges.size());
+  ws.shaded.assign(edges.size(), 0);
   ws.active.clear();
   for (uint32_t e = 0; e < edges.size(); ++e)
     if (edges[e].iterations > 0) ws.active.push_back(e);
@@ -848,13 +858,25 @@ void findEdgeRoots(const Field& field, RootTransform tf, WorkerScratch& ws) {
       const EdgeRoot& e = edges[ws.active[q]];
       ws.at[q] = e.pa + e.t * (e.pb - e.pa);
     }
-    field.values(ws.at, ws.values, ws.field);
+    if (shade) {
+      ws.batch.resize(ws.active.size());
+      field.samples(ws.at, ws.batch, ws.field);
+      for (size_t q = 0; q < ws.active.size(); ++q) ws.values[q] = ws.batch[q].value;
+    } else {
+      field.values(ws.at, ws.values, ws.field);
+    }
     for (float& v : ws.values) v = tf(v);  // one vectorised pass
     ws.stillActive.clear();
     for (size_t q = 0; q < ws.active.size(); ++q) {
       EdgeRoot& e = edges[ws.active[q]];
       const float gt = ws.values[q];
-      if (std::abs(gt) <= e.tolerance) continue;
+      if (std::abs(gt) <= e.tolerance) {
+        if (shade) {
+          ws.samples[ws.active[q]] = ws.batch[q];
+          ws.shaded[ws.active[q]] = 1;
+        }
+        continue;
+      }
       // Anderson-Bjorck: when the same end moves twice in a row, scale the stale end's value by
       // m = 1 - g(new) / g(old end), or halve it (Illinois) when m <= 0.
       if ((gt > 0.0f) == (e.ga > 0.0f)) {
@@ -879,18 +901,25 @@ void findEdgeRoots(const Field& field, RootTransform tf, WorkerScratch& ws) {
 
 void shadeEdgeVertices(const Field& field, const MarchingCubesOptions& options, BlockResult& r, WorkerScratch& ws) {
   const std::vector<EdgeRoot>& edges = ws.edges;
-  ws.at.resize(edges.size());
-  for (size_t q = 0; q < edges.size(); ++q) ws.at[q] = edges[q].pa + edges[q].t * (edges[q].pb - edges[q].pa);
   r.positions.resize(3 * edges.size());
   for (size_t q = 0; q < edges.size(); ++q) {
-    r.positions[3 * q] = ws.at[q].x;
-    r.positions[3 * q + 1] = ws.at[q].y;
-    r.positions[3 * q + 2] = ws.at[q].z;
+    const glm::vec3 x = edges[q].pa + edges[q].t * (edges[q].pb - edges[q].pa);
+    r.positions[3 * q] = x.x;
+    r.positions[3 * q + 1] = x.y;
+    r.positions[3 * q + 2] = x.z;
   }
   if (!options.computeNormals && !options.computeColors) return;
-  // Normals and colours from one batched evaluation.
-  ws.samples.resize(edges.size());
-  field.samples(ws.at, ws.samples, ws.field);
+  // The vertices root finding left without a sample (it ran out of steps): one batched evaluation.
+  ws.active.clear();
+  ws.at.clear();
+  for (uint32_t q = 0; q < edges.size(); ++q)
+    if (!ws.shaded[q]) {
+      ws.active.push_back(q);
+      ws.at.push_back(edges[q].pa + edges[q].t * (edges[q].pb - edges[q].pa));
+    }
+  ws.batch.resize(ws.at.size());
+  field.samples(ws.at, ws.batch, ws.field);
+  for (size_t q = 0; q < ws.active.size(); ++q) ws.samples[ws.active[q]] = ws.batch[q];
   if (options.computeNormals) r.normals.resize(3 * edges.size());
   if (options.computeColors) r.colors.resize(3 * edges.size());
   for (size_t q = 0; q < edges.size(); ++q) {
@@ -932,7 +961,7 @@ void processBlock(const Field& field, const Grid& g, size_t b, const MarchingCub
   sampleBlock(field, g, block, axes, st.snaps, r, ws);
   r.hasSurface = classifyBlock(field.iso(), options.rootIterations, axes, r, ws);
   if (!r.hasSurface) return;
-  findEdgeRoots(field, tf, ws);
+  findEdgeRoots(field, tf, options.computeNormals || options.computeColors, ws);
   shadeEdgeVertices(field, options, r, ws);
 }
 

@@ -11,7 +11,8 @@
 //      b. cullSubBlocks      the same bounds on the block's 2^3 sub-blocks: the rows of samples that need the field;
 //      c. sampleBlock        the field samples on those rows (moved vertices overwritten), the others' side known;
 //      d. classifyBlock      surface cells (case codes) and the crossing edges the block owns, numbered locally;
-//      e. findEdgeRoots      each crossing edge's vertex by Anderson-Bjorck regula falsi on the true field;
+//      e. findEdgeRoots      each crossing edge's vertex by Anderson-Bjorck regula falsi on the true field, each
+//                            step a whole sample (the last one the vertex's normal and colour);
 //      f. shadeEdgeVertices  positions, normals and colours of those vertices;
 //   5. numberVertices   global vertex numbers: each surface block's first vertex, in block order;
 //   6. triangulateBlock per surface block, in parallel: each cell's triangles from the face-consistent case table,
@@ -136,7 +137,9 @@ struct WorkerScratch {
   std::vector<uint32_t> active, stillActive;
   std::vector<glm::vec3> at;
   std::vector<float> values;
-  std::vector<FieldSample> samples;
+  std::vector<FieldSample> samples;  // findEdgeRoots -> shadeEdgeVertices: each edge vertex's sample
+  std::vector<uint8_t> shaded;       // findEdgeRoots -> shadeEdgeVertices: whether samples[e] is the vertex's
+  std::vector<FieldSample> batch;    // one batched evaluation
 };
 
 // Primitives binned to blocks (CSR): block b's candidates are members[offsets[b] .. offsets[b + 1]), ascending.
@@ -208,10 +211,14 @@ bool classifyBlock(float iso, int rootIterations, const BlockAxes& axes, BlockRe
 
 // 4e. Root finding on ws.edges: their parameters t in (0, 1) along pa -> pb, at most each edge's iterations batched
 // evaluations of the true field after the first estimate: the root of the polynomial through ws.ends and the known
-// ws.outer, or of the line through ws.ends when ws.outer is empty. ws.field must be prepared for the block.
-void findEdgeRoots(const Field& field, RootTransform transform, WorkerScratch& ws);
+// ws.outer, or of the line through ws.ends when ws.outer is empty. With `shade` and ws.outer the evaluations are whole
+// samples, and an edge whose root is an evaluated point (it met the tolerance) gets that sample in ws.samples and a 1
+// in ws.shaded; every other edge a 0. ws.field must be prepared for the block.
+void findEdgeRoots(const Field& field, RootTransform transform, bool shade, WorkerScratch& ws);
 
-// 4f. r.positions (and, as the options ask, r.normals and r.colors) of ws.edges' vertices, 3 floats per vertex.
+// 4f. r.positions (and, as the options ask, r.normals and r.colors) of ws.edges' vertices, 3 floats per vertex: the
+// normals and colours from ws.samples where ws.shaded says so, from one batched evaluation elsewhere (the same bits:
+// a sample is a function of the point).
 void shadeEdgeVertices(const Field& field, const MarchingCubesOptions& options, BlockResult& r, WorkerScratch& ws);
 
 // 5. Global vertex numbers: every surface block's r.base (blocks without surface get the running total too) and

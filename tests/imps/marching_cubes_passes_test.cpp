@@ -168,7 +168,8 @@ TEST(MarchingCubesPasses, ClassifyBlockFindsEveryMixedCellAndOwnedCrossingEdgeIn
   }
 }
 
-// With the samples beyond the edges' ends (a cubic or quadratic first estimate) and without (the line's root).
+// With the samples beyond the edges' ends (a cubic or quadratic first estimate, every step a whole sample) and
+// without (the line's root, every step a value). A vertex root finding shaded has the very sample of its point.
 TEST(MarchingCubesPasses, FindEdgeRootsPutsEveryVertexOnTheSurface) {
   for (const bool outer : {true, false})
     for (float blobbiness : {-8.0f, -2.0f}) {
@@ -195,18 +196,33 @@ TEST(MarchingCubesPasses, FindEdgeRootsPutsEveryVertexOnTheSurface) {
           ws.outer.push_back(q % 4 == 0 ? -1.0f : field.value(e.pb + (e.pb - e.pa)));
         }
       }
-      findEdgeRoots(field, RootTransform(field), ws);
+      findEdgeRoots(field, RootTransform(field), /*shade=*/true, ws);
       float worstF = 0.0f;
-      for (const EdgeRoot& e : ws.edges) {
+      size_t shaded = 0;
+      for (size_t q = 0; q < ws.edges.size(); ++q) {
+        const EdgeRoot& e = ws.edges[q];
         ASSERT_GE(e.t, 0.0f);
         ASSERT_LE(e.t, 1.0f);
         const glm::vec3 x = e.pa + e.t * (e.pb - e.pa);
+        ASSERT_EQ(ws.shaded.size(), ws.edges.size());
+        if (ws.shaded[q]) {
+          ++shaded;
+          const FieldSample at = field.sample(x);
+          ASSERT_EQ(ws.samples[q].value, at.value);
+          ASSERT_EQ(ws.samples[q].gradient, at.gradient);
+          ASSERT_EQ(ws.samples[q].color, at.color);
+        }
         worstF = std::max(worstF, std::abs(field.value(x) - field.iso()));
         if (blobbiness == -8.0f) {
           EXPECT_NEAR(glm::length(x), 0.5f, 1e-4f) << "the hard blend's surface is the sphere";
         }
       }
       EXPECT_LT(worstF, 1e-3f) << "blobbiness " << blobbiness << (outer ? " with" : " without") << " outer samples";
+      if (outer) {
+        EXPECT_GT(shaded, ws.edges.size() * 9 / 10) << "nearly every vertex is an evaluated point";
+      } else {
+        EXPECT_EQ(shaded, 0u) << "from the line's root shading evaluates separately";
+      }
     }
 }
 
@@ -342,7 +358,7 @@ TEST(MarchingCubesPasses, PassesByHandMakeThePolygonizersMesh) {
     sampleBlock(field, g, g.blockCoords(b), axes, {}, r, ws);
     r.hasSurface = classifyBlock(field.iso(), o.rootIterations, axes, r, ws);
     if (!r.hasSurface) continue;
-    findEdgeRoots(field, RootTransform(field), ws);
+    findEdgeRoots(field, RootTransform(field), /*shade=*/true, ws);
     shadeEdgeVertices(field, o, r, ws);
   }
   std::vector<uint32_t> surface;
