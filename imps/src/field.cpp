@@ -389,45 +389,80 @@ inline float blancSchlickSlope(float param, float d, float) {
 // and ownership at every point, in one loop (one distance and one term per point, nothing stored between passes).
 // Per point this is sample()'s arithmetic in its order (the set's sum, then each positive term's slope x distance
 // gradient, colour and weight), so the same bits; beyond the support the term is exactly 0 and adds nothing.
+// One candidate's contribution to a point's sums (value, gradient, colour, weight) and owner.
+struct SampleSums {
+  float v, x, y, z, r, g, b, w, best;
+  int32_t o;
+};
 template <float (*DistanceGradient)(const Primitive&, float, float, float, float&, float&, float&),
           float (*Term)(float, float), float (*Slope)(float, float, float)>
-IMPS_VECTOR_CLONES void addSampleTerms(const Primitive& p, float param, glm::vec3 c, int32_t candidate, size_t n,
-                                       const float* __restrict xs, const float* __restrict ys,
+[[gnu::always_inline]] inline void addSampleTerm(const Primitive& p, float param, glm::vec3 c, int32_t candidate,
+                                                 float px, float py, float pz, SampleSums& s) {
+  float dx, dy, dz;
+  const float d = DistanceGradient(p, px, py, pz, dx, dy, dz);
+  const float t = Term(param, d);
+  const float slope = Slope(param, d, t);
+  // Where the term is 0 so is the slope (+-0): those points add +-0, which changes nothing (the sums are never -0,
+  // see accumulateGradientColour), so no select is needed but for the owner.
+  s.v += t;
+  s.x += slope * dx;
+  s.y += slope * dy;
+  s.z += slope * dz;
+  s.r += t * c.x;
+  s.g += t * c.y;
+  s.b += t * c.z;
+  s.w += t;
+  // The owner changes where the term beats 0 and every earlier term (bestWeight starts at 0 here).
+  s.o = t > s.best ? candidate : s.o;
+  s.best = std::max(s.best, t);
+}
+
+// K (1 or 2) candidates' terms at every point, one after the other.
+template <float (*DistanceGradient)(const Primitive&, float, float, float, float&, float&, float&),
+          float (*Term)(float, float), float (*Slope)(float, float, float), size_t K>
+IMPS_VECTOR_CLONES void addSampleTerms(const std::array<const Primitive*, K>& ps, const std::array<float, K>& params,
+                                       const std::array<glm::vec3, K>& cs, const std::array<int32_t, K>& candidates,
+                                       size_t n, const float* __restrict xs, const float* __restrict ys,
                                        const float* __restrict zs, float* __restrict value, float* __restrict gx,
                                        float* __restrict gy, float* __restrict gz, float* __restrict cr,
                                        float* __restrict cg, float* __restrict cb, float* __restrict weight,
                                        float* __restrict bestWeight, int32_t* __restrict owner) {
-  const Primitive local = p;  // a local copy: the stores below cannot alias its fields, so the loop vectorises
+  static_assert(K == 1 || K == 2);
+  // Local copies: the stores below cannot alias their fields, so the loop vectorises.
+  const Primitive p0 = *ps[0], p1 = *ps[K - 1];
+  const float param0 = params[0], param1 = params[K - 1];
+  const glm::vec3 c0 = cs[0], c1 = cs[K - 1];
+  const int32_t candidate0 = candidates[0], candidate1 = candidates[K - 1];
   for (size_t i = 0; i < n; ++i) {
-    float dx, dy, dz;
-    const float d = DistanceGradient(local, xs[i], ys[i], zs[i], dx, dy, dz);
-    const float t = Term(param, d);
-    const float slope = Slope(param, d, t);
-    // Where the term is 0 so is the slope (+-0): those points add +-0, which changes nothing (the sums are never -0,
-    // see accumulateGradientColour), so no select is needed but for the owner.
-    value[i] += t;
-    gx[i] += slope * dx;
-    gy[i] += slope * dy;
-    gz[i] += slope * dz;
-    cr[i] += t * c.x;
-    cg[i] += t * c.y;
-    cb[i] += t * c.z;
-    weight[i] += t;
-    // The owner changes where the term beats 0 and every earlier term (bestWeight starts at 0 here).
-    const float best = bestWeight[i];
-    const int32_t o = owner[i];
-    owner[i] = t > best ? candidate : o;
-    bestWeight[i] = std::max(best, t);
+    SampleSums s{value[i], gx[i], gy[i], gz[i], cr[i], cg[i], cb[i], weight[i], bestWeight[i], owner[i]};
+    addSampleTerm<DistanceGradient, Term, Slope>(p0, param0, c0, candidate0, xs[i], ys[i], zs[i], s);
+    if constexpr (K == 2)
+      addSampleTerm<DistanceGradient, Term, Slope>(p1, param1, c1, candidate1, xs[i], ys[i], zs[i], s);
+    value[i] = s.v;
+    gx[i] = s.x;
+    gy[i] = s.y;
+    gz[i] = s.z;
+    cr[i] = s.r;
+    cg[i] = s.g;
+    cb[i] = s.b;
+    weight[i] = s.w;
+    bestWeight[i] = s.best;
+    owner[i] = s.o;
   }
 }
 
-template <float (*DistanceGradient)(const Primitive&, float, float, float, float&, float&, float&)>
-void addSampleTermsOfKind(const BlendFunction& blend, const Primitive& p, float param, glm::vec3 c, int32_t candidate,
-                          size_t n, const float* xs, const float* ys, const float* zs, FieldScratch::Lanes& l) {
+// samplesOfOneSet()'s step for K candidates of one kind (given by DistanceGradient), in ascending order: their terms
+// one after the other at each point, the same arithmetic in the same order as K steps of one, so the same bits. Two
+// at a time halve the accumulators' loads and stores and give the core two exponentials to overlap.
+template <float (*DistanceGradient)(const Primitive&, float, float, float, float&, float&, float&), size_t K>
+void addSampleTermsOfKind(const BlendFunction& blend, const std::array<const Primitive*, K>& ps,
+                          const std::array<float, K>& params, const std::array<glm::vec3, K>& cs,
+                          const std::array<int32_t, K>& candidates, size_t n, const float* xs, const float* ys,
+                          const float* zs, FieldScratch::Lanes& l) {
   auto run = [&]<float (*Term)(float, float), float (*Slope)(float, float, float)>() {
-    addSampleTerms<DistanceGradient, Term, Slope>(p, param, c, candidate, n, xs, ys, zs, l.d.data(), l.gx.data(),
-                                                  l.gy.data(), l.gz.data(), l.cr.data(), l.cg.data(), l.cb.data(),
-                                                  l.weight.data(), l.bestWeight.data(), l.owner.data());
+    addSampleTerms<DistanceGradient, Term, Slope, K>(ps, params, cs, candidates, n, xs, ys, zs, l.d.data(), l.gx.data(),
+                                                     l.gy.data(), l.gz.data(), l.cr.data(), l.cg.data(), l.cb.data(),
+                                                     l.weight.data(), l.bestWeight.data(), l.owner.data());
   };
   switch (blend.kind) {
     case BlendKind::Exponential:
@@ -972,24 +1007,42 @@ void Field::samplesOfOneSet(std::span<const glm::vec3> points, std::span<FieldSa
   // (l.d: the value; l.bestWeight from 0: only positive terms own a point)
   l.owner.assign(n, -1);
   const float *xs = scratch.xs.data(), *ys = scratch.ys.data(), *zs = scratch.zs.data();
-  for (size_t k = 0; k < scratch.candidates.size(); ++k) {
-    if (scratch.memberOffsets[k] == scratch.memberOffsets[k + 1]) continue;
-    const uint32_t p = scratch.candidates[k];
-    const Primitive& prim = primitives_[p];
-    const int32_t candidate = int32_t(p);
-    switch (prim.kind) {
+  // The set's members, ascending, two at a time where two of one kind follow each other.
+  auto member = [&](size_t k) { return scratch.memberOffsets[k] != scratch.memberOffsets[k + 1]; };
+  auto step = [&]<size_t K>(const std::array<uint32_t, K>& p) {
+    std::array<const Primitive*, K> ps;
+    std::array<float, K> params;
+    std::array<glm::vec3, K> cs;
+    std::array<int32_t, K> candidates;
+    for (size_t k = 0; k < K; ++k) {
+      ps[k] = &primitives_[p[k]];
+      params[k] = params_[p[k]];
+      cs[k] = colors_[p[k]];
+      candidates[k] = int32_t(p[k]);
+    }
+    switch (ps[0]->kind) {
       case PrimitiveKind::Metaball:
-        addSampleTermsOfKind<metaballDistanceGradient>(blend_, prim, params_[p], colors_[p], candidate, n, xs, ys, zs,
-                                                       l);
+        addSampleTermsOfKind<metaballDistanceGradient, K>(blend_, ps, params, cs, candidates, n, xs, ys, zs, l);
         break;
       case PrimitiveKind::Ellipsoid:
-        addSampleTermsOfKind<ellipsoidDistanceGradient>(blend_, prim, params_[p], colors_[p], candidate, n, xs, ys,
-                                                        zs, l);
+        addSampleTermsOfKind<ellipsoidDistanceGradient, K>(blend_, ps, params, cs, candidates, n, xs, ys, zs, l);
         break;
       case PrimitiveKind::LineSeg:
-        addSampleTermsOfKind<lineSegDistanceGradient>(blend_, prim, params_[p], colors_[p], candidate, n, xs, ys, zs,
-                                                      l);
+        addSampleTermsOfKind<lineSegDistanceGradient, K>(blend_, ps, params, cs, candidates, n, xs, ys, zs, l);
         break;
+    }
+  };
+  const size_t nc = scratch.candidates.size();
+  for (size_t k = 0; k < nc; ++k) {
+    if (!member(k)) continue;
+    size_t next = k + 1;
+    while (next < nc && !member(next)) ++next;
+    const uint32_t p = scratch.candidates[k];
+    if (next < nc && primitives_[scratch.candidates[next]].kind == primitives_[p].kind) {
+      step(std::array<uint32_t, 2>{p, scratch.candidates[next]});
+      k = next;
+    } else {
+      step(std::array<uint32_t, 1>{p});
     }
   }
   for (size_t i = 0; i < points.size(); ++i) {
