@@ -310,17 +310,25 @@ struct EdgeRef {
 // Resolves the cube edges of block b's cells to their vertices (the block itself or a +x, +y, +z neighbour).
 struct EdgeResolver {
   const CaseTable& table;
-  const Grid& g;
-  const std::vector<BlockResult>& blocks;
   const BlockResult& r;
-  glm::ivec3 block;
+  std::array<const BlockResult*, 8> owners{};  // owners[ox | oy << 1 | oz << 2]: the block (0) and its neighbours
+
+  EdgeResolver(const CaseTable& t, const Grid& g, const std::vector<BlockResult>& blocks, const BlockResult& self,
+               glm::ivec3 block)
+      : table(t), r(self) {
+    for (int o = 0; o < 8; ++o) {
+      const glm::ivec3 n = block + glm::ivec3(o & 1, (o >> 1) & 1, o >> 2);
+      if (n.x < g.blocks.x && n.y < g.blocks.y && n.z < g.blocks.z)
+        owners[size_t(o)] = &blocks[g.blockIndex(n.x, n.y, n.z)];
+    }
+  }
 
   // Cell (i, j, k)'s cube edge e, wherever it is owned.
   EdgeRef any(int i, int j, int k, int e) const {
     const int corner = table.edgeStartCorner[size_t(e)], axis = e / 4;
     const int vi = i + (corner & 1), vj = j + ((corner >> 1) & 1), vk = k + ((corner >> 2) & 1);
     const int ox = vi / kBlock, oy = vj / kBlock, oz = vk / kBlock;  // 1 on the far faces: the next block owns it
-    const BlockResult& owner = (ox | oy | oz) ? blocks[g.blockIndex(block.x + ox, block.y + oy, block.z + oz)] : r;
+    const BlockResult& owner = *owners[size_t(ox | oy << 1 | oz << 2)];
     IMPS_DCHECK(owner.hasSurface);
     const int32_t local = owner.edgeVertex[size_t(ownedEdgeIndex(axis, vi - ox * kBlock, vj - oy * kBlock,
                                                                  vk - oz * kBlock))];
@@ -1015,14 +1023,21 @@ void triangulateBlock(const Field& field, const Grid& g, size_t b, const Marchin
       for (int v = 0; v < count; ++v) indices[v] = r.base + edges.interior(index, entry[size_t(1 + v)]);
       continue;
     }
+    // Each cube edge resolved once (a cell's triangles name most of them twice or more).
+    std::array<uint32_t, 12> resolved;
+    resolved.fill(UINT32_MAX);
     for (int v = 0; v < count; ++v) {
       const int code = entry[size_t(1 + v)];
       if (code >= kCentre) {
         indices[v] = centreIndex[code - kCentre];
-      } else {
-        const auto [owner, local] = edges.of(index, inside, i, j, k, code);
-        indices[v] = owner->base + local;
+        continue;
       }
+      uint32_t& global = resolved[size_t(code)];
+      if (global == UINT32_MAX) {
+        const auto [owner, local] = edges.of(index, inside, i, j, k, code);
+        global = owner->base + local;
+      }
+      indices[v] = global;
     }
   }
 }
