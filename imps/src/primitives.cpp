@@ -256,6 +256,10 @@ float Primitive::maxDistance(const Box& box) const {
   return 0.0f;
 }
 
+float Primitive::radiusNear(const glm::vec3& x) const {
+  return kind == PrimitiveKind::LineSeg ? r1 + slope * lineSegParameter(*this, x) : minRadius();
+}
+
 float Primitive::minRadius() const {
   switch (kind) {
     case PrimitiveKind::Metaball: return radius;

@@ -29,6 +29,11 @@ constexpr float kFusionDistance = 0.35f;  // two particles closer than this fuse
 constexpr float kMaxStep = 0.3f;       // the most a particle moves per update
 constexpr float kMaxNewton = 0.5f;     // the longest Newton projection step
 constexpr float kStrayDistance = 1.0f; // |F - iso| / |grad F| beyond this: the particle left the surface
+// Thin parts (TesselatorOptions::resolveThinParts): where a particle's primitive is thinner than desiredRadius its
+// local spacing is desiredRadius times thickness / desiredRadius (at least kThinScaleMin; State::scale), and the
+// dynamics run in units of it (repel, integrateParticles, addAndDeleteParticles): rings of particles close round a
+// wrist that particles of the full spacing would leave open.
+constexpr float kThinScaleMin = 0.5f;
 // Coming to rest on a still field: after kStillAfter updates of an unchanged field with a particle count stable to
 // 1 % over the last kCountWindow updates, fission, fusion and death stop and the step halves every update; after
 // kCalmUpdates such updates the particles are frozen until the field moves again. Not while the last triangulation
@@ -40,6 +45,20 @@ constexpr size_t kCountWindow = 10;
 
 using Clock = std::chrono::steady_clock;
 double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+// Particle i's local spacing in desiredRadius: 1, or less where its owner is thinner (see kThinScaleMin).
+float thinScale(const Tesselator::State& s, const Field& field, const TesselatorOptions& o, size_t i) {
+  const int32_t owner = s.owner[i];
+  if (!o.resolveThinParts || owner < 0 || size_t(owner) >= field.size()) return 1.0f;
+  const Primitive& p = field.primitive(size_t(owner));
+  // The thickness is the particle's distance from its owner's core: the owner's radius there where the particle is on
+  // the owner's own surface, more where a blend, or another limb buried in it, carries the surface out (a hand held
+  // inside the hip owns particles on the hip's surface, which must not pack as densely as on the hand). Both vary
+  // smoothly along a limb and across a joint, where the owner changes: a jump in the scale would split every particle
+  // crossing it. Never less than the owner's radius there: a particle off the surface, inside its owner, is passing.
+  const float thickness = p.radiusNear(s.pos[i]) * std::sqrt(std::max(p.distance(s.pos[i]), 1.0f));
+  return std::clamp(thickness / o.desiredRadius, kThinScaleMin, 1.0f);
+}
 
 Box chunkBox(const std::vector<glm::vec3>& p, size_t begin, size_t end, float pad) {
   Box b;
@@ -440,14 +459,18 @@ void repel(Tesselator::State& s, size_t i, const FieldSample& fs, float iso, con
   const float invH = 1.0f / o.desiredRadius, alpha = o.energyCoeff;
   const glm::vec3 p = s.pos[i], g = fs.gradient;
   const float g2 = glm::dot(g, g);
-  const float si = s.sigma[i] * invH;
+  // Radii and distances in units of the local spacing (desiredRadius times the thin-part scale): a pair's distance in
+  // units of their mean spacing, so that a wrist packed at a smaller spacing than its forearm is in equilibrium, not
+  // pushing particles out across the border for ever.
+  const float si = s.sigma[i] * invH / s.scale[i];
   const float inv2si = 0.5f / (si * si);
   glm::vec3 P(0.0f);
   float D = 0.0f, Ds = 0.0f;
   for (size_t k = 0; k < cnt; ++k) {
     const uint32_t j = ni[k];
-    const float sj = s.sigma[j] * invH;
-    const float r2 = nd2[k] * invH * invH;
+    const float sj = s.sigma[j] * invH / s.scale[j];
+    const float spacing = 0.5f * (s.scale[i] + s.scale[j]);
+    const float r2 = nd2[k] * invH * invH / (spacing * spacing);
     const float ei = alpha * expAccurate(-r2 * inv2si);
     const float ej = alpha * expAccurate(-r2 * 0.5f / (sj * sj));
     D += ei;
@@ -466,10 +489,10 @@ void repel(Tesselator::State& s, size_t i, const FieldSample& fs, float iso, con
   s.sigmaRate[i] = dDot / denom;
 }
 
-// Particle i's fission into two of radius sigma / sqrt(2), displaced in a random tangent direction (the child is
-// appended).
+// Particle i's fission into two of radius sigma / sqrt(2), displaced a quarter of its local spacing in a random tangent
+// direction (the child is appended).
 void fission(Tesselator::State& s, size_t i, const TesselatorOptions& o) {
-  const float h = o.desiredRadius;
+  const float h = o.desiredRadius * s.scale[i];
   glm::vec3 b0, b1;
   tangentBasis(s.nrm[i], b0, b1);
   const float a = 6.2831853f * uniform01(o.seed, s.id[i], s.update, 1);
@@ -545,6 +568,11 @@ void computeForces(Tesselator::State& s, const Field& field, const TesselatorOpt
   s.value.resize(n);
   s.dead.assign(n, 0);
   if (s.scratch.size() < chunks) s.scratch.resize(chunks);
+  s.scale.resize(n);
+  parallelFor(chunks, o.threads, [&](size_t c) {
+    for (size_t i = c * kChunk, end = std::min(n, (c + 1) * kChunk); i < end; ++i)
+      s.scale[i] = thinScale(s, field, o, i);
+  });
   s.chunkTransfers.assign(chunks, 0);
   s.chunkBlocked.assign(chunks, 0);
   parallelFor(chunks, o.threads, [&](size_t c) {
@@ -600,8 +628,8 @@ void integrateParticles(Tesselator::State& s, const Field& field, const Tesselat
       if (len > kMaxStep * h) step *= kMaxStep * h / len;
       s.pos[i] += s.stepScale * step;
       const float si =
-          std::clamp(s.sigma[i] * invH + s.stepScale * o.deltaT * s.sigmaRate[i], kSigmaMin, kSigmaMax);
-      s.sigma[i] = si * h;
+          std::clamp(s.sigma[i] * invH / s.scale[i] + s.stepScale * o.deltaT * s.sigmaRate[i], kSigmaMin, kSigmaMax);
+      s.sigma[i] = si * h * s.scale[i];
     }
     field.prepare(chunkBox(s.pos, begin, end, 0.0f), scratch);
     for (size_t i = begin; i < end; ++i) {
@@ -626,7 +654,6 @@ void integrateParticles(Tesselator::State& s, const Field& field, const Tesselat
 
 void addAndDeleteParticles(Tesselator::State& s, const TesselatorOptions& o, TesselatorStats& stats) {
   const float h = o.desiredRadius, invH = 1.0f / h;
-  const float fuse2 = kFusionDistance * kFusionDistance * h * h;
   const size_t before = s.size();
   for (size_t i = 0; i < before; ++i) {
     if (s.dead[i]) {
@@ -634,12 +661,13 @@ void addAndDeleteParticles(Tesselator::State& s, const TesselatorOptions& o, Tes
       continue;
     }
     if (s.calm > 0) continue;  // coming to rest: only strays die
-    if (fuses(s, i, fuse2)) {
+    const float scale = s.scale[i];  // radii and lengths in units of the local spacing, as in repel()
+    if (fuses(s, i, kFusionDistance * kFusionDistance * h * h * scale * scale)) {
       s.dead[i] = 1;
       ++stats.fusions;
       continue;
     }
-    const float si = s.sigma[i] * invH;
+    const float si = s.sigma[i] * invH / scale;
     if (si < kSigmaDeath && uniform01(o.seed, s.id[i], s.update, 0) < kDeathChance) {
       s.dead[i] = 1;
       ++stats.deaths;

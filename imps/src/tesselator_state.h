@@ -57,6 +57,7 @@ struct Tesselator::State {
   // Particles, structure of arrays, in particle order.
   std::vector<glm::vec3> pos, vel, grad, nrm;
   std::vector<float> sigma, sigmaRate, energy, value;
+  std::vector<float> scale;  // computeForces -> addAndDeleteParticles: each particle's spacing, in desiredRadius
   std::vector<int32_t> owner;
   std::vector<uint64_t> id;
   std::vector<uint8_t> dead;
@@ -252,11 +253,13 @@ void writeFallbackMesh(const Tesselator::State& s, const TesselatorOptions& o, M
 // Compute (parallel, fixed partition): per particle its field sample (the cache of the last triangulation when
 // `cached`), stray test (s.dead), ownership transfer to a blend neighbour (counted in s.chunkTransfers /
 // chunkBlocked), its kMaxFuse nearest (s.fuse), repulsion velocity constrained to the surface (s.vel), energy and
-// radius rate. Sizes every per-particle output and clears s.dead first. Reads others' positions and radii; writes
-// only particle i's outputs.
+// radius rate, all in units of the local spacing (s.scale, every particle's first: 1 but on thin parts). Sizes every
+// per-particle output and clears s.dead first. Reads others' positions, radii and spacings; writes only particle i's
+// outputs.
 void computeForces(Tesselator::State& s, const Field& field, const TesselatorOptions& o, bool cached);
-// Integration (parallel): the clamped step along s.vel and the radius rate, then one Newton step back onto the
-// surface along the compute phase's gradient; particles carried off the surface are marked dead.
+// Integration (parallel): the clamped step along s.vel and the radius rate (the radius clamped in units of s.scale),
+// then one Newton step back onto the surface along the compute phase's gradient; particles carried off the surface
+// are marked dead. Needs computeForces' outputs.
 void integrateParticles(Tesselator::State& s, const Field& field, const TesselatorOptions& o);
 // Carried coordinates (tesselator_texcoords.cpp; only while s.carry): after integration, each particle's coordinates
 // move by what its layer's generator maps its step (s.prevPos -> s.pos) to. Parallel, each particle writes only its
@@ -264,8 +267,8 @@ void integrateParticles(Tesselator::State& s, const Field& field, const Tesselat
 void advectTexcoords(Tesselator::State& s, const TesselatorOptions& o);
 // The generators of a carried mesh's layers at the skeleton's current pose (no change if their count differs).
 void updateTexGens(Tesselator::State& s, const SkeletonCache& skeleton);
-// Additions and deletions (sequential, particle order): strays, fusion, death, fission (children appended), then
-// compaction in particle order. Counts into stats.
+// Additions and deletions (sequential, particle order): strays, fusion, death, fission (children appended; radii and
+// lengths in units of s.scale), then compaction in particle order. Counts into stats. Needs computeForces' outputs.
 void addAndDeleteParticles(Tesselator::State& s, const TesselatorOptions& o, TesselatorStats& stats);
 
 }  // namespace imps

@@ -671,8 +671,8 @@ TEST(Tesselator, FoldsAreRepairedAndTheMeshStaysClosed) {
 // 60-90 degrees apart. The particle mesh can cut a hand or a foot off at its neck: two closed caps instead of a tube,
 // where Marching Cubes of the same field (at half desiredRadius, matched one for one every render) finds one surface.
 // Not solved (docs/tesselator.md, "Parts cut off"): this guards what the fans' convex band, the repair's joined tube
-// rims, its surface rows, pass F's opened pinches and split rims gained, 170 -> 102 -> 61 -> 41 of 300 renders, and
-// that no component is ever missing.
+// rims, its surface rows, pass F's opened pinches and split rims, and the thin parts' local spacing gained, 170 -> 102
+// -> 61 -> 41 -> 21 of 300 renders, and that no component is ever missing.
 TEST(Tesselator, HandsAndFeetStayConnectedAtThesisFidelity) {
   Example e = load("simple_biped.wrl");
   scaleToParticles(e.options, 900.0f);
@@ -695,11 +695,11 @@ TEST(Tesselator, HandsAndFeetStayConnectedAtThesisFidelity) {
     cut += match.cutOff > 0;
   }
   std::printf("renders with a part cut off: %d of 300\n", cut);
-  // measured 41: 42 with surface rows of one count only, 45 before a rim facing two pieces was split between them, 51
-  // when pass F cut a pinch between two pieces, 61 before surface rows and pieces told apart across edges, 66 when
-  // rims are joined only straight across, 102 before the repair joined tube rims at all, 170 with fans within 72
-  // degrees only
-  EXPECT_LE(cut, 43);
+  // measured 21: 41 with one spacing on thin parts, 42 with surface rows of one count only, 45 before a rim facing two
+  // pieces was split between them, 51 when pass F cut a pinch between two pieces, 61 before surface rows and pieces
+  // told apart across edges, 66 when rims are joined only straight across, 102 before the repair joined tube rims at
+  // all, 170 with fans within 72 degrees only
+  EXPECT_LE(cut, 25);
 }
 
 // The file's fidelity (~2650 particles) at 30 Hz: swing:360 advances 12 degrees per render. Over 600 renders every
@@ -908,6 +908,49 @@ TEST(Tesselator, AnAirPocketInsideTheSwarmIsMeshedInsideOut) {
 // five blended ones, variance 0.25 like swarm_1000.wrl: with the old default desiredRadius of 0.3 m the small balls
 // had 3-10 particles and no triangle; now settle() gives a closed, manifold mesh with as many components as Marching
 // Cubes finds at half desiredRadius (14), every particle but a few in a triangle, on 1 and 2 threads alike.
+// A limb thinner than desiredRadius (radius 0.6 of it): with the thin-parts rule its particles split at the scaled
+// radius, so that about five of them ring it (and it meshes closed as one piece); with the thesis's one spacing about
+// three, too few for a tube. The ring is counted from the particles of a slab across the limb's middle, averaged over
+// 20 updates: a hexagonal packing of n particles on the slab's area A has spacing s = sqrt(A / (n sqrt(3) / 2)), and
+// 2 pi r / s of them round the limb.
+TEST(Tesselator, AThinLimbIsRingedByFiveParticlesNotThree) {
+  const Example e = fromRead(readScene(R"(#VRML V2.0 utf8
+ExponentialBlend { variance 0.25 children [
+  LineSeg { point1 0 0 0 point2 0 0.6 0 radius1 0.03 radius2 0.03 }
+] }
+)",
+                                       "thin.wrl"));
+  ASSERT_TRUE(e.character);
+  SkeletonCache skel(*e.character);
+  const float r = 0.03f, slab = 0.2f;
+  auto ring = [&](bool resolve, MeshTopology& t) {
+    TesselatorOptions o;
+    o.desiredRadius = 0.05f;
+    o.queryRadius = 0.05f * 0.8f / 0.3f;
+    o.cubeSize = 0.1f;
+    o.closedFallback = false;
+    o.resolveThinParts = resolve;
+    Tesselator tess(o);
+    Mesh mesh;
+    EXPECT_LT(tess.settle(skel, mesh, 400), 400);
+    t = analyzeTopology(mesh);
+    double n = 0.0;
+    for (int update = 0; update < 20; ++update) {
+      tess.update(skel.field());
+      for (const glm::vec3& p : tess.particles().positions) n += std::abs(p.y - 0.3f) < 0.5f * slab;
+    }
+    n /= 20.0;
+    const double spacing = std::sqrt(2.0 * 3.14159265 * r * slab / (n * std::sqrt(3.0) / 2.0));
+    return 2.0 * 3.14159265 * r / spacing;
+  };
+  MeshTopology thin, uniform;
+  const double withRule = ring(true, thin), without = ring(false, uniform);
+  EXPECT_TRUE(thin.closedManifold()) << thin.boundaryEdges << " boundary edges";
+  EXPECT_EQ(thin.components, 1u);
+  EXPECT_GT(withRule, 4.5) << "particles round the limb with the rule";
+  EXPECT_LT(without, 3.6) << "and with the one spacing";
+}
+
 TEST(Tesselator, ManySmallBlobsMeshClosedWithEveryComponent) {
   std::string text = "#VRML V2.0 utf8\nExponentialBlend {\n  variance 0.25\n  children [\n";
   uint32_t rng = 12345u;
@@ -959,14 +1002,17 @@ TEST(Tesselator, ManySmallBlobsMeshClosedWithEveryComponent) {
   }
   EXPECT_EQ(indices[0], indices[1]);
 
-  // The old default spacing misses components (what issue 15 measured on the swarm).
+  // The old default spacing (0.3 m, as large as the blobs) missed components (what issue 15 measured on the swarm).
+  // It reaches every one now that particles split at a scaled radius on parts thinner than desiredRadius.
   TesselatorOptions coarse;
   coarse.closedFallback = false;
   Tesselator tess(coarse);
   Mesh mesh;
-  tess.settle(skel, mesh, 100);
-  EXPECT_LT(analyzeTopology(mesh).components, reference);
-  EXPECT_GT(matchComponents(mesh, referenceMesh).missing, 0u);
+  tess.settle(skel, mesh, 200);
+  const MeshTopology t = analyzeTopology(mesh);
+  EXPECT_TRUE(t.closedManifold()) << t.boundaryEdges << " boundary edges";
+  EXPECT_EQ(t.components, reference);
+  EXPECT_EQ(matchComponents(mesh, referenceMesh).missing, 0u);
 }
 
 // ---- The update's phases one at a time (tesselator_state.h), on particles spread evenly over a sphere ---------

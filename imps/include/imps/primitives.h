@@ -86,6 +86,8 @@ struct Primitive {
   float maxDistance(const Box& box) const;
   // The smallest radius of the primitive (metres): a ball of this radius fits in it wherever its core is.
   float minRadius() const;
+  // Its radius nearest x (metres): a line segment's swept radius at the sphere nearest x, an ellipsoid's smallest.
+  float radiusNear(const glm::vec3& x) const;
 };
 
 }  // namespace imps

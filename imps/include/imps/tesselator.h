@@ -73,6 +73,12 @@ struct TesselatorOptions {
   // keep it closed and manifold (pass H, docs/tesselator.md); stats().foldedTriangles counts those left. False: folds
   // stay (and are not counted).
   bool unfold = true;
+  // Thin parts: where a particle's primitive is thinner than desiredRadius (the particle's distance from the
+  // primitive's core), its spacing is desiredRadius times thickness / desiredRadius (at least 0.5), so that a ring of
+  // about 2 pi particles closes round a wrist or a small blob instead of the three or four of the full spacing
+  // (docs/tesselator.md, "Thin parts"). Parts at least desiredRadius thick are sampled as without. False: the
+  // thesis's one spacing everywhere.
+  bool resolveThinParts = true;
   // Projective: a textured mesh's coordinates come from the generators (textureMesh alone). Carried: every particle
   // carries its coordinates (see carryTexcoords), so the texture stretches with the skin instead of sliding.
   TextureMode textureMode = TextureMode::Projective;
