@@ -48,6 +48,7 @@ struct BenchArgs {
   double hz = 30.0;
   int threads = -1;  // -1: the scene's numThreads
   double desiredRadius = 0;  // > 0: overrides the scene's (queryRadius and the hash cube scale with it)
+  bool uniformSpacing = false;  // TesselatorOptions::resolveThinParts off: the thesis's one spacing everywhere
   std::string csv;
   bool json = false;
 };
@@ -293,6 +294,7 @@ std::optional<Report> benchScene(const std::string& path, const Motion& motion, 
   SkeletonCache skel(ch);
   TesselatorOptions o = TesselatorOptions::forScene(loaded->scene, skel.field());
   if (a.threads >= 0) o.threads = a.threads;
+  o.resolveThinParts = !a.uniformSpacing;
   if (a.desiredRadius > 0) {
     const float scale = float(a.desiredRadius) / o.desiredRadius;
     o.desiredRadius *= scale;
@@ -559,6 +561,8 @@ void addTesselatorCommands(CLI::App& app, Commands& commands) {
   cmd->add_option("--desired-radius", a->desiredRadius,
                   "Particle spacing (m) instead of the scene's; queryRadius and the hash cube scale with it")
       ->check(positiveNumber());
+  cmd->add_flag("--uniform-spacing", a->uniformSpacing,
+                "One particle spacing everywhere, as the thesis (default: a smaller one on parts thinner than it)");
   cmd->add_option("--csv", a->csv, "Write one line per render (topology, folds, |F-iso|, particles, fissions) here");
   cmd->add_flag("--json", a->json, "Print the report as JSON (for scripts)");
   commands.push_back({cmd, [a] { return runBench(*a); }});
