@@ -385,15 +385,16 @@ inline float blancSchlickSlope(float param, float d, float) {
   return -2.0f * u * param;
 }
 
-// samples()' one-pass step for a field of one additive blend set: one candidate's term, gradient, colour, weight
-// and ownership at every point, in one loop (one distance and one term per point, nothing stored between passes).
-// Per point this is sample()'s arithmetic in its order (the set's sum, then each positive term's slope x distance
-// gradient, colour and weight), so the same bits; beyond the support the term is exactly 0 and adds nothing.
-// One candidate's contribution to a point's sums (value, gradient, colour, weight) and owner.
+// A point's running sums in samplesOfOneSet(): value, gradient, colour, weight, the best term so far and its owner.
 struct SampleSums {
   float v, x, y, z, r, g, b, w, best;
   int32_t o;
 };
+
+// samples()' one-pass step for a field of one additive blend set: one candidate's term, gradient, colour, weight
+// and ownership at a point (one distance and one term, nothing stored between passes). Per point this is sample()'s
+// arithmetic in its order (the set's sum, then each positive term's slope x distance gradient, colour and weight), so
+// the same bits; beyond the support the term is exactly 0 and adds nothing.
 template <float (*DistanceGradient)(const Primitive&, float, float, float, float&, float&, float&),
           float (*Term)(float, float), float (*Slope)(float, float, float)>
 [[gnu::always_inline]] inline void addSampleTerm(const Primitive& p, float param, glm::vec3 c, int32_t candidate,
@@ -417,7 +418,7 @@ template <float (*DistanceGradient)(const Primitive&, float, float, float, float
   s.best = std::max(s.best, t);
 }
 
-// K (1 or 2) candidates' terms at every point, one after the other.
+// K (1 or 2) candidates' steps at every point, one after the other, in one loop over the points.
 template <float (*DistanceGradient)(const Primitive&, float, float, float, float&, float&, float&),
           float (*Term)(float, float), float (*Slope)(float, float, float), size_t K>
 IMPS_VECTOR_CLONES void addSampleTerms(const std::array<const Primitive*, K>& ps, const std::array<float, K>& params,
