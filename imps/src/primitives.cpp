@@ -256,8 +256,29 @@ float Primitive::maxDistance(const Box& box) const {
   return 0.0f;
 }
 
-float Primitive::radiusNear(const glm::vec3& x) const {
-  return kind == PrimitiveKind::LineSeg ? r1 + slope * lineSegParameter(*this, x) : minRadius();
+float Primitive::thickness(const glm::vec3& x) const {
+  // distance()'s arithmetic, the segment's parameter found once.
+  float r = minRadius(), d = 0.0f;
+  switch (kind) {
+    case PrimitiveKind::Metaball: {
+      const glm::vec3 v = x - center;
+      d = glm::dot(v, v) / (radius * radius);
+      break;
+    }
+    case PrimitiveKind::Ellipsoid: {
+      const glm::vec3 q = worldToLocal * (x - center);
+      d = glm::dot(q, q);
+      break;
+    }
+    case PrimitiveKind::LineSeg: {
+      const float s = lineSegParameter(*this, x);
+      const glm::vec3 v = x - (p1 + s * axis);
+      r = r1 + slope * s;
+      d = glm::dot(v, v) / (r * r);
+      break;
+    }
+  }
+  return r * std::sqrt(std::max(d, 1.0f));
 }
 
 float Primitive::minRadius() const {

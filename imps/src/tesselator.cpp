@@ -56,8 +56,7 @@ float thinScale(const Tesselator::State& s, const Field& field, const Tesselator
   // inside the hip owns particles on the hip's surface, which must not pack as densely as on the hand). Both vary
   // smoothly along a limb and across a joint, where the owner changes: a jump in the scale would split every particle
   // crossing it. Never less than the owner's radius there: a particle off the surface, inside its owner, is passing.
-  const float thickness = p.radiusNear(s.pos[i]) * std::sqrt(std::max(p.distance(s.pos[i]), 1.0f));
-  return std::clamp(thickness / o.desiredRadius, kThinScaleMin, 1.0f);
+  return std::clamp(p.thickness(s.pos[i]) / o.desiredRadius, kThinScaleMin, 1.0f);
 }
 
 Box chunkBox(const std::vector<glm::vec3>& p, size_t begin, size_t end, float pad) {

@@ -53,6 +53,25 @@ TEST(Primitives, LineSegWithEqualRadiiIsACapsule) {
   EXPECT_NEAR(p.distance({1, 1, 0}), 4.0f, 1e-5f);
 }
 
+// thickness(): the distance from the core (the nearest swept sphere's centre, the ellipsoid's centre scaled), never
+// less than the radius there: a point inside the primitive gets the radius.
+TEST(Primitives, ThicknessIsTheDistanceFromTheCoreAtLeastTheRadiusThere) {
+  const Primitive cone = Primitive::lineSeg({0, 0, 0}, {0, 2, 0}, 0.4f, 0.2f);  // radius 0.3 half way
+  EXPECT_NEAR(cone.thickness({0, 1, 0}), 0.3f, 1e-5f) << "on the axis: the radius there";
+  // Inside, off the axis: the radius of the sphere nearest the point, a little up the cone (s = t + slope rho^2 / a).
+  EXPECT_NEAR(cone.thickness({0.1f, 1, 0}), 0.4f - 0.1f * (1.0f - 0.1f * 0.01f / 0.3f), 1e-5f);
+  EXPECT_NEAR(Primitive::lineSeg({0, 0, 0}, {0, 2, 0}, 0.3f, 0.3f).thickness({0.1f, 1, 0}), 0.3f, 1e-6f)
+      << "inside a capsule: its radius";
+  EXPECT_NEAR(cone.thickness({0, 3, 0}), 1.0f, 1e-5f) << "beyond the small end: the distance from its centre";
+  EXPECT_NEAR(cone.thickness({0, -0.4f, 0}), 0.4f, 1e-5f) << "on the big end's cap";
+  const Primitive ball = Primitive::metaball({1, 2, 3}, 0.5f);
+  EXPECT_FLOAT_EQ(ball.thickness({1, 2, 3}), 0.5f);
+  EXPECT_FLOAT_EQ(ball.thickness({1, 4, 3}), 2.0f);
+  const Primitive egg = Primitive::ellipsoid({0, 0, 0}, glm::quat(1, 0, 0, 0), {1, 2, 3});
+  EXPECT_NEAR(egg.thickness({0, 0, 0}), 1.0f, 1e-6f) << "its smallest radius";
+  EXPECT_NEAR(egg.thickness({0, 4, 0}), 2.0f, 1e-5f) << "twice its d = 1 surface: twice the smallest radius";
+}
+
 // The surface d = 1 of a segment with unequal radii is the tangent cone-sphere hull: the distance to the cone
 // surface, measured along its normal, is zero on the tangent line and the tangent points sit r*sin(theta) from
 // the endpoints towards the smaller end (thesis 2.3.3).

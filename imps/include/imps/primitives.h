@@ -86,8 +86,9 @@ struct Primitive {
   float maxDistance(const Box& box) const;
   // The smallest radius of the primitive (metres): a ball of this radius fits in it wherever its core is.
   float minRadius() const;
-  // Its radius nearest x (metres): a line segment's swept radius at the sphere nearest x, an ellipsoid's smallest.
-  float radiusNear(const glm::vec3& x) const;
+  // Its thickness at x (metres): x's distance from its core, at least its radius there, i.e. r sqrt(max(d(x), 1))
+  // with r the radius nearest x (a line segment's swept radius at the sphere nearest x, an ellipsoid's smallest).
+  float thickness(const glm::vec3& x) const;
 };
 
 }  // namespace imps
