@@ -33,7 +33,13 @@ constexpr float kStrayDistance = 1.0f; // |F - iso| / |grad F| beyond this: the 
 // local spacing is desiredRadius times thickness / desiredRadius (at least kThinScaleMin; State::scale), and the
 // dynamics run in units of it (repel, integrateParticles, addAndDeleteParticles): rings of particles close round a
 // wrist that particles of the full spacing would leave open.
+// Between kThinScaleKnee and kThinScaleFull the scale rises linearly from kThinScaleKnee to 1 (continuous: a jump
+// would split every particle crossing it), so a part just under desiredRadius thick keeps (nearly) the full spacing:
+// with the scale equal to the thickness there, flubber's arms (0.05-0.07 m under a desiredRadius of 0.06 m) packed
+// unevenly against its body and folded more often than with one spacing (docs/tesselator.md, "Thin parts").
 constexpr float kThinScaleMin = 0.5f;
+constexpr float kThinScaleKnee = 0.8f;
+constexpr float kThinScaleFull = 0.95f;
 // Coming to rest on a still field: after kStillAfter updates of an unchanged field with a particle count stable to
 // 1 % over the last kCountWindow updates, fission, fusion and death stop and the step halves every update; after
 // kCalmUpdates such updates the particles are frozen until the field moves again. Not while the last triangulation
@@ -56,7 +62,10 @@ float thinScale(const Tesselator::State& s, const Field& field, const Tesselator
   // inside the hip owns particles on the hip's surface, which must not pack as densely as on the hand). Both vary
   // smoothly along a limb and across a joint, where the owner changes: a jump in the scale would split every particle
   // crossing it. Never less than the owner's radius there: a particle off the surface, inside its owner, is passing.
-  return std::clamp(p.thickness(s.pos[i]) / o.desiredRadius, kThinScaleMin, 1.0f);
+  const float t = p.thickness(s.pos[i]) / o.desiredRadius;
+  if (t >= kThinScaleFull) return 1.0f;
+  if (t <= kThinScaleKnee) return std::max(t, kThinScaleMin);
+  return kThinScaleKnee + (1.0f - kThinScaleKnee) * (t - kThinScaleKnee) / (kThinScaleFull - kThinScaleKnee);
 }
 
 Box chunkBox(const std::vector<glm::vec3>& p, size_t begin, size_t end, float pad) {

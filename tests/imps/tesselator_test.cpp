@@ -951,6 +951,39 @@ ExponentialBlend { variance 0.25 children [
   EXPECT_LT(without, 3.6) << "and with the one spacing";
 }
 
+// The thin-parts rule's knee: a limb just under desiredRadius thick (radius 0.96 of it) keeps the full spacing, so the
+// rule changes nothing there: the same particles and triangles, bit for bit, as with the one spacing (with the scale
+// equal to the thickness up to 1, such a part packed a few per cent denser than the body it joins, and flubber's arms
+// folded more often; docs/tesselator.md, "Thin parts").
+TEST(Tesselator, ALimbNearlyAsThickAsTheSpacingKeepsTheOneSpacing) {
+  const Example e = fromRead(readScene(R"(#VRML V2.0 utf8
+ExponentialBlend { variance 0.25 children [
+  LineSeg { point1 0 0 0 point2 0 0.6 0 radius1 0.048 radius2 0.048 }
+] }
+)",
+                                       "limb.wrl"));
+  ASSERT_TRUE(e.character);
+  SkeletonCache skel(*e.character);
+  auto settle = [&](bool resolve, std::vector<glm::vec3>& positions) {
+    TesselatorOptions o;
+    o.desiredRadius = 0.05f;
+    o.queryRadius = 0.05f * 0.8f / 0.3f;
+    o.cubeSize = 0.1f;
+    o.resolveThinParts = resolve;
+    Tesselator tess(o);
+    Mesh mesh;
+    tess.settle(skel, mesh, 200);
+    positions.assign(tess.particles().positions.begin(), tess.particles().positions.end());
+    return mesh;
+  };
+  std::vector<glm::vec3> withRule, without;
+  const Mesh a = settle(true, withRule), b = settle(false, without);
+  ASSERT_GT(withRule.size(), 50u);
+  EXPECT_EQ(withRule, without) << withRule.size() << " against " << without.size() << " particles";
+  EXPECT_EQ(a.indices, b.indices);
+  EXPECT_TRUE(analyzeTopology(a).closedManifold());
+}
+
 TEST(Tesselator, ManySmallBlobsMeshClosedWithEveryComponent) {
   std::string text = "#VRML V2.0 utf8\nExponentialBlend {\n  variance 0.25\n  children [\n";
   uint32_t rng = 12345u;
