@@ -329,6 +329,7 @@ void Tesselator::reset() {
   s_->fieldMoved = true;
   s_->stillUpdates = s_->calm = 0;
   s_->lastMeshOpen = false;
+  s_->fieldPieces = 1;
   s_->recentCounts.clear();
   s_->stepScale = 1.0f;
   stats_ = {};

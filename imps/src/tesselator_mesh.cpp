@@ -1928,6 +1928,21 @@ size_t unfoldTriangles(Tesselator::State& s) {
   return s.folded.size();
 }
 
+size_t solidPieces(const Tesselator::State& s) {
+  DisjointSets pieces(s.vertexCount());
+  for (size_t t = 0; t < s.tris.size(); t += 3) {
+    pieces.unite(s.tris[t], s.tris[t + 1]);
+    pieces.unite(s.tris[t], s.tris[t + 2]);
+  }
+  // Each piece's signed volume (six times: the tetrahedra to the origin, as signedVolume), by its root.
+  std::vector<double> volume(s.vertexCount(), 0.0);
+  for (size_t t = 0; t < s.tris.size(); t += 3) {
+    const glm::dvec3 a(s.vpos[s.tris[t]]), b(s.vpos[s.tris[t + 1]]), c(s.vpos[s.tris[t + 2]]);
+    volume[pieces.find(s.tris[t])] += glm::dot(a, glm::cross(b, c));
+  }
+  return size_t(std::count_if(volume.begin(), volume.end(), [](double v) { return v > 0.0; }));
+}
+
 void writeMesh(const Tesselator::State& s, const TesselatorOptions& o, Mesh& mesh) {
   const size_t n = s.vertexCount();
   mesh.positions.resize(3 * n);
@@ -1979,12 +1994,32 @@ void Tesselator::triangulate(Mesh& mesh) {
   stats_.openEdges = boundary;
   s.lastMeshOpen = boundary > 0 || pinched > 0;
   stats_.foldedTriangles = s.lastMeshOpen || !o.unfold ? 0 : unfoldTriangles(s);  // H
-  stats_.fallback = o.closedFallback && (boundary > 0 || pinched > 0);
-  if (stats_.fallback) {  // G: never show a hole (docs/tesselator.md, "The fallback")
+  // J: a closed triangulation of more solid pieces than the field was last found to have may have meshed a part apart
+  // from the solid it joins (a head capped at the neck): it is checked against the fallback, Marching Cubes of the
+  // same field, which it then becomes. The solids it cut off are stats().cutOffParts.
+  bool written = false;
+  Mesh fallback;
+  stats_.cutOffParts = 0;
+  if (o.closedFallback && boundary == 0 && pinched == 0) {
+    const size_t pieces = solidPieces(s);
+    if (pieces > 1 && pieces != s.fieldPieces) {
+      writeMesh(s, o, mesh);
+      writeFallbackMesh(s, o, fallback);
+      const ComponentMatch match = matchComponents(mesh, fallback);
+      stats_.cutOffParts = match.cutOff - match.cutOffCavities;
+      written = true;
+    }
+    if (stats_.cutOffParts == 0) s.fieldPieces = pieces;
+  }
+  stats_.fallback = o.closedFallback && (boundary > 0 || pinched > 0 || stats_.cutOffParts > 0);
+  if (stats_.fallback) {  // G: never show a hole, nor a part off the body (docs/tesselator.md, "The fallback")
     ++stats_.fallbacks;
-    writeFallbackMesh(s, o, mesh);
+    if (written)
+      mesh = std::move(fallback);
+    else
+      writeFallbackMesh(s, o, mesh);
     boundary = 0;
-  } else {
+  } else if (!written) {
     writeMesh(s, o, mesh);
   }
   // The surface rows' vertices were this render's: the arrays shared with the particles (s.nrm) are n long again.

@@ -110,6 +110,9 @@ struct Tesselator::State {
   // The last triangulate() left the particles' own triangulation open or pinched (before any fallback): the particles
   // must not come to rest on it (a frozen hole would stay for good); set by triangulate(), read by the rest schedule.
   bool lastMeshOpen = false;
+  // Pass J: the number of solid pieces of the last closed triangulation that Marching Cubes found to be the field's
+  // own (no part cut off). A triangulation of that many pieces is not checked again: a part cut off adds a piece.
+  size_t fieldPieces = 1;
 
   // Reorder scratch.
   std::vector<glm::vec3> tmpV;
@@ -243,6 +246,11 @@ size_t markPinchedVertices(Tesselator::State& s, const TesselatorOptions& o);
 // (retriangulateAround). Each replaces a disk by a disk with the same boundary, so the mesh stays closed and
 // manifold. In triangle order, up to three rounds. Returns the folds left.
 size_t unfoldTriangles(Tesselator::State& s);
+// J. parts cut off (only on a closed, manifold triangulation): the pieces of s.tris (triangles joined by edges) that
+// face outward (positive signed volume; an air pocket's faces inward). More than one: triangulate() asks Marching
+// Cubes whether the field joins them (matchComponents), as it does for a head capped at a neck whose ring of
+// particles made no triangle. One union-find pass.
+size_t solidPieces(const Tesselator::State& s);
 // The output: one vertex per particle, then the surface rows' (s.vpos, s.nrm, s.vcol clamped to [0, 1]), and s.tris.
 void writeMesh(const Tesselator::State& s, const TesselatorOptions& o, Mesh& mesh);
 // G. the fallback output: Marching Cubes of s.field at cell desiredRadius (closed and manifold by construction).

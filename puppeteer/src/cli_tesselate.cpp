@@ -78,8 +78,10 @@ struct RenderRow {
   double worstFieldError = 0;  // max |F(v) - iso| over the mesh's vertices (field units)
   double worstOffsetMm = 0;    // max |F(v) - iso| / |grad F(v)| (first-order distance to the surface, mm)
   uint64_t fissions = 0, fusions = 0;
-  size_t fallback = 0;  // 1: the particle triangulation was not closed and manifold; Marching Cubes was shown
+  size_t fallback = 0;  // 1: the particle triangulation was not closed and manifold, or cut a part off; Marching
+                        // Cubes was shown
   size_t particleOpenEdges = 0, particlePinchedVertices = 0;  // what the particle triangulation had left
+  size_t particleCutOffParts = 0;  // solids the particle triangulation meshed apart (TesselatorStats::cutOffParts)
   // Against Marching Cubes of the same field at half desiredRadius (matchComponents): parts meshed as separate
   // pieces where the surface is one (a hand cut off at the wrist), and components not meshed at all.
   size_t cutOffParts = 0, missingComponents = 0;
@@ -336,6 +338,7 @@ std::optional<Report> benchScene(const std::string& path, const Motion& motion, 
     row.fallback = tess.stats().fallback ? 1 : 0;
     row.particleOpenEdges = tess.stats().openEdges;
     row.particlePinchedVertices = tess.stats().pinchedVertices;
+    row.particleCutOffParts = tess.stats().cutOffParts;
     marchingCubes.polygonize(skel.field(), reference, referenceMesh);
     measureRender(mesh, skel.field(), referenceMesh, row);
     r.rows.push_back(row);
@@ -395,18 +398,18 @@ std::string csvText(const std::vector<Report>& reports) {
       "scene,render,seconds,particles,triangles,boundary_edges,nonmanifold_edges,nonmanifold_vertices,"
       "folded_triangles,worst_f_minus_iso,worst_offset_mm,fissions,fusions,fallback,particle_open_edges,"
       "particle_pinched_vertices,cut_off_parts,cut_off_cavities,missing_components,missing_cavities,"
-      "largest_missing_mm\n";
+      "largest_missing_mm,particle_cut_off_parts\n";
   char line[512];
   for (const Report& r : reports)
     for (size_t f = 0; f < r.rows.size(); ++f) {
       const RenderRow& w = r.rows[f];
       std::snprintf(line, sizeof line,
-                    "%s,%zu,%.4f,%zu,%zu,%zu,%zu,%zu,%zu,%.6g,%.4g,%llu,%llu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%.4g\n",
+                    "%s,%zu,%.4f,%zu,%zu,%zu,%zu,%zu,%zu,%.6g,%.4g,%llu,%llu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%.4g,%zu\n",
                     r.name.c_str(), f, w.seconds, w.particles, w.triangles, w.boundaryEdges, w.nonManifoldEdges,
                     w.nonManifoldVertices, w.foldedTriangles, w.worstFieldError, w.worstOffsetMm,
                     (unsigned long long)w.fissions, (unsigned long long)w.fusions, w.fallback, w.particleOpenEdges,
                     w.particlePinchedVertices, w.cutOffParts, w.cutOffParts - w.cutOffSolids, w.missingComponents,
-                    w.missingComponents - w.missingSolids, w.largestMissingMm);
+                    w.missingComponents - w.missingSolids, w.largestMissingMm, w.particleCutOffParts);
       out += line;
     }
   return out;
@@ -433,11 +436,22 @@ Json reportJson(const Report& r) {
               {"max_folded_triangles", r.max(&RenderRow::foldedTriangles)},
               {"worst_f_minus_iso", r.worst(&RenderRow::worstFieldError)},
               {"worst_offset_mm", r.worst(&RenderRow::worstOffsetMm)},
-              {"fissions", [&] { uint64_t n = 0; for (const RenderRow& w : r.rows) n += w.fissions; return n; }()},
-              {"fusions", [&] { uint64_t n = 0; for (const RenderRow& w : r.rows) n += w.fusions; return n; }()},
+              {"fissions",
+               [&] {
+                 uint64_t n = 0;
+                 for (const RenderRow& w : r.rows) n += w.fissions;
+                 return n;
+               }()},
+              {"fusions",
+               [&] {
+                 uint64_t n = 0;
+                 for (const RenderRow& w : r.rows) n += w.fusions;
+                 return n;
+               }()},
               {"renders_with_fallback", r.count(&RenderRow::fallback)},
               {"max_particle_open_edges", r.max(&RenderRow::particleOpenEdges)},
               {"max_particle_pinched_vertices", r.max(&RenderRow::particlePinchedVertices)},
+              {"renders_with_particle_cut_off_parts", r.count(&RenderRow::particleCutOffParts)},
               {"renders_with_cut_off_parts", r.count(&RenderRow::cutOffParts)},
               {"max_cut_off_parts", r.max(&RenderRow::cutOffParts)},
               {"renders_with_cut_off_solids", r.count(&RenderRow::cutOffSolids)},
@@ -486,6 +500,8 @@ void printTable(const BenchArgs& a, const std::vector<Report>& reports) {
   row("Renders with folds", [&](const Report& r) { return pct(r, r.count(&RenderRow::foldedTriangles)); });
   row("Folded triangles (max)", [&](const Report& r) { return num(r.max(&RenderRow::foldedTriangles)); });
   row("Renders with MC fallback", [&](const Report& r) { return pct(r, r.count(&RenderRow::fallback)); });
+  row("  of them for a part cut off",
+      [&](const Report& r) { return pct(r, r.count(&RenderRow::particleCutOffParts)); });
   row("Renders with parts cut off", [&](const Report& r) { return pct(r, r.count(&RenderRow::cutOffParts)); });
   row("Renders with solids cut off", [&](const Report& r) { return pct(r, r.count(&RenderRow::cutOffSolids)); });
   row("Renders missing components", [&](const Report& r) { return pct(r, r.count(&RenderRow::missingComponents)); });

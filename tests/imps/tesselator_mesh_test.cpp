@@ -650,6 +650,36 @@ TEST(TesselatorMesh, OctahedronFacesAreOutwardAndClosed) {
   EXPECT_EQ(openEdges(o.s), 0u);
 }
 
+// Pass J's count: the pieces of the triangulation (triangles joined by corners) that face outward. The octahedron is
+// one; the same octahedron turned inside out (an air pocket's hull) is none; a second octahedron beside it, apart, is
+// a second piece, and its inside-out copy inside the first (a pocket in it) is none.
+TEST(TesselatorMesh, SolidPiecesCountsTheOutwardPiecesOnly) {
+  Octahedron o;
+  setTriangles(o.s, o.faces());
+  EXPECT_EQ(solidPieces(o.s), 1u);
+  std::vector<uint32_t> inward = o.faces();
+  for (size_t t = 0; t < inward.size(); t += 3) std::swap(inward[t + 1], inward[t + 2]);
+  o.s.tris = inward;
+  EXPECT_EQ(solidPieces(o.s), 0u) << "an inside-out piece is no solid";
+  // Six more vertices (as the hole repair's surface rows add them): a second octahedron, at 3 along x or inside.
+  const std::vector<uint32_t> faces = o.faces();
+  for (const glm::vec3 centre : {glm::vec3(3, 0, 0), glm::vec3(0, 0, 0)}) {
+    o.s.vpos.resize(o.s.size());
+    for (uint32_t c : o.corner) o.s.vpos.push_back(centre + 0.5f * o.s.vpos[c]);
+    std::vector<uint32_t> tris = faces;
+    for (size_t t = 0; t < faces.size(); t += 3) {
+      uint32_t second[3];
+      for (size_t k = 0; k < 3; ++k)
+        second[k] = uint32_t(o.s.size()) +
+                    uint32_t(std::find(o.corner.begin(), o.corner.end(), faces[t + k]) - o.corner.begin());
+      const bool pocket = centre == glm::vec3(0.0f);  // inside the first: turned inside out, as pass I orients it
+      tris.insert(tris.end(), {second[0], pocket ? second[2] : second[1], pocket ? second[1] : second[2]});
+    }
+    o.s.tris = tris;
+    EXPECT_EQ(solidPieces(o.s), centre.x > 0.0f ? 2u : 1u) << "a second octahedron at x = " << centre.x;
+  }
+}
+
 TEST(TesselatorMesh, ClosedMeshHasNoPinchAndRepairLeavesItAlone) {
   Octahedron o;
   setTriangles(o.s, o.faces());

@@ -66,7 +66,7 @@ TEST(BenchCommand, ChecksEveryRenderOfASwingAClipAndASession) {
           "max_nonmanifold_vertices", "renders_with_folds", "fissions_per_update_settled", "worst_f_minus_iso",
           "renders_with_fallback", "renders_with_cut_off_parts", "max_cut_off_parts", "renders_with_missing_components",
           "max_missing_components", "renders_with_missing_solids", "renders_with_cut_off_solids",
-          "largest_missing_component_mm"})
+          "largest_missing_component_mm", "renders_with_particle_cut_off_parts"})
       EXPECT_TRUE(scene.contains(key)) << c.motion << ": " << key;
     EXPECT_EQ(scene["renders"], c.renders) << c.motion;
     EXPECT_EQ(scene["renders_with_holes"], 0) << c.motion;
@@ -76,13 +76,15 @@ TEST(BenchCommand, ChecksEveryRenderOfASwingAClipAndASession) {
     std::getline(csv, line);
     EXPECT_EQ(line.rfind("scene,render,seconds,particles,triangles,boundary_edges,", 0), 0u) << line;
     EXPECT_TRUE(
-        line.ends_with(",cut_off_parts,cut_off_cavities,missing_components,missing_cavities,largest_missing_mm"))
+        line.ends_with(",cut_off_parts,cut_off_cavities,missing_components,missing_cavities,largest_missing_mm,"
+                       "particle_cut_off_parts"))
         << line;
-    // The last five columns are each render's parts cut off and how many of those are cavities, components missing
-    // (against Marching Cubes) and how many of those are cavities, and the largest missing one's size: the JSON
-    // counts the renders with parts cut off, with solids (not cavities) cut off, with components missing and with
-    // solids missing, and gives the largest size.
-    int rows = 0, cut = 0, cutSolids = 0, missing = 0, solids = 0;
+    // The five columns before the last are each render's parts cut off and how many of those are cavities, components
+    // missing (against Marching Cubes) and how many of those are cavities, and the largest missing one's size: the
+    // JSON counts the renders with parts cut off, with solids (not cavities) cut off, with components missing and with
+    // solids missing, and gives the largest size. The last: the solids the particles' own triangulation cut off, which
+    // makes the render fall back to Marching Cubes (the "fallback" column, the 14th).
+    int rows = 0, cut = 0, cutSolids = 0, missing = 0, solids = 0, particlesCut = 0;
     double largest = 0;
     while (std::getline(csv, line)) {
       ++rows;
@@ -91,8 +93,12 @@ TEST(BenchCommand, ChecksEveryRenderOfASwingAClipAndASession) {
         comma = std::min(line.find(',', at), line.size());
         cells.push_back(line.substr(at, comma - at));
       }
-      ASSERT_GE(cells.size(), 5u) << line;
-      const size_t k = cells.size() - 5;
+      ASSERT_EQ(cells.size(), 22u) << line;
+      const size_t k = cells.size() - 6;
+      if (std::stoi(cells[21]) > 0) {
+        ++particlesCut;
+        EXPECT_EQ(cells[13], "1") << "a render whose particles cut a part off falls back: " << line;
+      }
       const int cutHere = std::stoi(cells[k]), pocketsHere = std::stoi(cells[k + 1]);
       EXPECT_LE(pocketsHere, cutHere) << line;
       cut += cutHere > 0;
@@ -107,6 +113,7 @@ TEST(BenchCommand, ChecksEveryRenderOfASwingAClipAndASession) {
     }
     EXPECT_EQ(rows, c.renders) << c.motion;
     EXPECT_EQ(scene["renders_with_cut_off_parts"], cut) << c.motion;
+    EXPECT_EQ(scene["renders_with_particle_cut_off_parts"], particlesCut) << c.motion;
     EXPECT_EQ(scene["renders_with_cut_off_solids"], cutSolids) << c.motion;
     EXPECT_EQ(scene["renders_with_missing_components"], missing) << c.motion;
     EXPECT_EQ(scene["renders_with_missing_solids"], solids) << c.motion;

@@ -65,8 +65,9 @@ struct TesselatorOptions {
   // desiredRadius too small for the character reaches it; the surface is then sampled more coarsely than asked.
   size_t maxParticles = size_t{1} << 18;
   int maxHoleLoop = 40;          // boundary loops up to this many edges are filled by the hole repair
-  // A triangulation left with a hole or a pinched vertex after repair is replaced by Marching Cubes of the same field
-  // at cell desiredRadius (stats().fallback), so that no hole is ever shown. False: the particle mesh as it is.
+  // A triangulation left with a hole or a pinched vertex after repair, or one that meshes a part apart from the solid
+  // it joins (stats().cutOffParts), is replaced by Marching Cubes of the same field at cell desiredRadius
+  // (stats().fallback), so that no hole and no part off the body is ever shown. False: the particle mesh as it is.
   bool closedFallback = true;
   // A closed triangulation's folds (triangles winding against the field's outward normal at their centroid, in the
   // concave creases) are repaired by edge flips, vertex removals and retriangulations of a disk around them, which
@@ -121,6 +122,9 @@ struct TesselatorStats {
   size_t foldedTriangles = 0;  // last triangulate(): triangles still winding against their corners' normals
   size_t surfaceRowVertices = 0;  // last triangulate(): vertices the hole repair added on the surface (after the
                                   // particles' own in the mesh; 0 for the fallback)
+  size_t cutOffParts = 0;      // last triangulate(): solid parts the particles' closed triangulation meshed apart from
+                               // the solid the field joins them to (a head capped at the neck), by Marching Cubes;
+                               // the render then falls back. Checked only with closedFallback (0 without)
   bool fallback = false;       // last triangulate(): the mesh is the Marching Cubes fallback (see closedFallback)
   uint64_t fallbacks = 0;      // triangulations that fell back, since reset
   uint64_t updates = 0;        // total update() calls since reset
