@@ -246,10 +246,11 @@ size_t markPinchedVertices(Tesselator::State& s, const TesselatorOptions& o);
 // (retriangulateAround). Each replaces a disk by a disk with the same boundary, so the mesh stays closed and
 // manifold. In triangle order, up to three rounds. Returns the folds left.
 size_t unfoldTriangles(Tesselator::State& s);
-// J. parts cut off (only on a closed, manifold triangulation): the pieces of s.tris (triangles joined by edges) that
-// face outward (positive signed volume; an air pocket's faces inward). More than one: triangulate() asks Marching
-// Cubes whether the field joins them (matchComponents), as it does for a head capped at a neck whose ring of
-// particles made no triangle. One union-find pass.
+// J. parts cut off (only on a closed, manifold triangulation): the pieces of s.tris (triangles joined by corners,
+// which on a manifold is by edges) that face outward (positive signed volume; an air pocket's faces inward). More
+// than one: triangulate() asks Marching Cubes whether the field joins them (matchComponents), as it does for a head
+// capped at a neck whose ring of particles made no triangle, unless the count is the one it last found to be the
+// field's own (State::fieldPieces). One union-find pass.
 size_t solidPieces(const Tesselator::State& s);
 // The output: one vertex per particle, then the surface rows' (s.vpos, s.nrm, s.vcol clamped to [0, 1]), and s.tris.
 void writeMesh(const Tesselator::State& s, const TesselatorOptions& o, Mesh& mesh);

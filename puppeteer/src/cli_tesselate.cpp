@@ -119,6 +119,11 @@ struct Report {
     for (const RenderRow& r : rows) m = std::max(m, r.*field);
     return m;
   }
+  uint64_t total(uint64_t RenderRow::*field) const {
+    uint64_t n = 0;
+    for (const RenderRow& r : rows) n += r.*field;
+    return n;
+  }
 };
 
 // The mesh's defects as the viewer would show them: topology (analyzeTopology), triangles whose winding disagrees
@@ -436,18 +441,8 @@ Json reportJson(const Report& r) {
               {"max_folded_triangles", r.max(&RenderRow::foldedTriangles)},
               {"worst_f_minus_iso", r.worst(&RenderRow::worstFieldError)},
               {"worst_offset_mm", r.worst(&RenderRow::worstOffsetMm)},
-              {"fissions",
-               [&] {
-                 uint64_t n = 0;
-                 for (const RenderRow& w : r.rows) n += w.fissions;
-                 return n;
-               }()},
-              {"fusions",
-               [&] {
-                 uint64_t n = 0;
-                 for (const RenderRow& w : r.rows) n += w.fusions;
-                 return n;
-               }()},
+              {"fissions", r.total(&RenderRow::fissions)},
+              {"fusions", r.total(&RenderRow::fusions)},
               {"renders_with_fallback", r.count(&RenderRow::fallback)},
               {"max_particle_open_edges", r.max(&RenderRow::particleOpenEdges)},
               {"max_particle_pinched_vertices", r.max(&RenderRow::particlePinchedVertices)},

@@ -191,9 +191,10 @@ class Tesselator {
   void carryTexcoords(Mesh& mesh);
 
   // Runs updates until settled (particle count stable to 1% over 10 updates, and the particle triangulation closed
-  // without the fallback: no hole, no pinch, no part cut off) or maxUpdates; returns the number of updates run. Leaves the last triangulation in
-  // `mesh`. Reports progress and stops on cancel as the options say (then `mesh` is empty, stats().cancelled is set,
-  // and the particles are those of the last complete update, so a later call goes on from there).
+  // without the fallback: no hole, no pinch, no part cut off) or maxUpdates; returns the number of updates run.
+  // Leaves the last triangulation in `mesh`. Reports progress and stops on cancel as the options say (then `mesh` is
+  // empty, stats().cancelled is set, and the particles are those of the last complete update, so a later call goes
+  // on from there).
   int settle(const SkeletonCache& skeleton, Mesh& mesh, int maxUpdates = 400);
 
   ParticleView particles() const;
