@@ -921,28 +921,38 @@ TEST(Tesselator, AnAirPocketInsideTheSwarmIsMeshedInsideOut) {
 // five blended ones, variance 0.25 like swarm_1000.wrl: with the old default desiredRadius of 0.3 m the small balls
 // had 3-10 particles and no triangle; now settle() gives a closed, manifold mesh with as many components as Marching
 // Cubes finds at half desiredRadius (14), every particle but a few in a triangle, on 1 and 2 threads alike.
+// A straight limb 0.6 m long of the given radius, alone, and the options its thin-parts tests run it with
+// (desiredRadius 0.05 m, the query radius and hash cube in the file's proportions).
+Example straightLimb(float radius) {
+  const std::string r = std::to_string(radius);
+  return fromRead(
+      readScene("#VRML V2.0 utf8\nExponentialBlend { variance 0.25 children [\n"
+                "  LineSeg { point1 0 0 0 point2 0 0.6 0 radius1 " +
+                    r + " radius2 " + r + " }\n] }\n",
+                "limb.wrl"));
+}
+TesselatorOptions limbOptions(bool resolveThinParts) {
+  TesselatorOptions o;
+  o.desiredRadius = 0.05f;
+  o.queryRadius = 0.05f * 0.8f / 0.3f;
+  o.cubeSize = 0.1f;
+  o.resolveThinParts = resolveThinParts;
+  return o;
+}
+
 // A limb thinner than desiredRadius (radius 0.6 of it): with the thin-parts rule its particles split at the scaled
 // radius, so that about five of them ring it (and it meshes closed as one piece); with the thesis's one spacing about
 // three, too few for a tube. The ring is counted from the particles of a slab across the limb's middle, averaged over
 // 20 updates: a hexagonal packing of n particles on the slab's area A has spacing s = sqrt(A / (n sqrt(3) / 2)), and
 // 2 pi r / s of them round the limb.
 TEST(Tesselator, AThinLimbIsRingedByFiveParticlesNotThree) {
-  const Example e = fromRead(readScene(R"(#VRML V2.0 utf8
-ExponentialBlend { variance 0.25 children [
-  LineSeg { point1 0 0 0 point2 0 0.6 0 radius1 0.03 radius2 0.03 }
-] }
-)",
-                                       "thin.wrl"));
+  const float r = 0.03f, slab = 0.2f;
+  const Example e = straightLimb(r);
   ASSERT_TRUE(e.character);
   SkeletonCache skel(*e.character);
-  const float r = 0.03f, slab = 0.2f;
   auto ring = [&](bool resolve, MeshTopology& t) {
-    TesselatorOptions o;
-    o.desiredRadius = 0.05f;
-    o.queryRadius = 0.05f * 0.8f / 0.3f;
-    o.cubeSize = 0.1f;
+    TesselatorOptions o = limbOptions(resolve);
     o.closedFallback = false;
-    o.resolveThinParts = resolve;
     Tesselator tess(o);
     Mesh mesh;
     EXPECT_LT(tess.settle(skel, mesh, 400), 400);
@@ -969,21 +979,11 @@ ExponentialBlend { variance 0.25 children [
 // equal to the thickness up to 1, such a part packed a few per cent denser than the body it joins, and flubber's arms
 // folded more often; docs/tesselator.md, "Thin parts").
 TEST(Tesselator, ALimbNearlyAsThickAsTheSpacingKeepsTheOneSpacing) {
-  const Example e = fromRead(readScene(R"(#VRML V2.0 utf8
-ExponentialBlend { variance 0.25 children [
-  LineSeg { point1 0 0 0 point2 0 0.6 0 radius1 0.048 radius2 0.048 }
-] }
-)",
-                                       "limb.wrl"));
+  const Example e = straightLimb(0.048f);
   ASSERT_TRUE(e.character);
   SkeletonCache skel(*e.character);
   auto settle = [&](bool resolve, std::vector<glm::vec3>& positions) {
-    TesselatorOptions o;
-    o.desiredRadius = 0.05f;
-    o.queryRadius = 0.05f * 0.8f / 0.3f;
-    o.cubeSize = 0.1f;
-    o.resolveThinParts = resolve;
-    Tesselator tess(o);
+    Tesselator tess(limbOptions(resolve));
     Mesh mesh;
     tess.settle(skel, mesh, 200);
     positions.assign(tess.particles().positions.begin(), tess.particles().positions.end());
