@@ -281,9 +281,12 @@ void collectHoles(Tesselator::State& s) {
 
 // Whether a hole loop may be filled: it turns counter-clockwise seen from outside (its vector area along the
 // vertices' mean normal is positive), as the loop around a hole does. A clockwise one runs around an island of
-// triangles inside a larger hole, and filling it would cap the island with a second, flipped layer; it is opened up
-// instead. Only loops whose normals all lie within 90 degrees of their mean (a patch that projects onto one plane)
-// get this verdict: one wrapped around a thin limb has no meaningful plane and is filled as before.
+// triangles inside a larger hole (or between overlapping triangles, in a saddle), and filling it would cap the island
+// with a second, flipped layer; it is opened up instead, by the triangles across its edges only (repairHoles): in the
+// neck's saddle at ~900 particles several such loops lie side by side, and opening up every triangle round their
+// vertices merged them into one band round the neck that no strip could join, and the head was capped off. Only loops
+// whose normals all lie within 90 degrees of their mean (a patch that projects onto one plane) get this verdict: one
+// wrapped around a thin limb has no meaningful plane and is filled as before.
 bool fillable(const Tesselator::State& s, const std::vector<uint32_t>& loop) {
   glm::vec3 normal(0.0f), area(0.0f);
   for (size_t k = 0; k < loop.size(); ++k) {
@@ -308,13 +311,19 @@ void removeHalfEdge(Tesselator::State& s, uint32_t a, uint32_t b) {
   --s.heCount[a];
 }
 
-// Removes every triangle with a corner marked in openUp, with its half-edges, keeping `boundary` (directed edges
-// without a twin) and s.openOut (a superset of the vertices with an open outgoing edge) up to date.
+// Removes every triangle with a corner marked in openUp or a directed edge in s.dropEdges, with its half-edges, keeping
+// `boundary` (directed edges without a twin) and s.openOut (a superset of the vertices with an open outgoing edge) up
+// to date.
 void removeAround(Tesselator::State& s, size_t& boundary) {
+  std::sort(s.dropEdges.begin(), s.dropEdges.end());
+  const auto dropped = [&](uint32_t a, uint32_t b) {
+    return std::binary_search(s.dropEdges.begin(), s.dropEdges.end(), uint64_t(a) << 32 | b);
+  };
   size_t w = 0;
   for (size_t t = 0; t < s.tris.size(); t += 3) {
     const uint32_t c[3] = {s.tris[t], s.tris[t + 1], s.tris[t + 2]};
-    if (!(s.openUp[c[0]] | s.openUp[c[1]] | s.openUp[c[2]])) {
+    const bool onRim = !s.dropEdges.empty() && (dropped(c[0], c[1]) || dropped(c[1], c[2]) || dropped(c[2], c[0]));
+    if (!(s.openUp[c[0]] | s.openUp[c[1]] | s.openUp[c[2]]) && !onRim) {
       for (int k = 0; k < 3; ++k) s.tris[w + size_t(k)] = c[k];
       w += 3;
       continue;
@@ -1350,6 +1359,7 @@ size_t repairHoles(Tesselator::State& s, const TesselatorOptions& o, size_t& bou
     collectHoles(s);
     s.holeUsed.assign(n * 4, 0);
     s.openUp.assign(n, 0);
+    s.dropEdges.clear();
     unfilled = collectLoops(s, o);
     bridgeTubes(s, o, boundary);
     // Every loop not bridged is capped by ear clipping.
@@ -1357,17 +1367,22 @@ size_t repairHoles(Tesselator::State& s, const TesselatorOptions& o, size_t& bou
       if (s.loopBridged[k]) continue;
       s.loop.assign(s.loops.begin() + std::ptrdiff_t(s.loopStart[k]),
                     s.loops.begin() + std::ptrdiff_t(s.loopStart[k + 1]));
-      if (!fillable(s, s.loop) || !clipEars(s, o.desiredRadius, boundary)) {
+      if (!fillable(s, s.loop)) {  // wrong way round: its rim's triangles go next round (see fillable)
+        ++unfilled;
+        for (size_t q = 0; q < s.loop.size(); ++q)
+          s.dropEdges.push_back(uint64_t(s.loop[(q + 1) % s.loop.size()]) << 32 | s.loop[q]);
+      } else if (!clipEars(s, o.desiredRadius, boundary)) {
         ++unfilled;
         for (uint32_t v : s.loop) s.openUp[v] = 1;  // open up around it next round
       }
     }
-    // Loops that could not be closed (pinched or folded): remove every triangle touching them, so that the next
-    // round sees one larger, simple loop around the trouble spot. (A loop counts as unclosed when another loop's
-    // triangles closed it first: then nothing is left open.)
+    // Loops that could not be closed (pinched or folded): remove every triangle touching them (a loop the wrong way
+    // round: the triangles across its edges), so that the next round sees one larger, simple loop around the trouble
+    // spot. (A loop counts as unclosed when another loop's triangles closed it first: then nothing is left open.)
     if (boundary == 0) unfilled = 0;
     if (unfilled > 0 && round < 3) removeAround(s, boundary);
   }
+  s.dropEdges.clear();  // (pass F's removeAround takes pinches only)
   return unfilled;
 }
 

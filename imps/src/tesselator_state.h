@@ -137,6 +137,7 @@ struct Tesselator::State {
   std::vector<uint8_t> dropSlot;  // per half-edge slot: its triangle is in a pinched vertex's smaller fan
   std::vector<uint32_t> holeTo;
   std::vector<uint8_t> holeCount, holeUsed, openUp, openOut;
+  std::vector<uint64_t> dropEdges;  // repairHoles -> removeAround: directed edges (a << 32 | b) whose triangles go
   std::vector<uint32_t> loop, tris;
   std::vector<uint32_t> loops;       // repairHoles: one round's closed hole loops, concatenated
   std::vector<size_t> loopStart;     // repairHoles: loop k is loops[loopStart[k], loopStart[k + 1])
