@@ -322,7 +322,7 @@ void removeAround(Tesselator::State& s, size_t& boundary) {
   size_t w = 0;
   for (size_t t = 0; t < s.tris.size(); t += 3) {
     const uint32_t c[3] = {s.tris[t], s.tris[t + 1], s.tris[t + 2]};
-    const bool onRim = !s.dropEdges.empty() && (dropped(c[0], c[1]) || dropped(c[1], c[2]) || dropped(c[2], c[0]));
+    const bool onRim = dropped(c[0], c[1]) || dropped(c[1], c[2]) || dropped(c[2], c[0]);
     if (!(s.openUp[c[0]] | s.openUp[c[1]] | s.openUp[c[2]]) && !onRim) {
       for (int k = 0; k < 3; ++k) s.tris[w + size_t(k)] = c[k];
       w += 3;
@@ -2009,33 +2009,31 @@ void Tesselator::triangulate(Mesh& mesh) {
   stats_.openEdges = boundary;
   s.lastMeshOpen = boundary > 0 || pinched > 0;
   stats_.foldedTriangles = s.lastMeshOpen || !o.unfold ? 0 : unfoldTriangles(s);  // H
-  // J: a closed triangulation of more solid pieces than the field was last found to have may have meshed a part apart
-  // from the solid it joins (a head capped at the neck): it is checked against the fallback, Marching Cubes of the
-  // same field, which it then becomes. The solids it cut off are stats().cutOffParts.
-  bool written = false;
-  Mesh fallback;
   stats_.cutOffParts = 0;
-  if (o.closedFallback && boundary == 0 && pinched == 0) {
-    const size_t pieces = solidPieces(s);
+  stats_.fallback = o.closedFallback && (boundary > 0 || pinched > 0);
+  if (stats_.fallback) {  // G: never show a hole, nor a part off the body (docs/tesselator.md, "The fallback")
+    writeFallbackMesh(s, o, mesh);
+  } else {
+    writeMesh(s, o, mesh);
+    // J: a closed triangulation of more solid pieces than the field was last found to have may have meshed a part
+    // apart from the solid it joins (a head capped at the neck): it is matched against the fallback, Marching Cubes
+    // of the same field, which it then becomes (G). The solids it cut off are stats().cutOffParts.
+    const size_t pieces = o.closedFallback ? solidPieces(s) : 0;
     if (pieces > 1 && pieces != s.fieldPieces) {
-      writeMesh(s, o, mesh);
+      Mesh fallback;
       writeFallbackMesh(s, o, fallback);
       const ComponentMatch match = matchComponents(mesh, fallback);
       stats_.cutOffParts = match.cutOff - match.cutOffCavities;
-      written = true;
+      if (stats_.cutOffParts > 0) {
+        mesh = std::move(fallback);
+        stats_.fallback = true;
+      }
     }
-    if (stats_.cutOffParts == 0) s.fieldPieces = pieces;
+    if (o.closedFallback && stats_.cutOffParts == 0) s.fieldPieces = pieces;
   }
-  stats_.fallback = o.closedFallback && (boundary > 0 || pinched > 0 || stats_.cutOffParts > 0);
-  if (stats_.fallback) {  // G: never show a hole, nor a part off the body (docs/tesselator.md, "The fallback")
+  if (stats_.fallback) {
     ++stats_.fallbacks;
-    if (written)
-      mesh = std::move(fallback);
-    else
-      writeFallbackMesh(s, o, mesh);
     boundary = 0;
-  } else if (!written) {
-    writeMesh(s, o, mesh);
   }
   // The surface rows' vertices were this render's: the arrays shared with the particles (s.nrm) are n long again.
   // s.addedFrom stays for carryTexcoords.
