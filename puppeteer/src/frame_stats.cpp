@@ -52,6 +52,12 @@ void FrameStats::addLatency(double ms) {
   latencies_.push_back(ms);
 }
 
+void FrameStats::addParticleMesh(bool standIn, bool cutOff) {
+  ++particleMeshes_;
+  standIns_ += standIn;
+  standInsCutOff_ += standIn && cutOff;
+}
+
 bool FrameStats::endFrame(int64_t nowNs) {
   frameMs_.push_back(double(nowNs - lastFrameEndNs_) * 1e-6);
   lastFrameEndNs_ = nowNs;
@@ -78,6 +84,7 @@ FrameSummary FrameStats::summary() const {
   for (size_t p = 0; p < phaseMs_.size(); ++p) s.phaseMedianMs[p] = medianP99(phaseMs_[p]).median;
   s.latencies = latencies_.size();
   s.latencyMs = medianP99(latencies_);
+  s.particleMeshes = particleMeshes_, s.standIns = standIns_, s.standInsCutOff = standInsCutOff_;
   return s;
 }
 
@@ -96,6 +103,12 @@ std::string summaryText(const FrameSummary& s, size_t triangles, int width, int 
   if (s.latencies > 0)
     append("puppeteer: sample-to-screen latency over %zu frames: median %.1f ms, p99 %.1f ms\n", s.latencies,
            s.latencyMs.median, s.latencyMs.p99);
+  if (s.standIns > 0)
+    append(
+        "puppeteer: the particles' mesh was replaced by Marching Cubes in %llu of %llu particle meshes (%llu for a "
+        "part cut off, the rest for a hole or a pinch)\n",
+        static_cast<unsigned long long>(s.standIns), static_cast<unsigned long long>(s.particleMeshes),
+        static_cast<unsigned long long>(s.standInsCutOff));
   return text;
 }
 

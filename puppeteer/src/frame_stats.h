@@ -46,6 +46,10 @@ struct FrameSummary {
   std::array<double, kFramePhases> phaseMedianMs{};  // each phase's median over every frame (-1: never timed)
   size_t latencies = 0;                              // frames that showed a new sample
   MedianP99 latencyMs;                               // over every latency
+  // Particle meshes shown (frames with a new particle triangulation) and how many of them were the tesselator's
+  // Marching Cubes stand-in (TesselatorStats::fallback: the particles' own mesh had a hole, a pinch or a part cut
+  // off), `standInsCutOff` of those for a part cut off.
+  uint64_t particleMeshes = 0, standIns = 0, standInsCutOff = 0;
   double fps() const { return seconds > 0.0 ? frames / seconds : 0.0; }
 };
 
@@ -72,11 +76,16 @@ class FrameStats {
   void addPhase(FramePhase phase, double ms);
   // A frame showed a sample that arrived `ms` milliseconds before it was on screen.
   void addLatency(double ms);
+  // A new particle mesh is shown this frame; `standIn`: it is the Marching Cubes stand-in, `cutOff`: for a part cut
+  // off.
+  void addParticleMesh(bool standIn, bool cutOff);
   // The frame ended (is on screen) at `nowNs`. Returns true when this closed a window: window() then holds the new
   // figures and the next window starts here.
   bool endFrame(int64_t nowNs);
 
   int frames() const { return frames_; }
+  uint64_t particleMeshes() const { return particleMeshes_; }
+  uint64_t standIns() const { return standIns_; }
   // The last frame's time (ms); 0 before the first frame.
   double lastFrameMs() const { return frameMs_.empty() ? 0.0 : frameMs_.back(); }
   // The figures of the last window closed (all zero / -1 before the first).
@@ -88,6 +97,7 @@ class FrameStats {
  private:
   int64_t startNs_ = 0, lastFrameEndNs_ = 0, windowStartNs_ = 0;
   int frames_ = 0, framesInWindow_ = 0;
+  uint64_t particleMeshes_ = 0, standIns_ = 0, standInsCutOff_ = 0;
   std::array<double, kFramePhases> phaseSum_{};
   std::array<std::vector<double>, kFramePhases> phaseMs_;
   std::vector<double> frameMs_, latencies_, recentLatencies_;
@@ -96,7 +106,8 @@ class FrameStats {
 
 // The exit summary, as the viewer prints it: "puppeteer: N frames in S s: F FPS (frame time median M ms, p99 P ms),
 // T triangles, WxH", the phases' medians ("(GL finished after each)" when `syncedPhases`), and the sample-to-screen
-// latency when any frame showed a sample. Each line ends in '\n'.
+// latency when any frame showed a sample, and "the particles' mesh was replaced by Marching Cubes in N of M particle
+// meshes (K for a part cut off, the rest for a hole or a pinch)" when any was. Each line ends in '\n'.
 std::string summaryText(const FrameSummary& summary, size_t triangles, int width, int height, bool syncedPhases);
 
 }  // namespace imps::app

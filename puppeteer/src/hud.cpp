@@ -29,6 +29,13 @@ std::string keyHelp(bool deviceKeys) {
          (deviceKeys ? "o record  k calibrate  " : "") + "F12 shot  Esc quit";
 }
 
+std::string standInText(const HudInfo& info) {
+  if (info.standIns == 0) return {};
+  const std::string counts = std::to_string(info.standIns) + " of " + std::to_string(info.particleMeshes) + " meshes";
+  if (!info.standIn) return "MC stand-ins: " + counts;
+  return std::string("MC stand-in (") + (info.standInCutOff ? "part cut off" : "hole or pinch") + ")  " + counts;
+}
+
 bool Hud::wantsMouse() const { return ImGui::GetIO().WantCaptureMouse; }
 
 void Hud::draw(const HudInfo& info, const std::function<void()>& extra) {
@@ -57,8 +64,14 @@ void Hud::draw(const HudInfo& info, const std::function<void()>& extra) {
     else
       ImGui::Text("Marching Cubes: %.2f ms", info.marchingCubesMs);
     ImGui::Text("%zu particles  %zu triangles", info.particles, info.triangles);
-    ImGui::Separator();
     const ImVec4 kProblem(1.0f, 0.45f, 0.25f, 1.0f);  // orange-red: reads as "something is wrong" on the grey panel
+    if (const std::string standIn = standInText(info); !standIn.empty()) {
+      if (info.standIn)
+        ImGui::TextColored(kProblem, "%s", standIn.c_str());
+      else
+        ImGui::TextColored(kDim, "%s", standIn.c_str());
+    }
+    ImGui::Separator();
     if (info.problem) {
       ImGui::PushStyleColor(ImGuiCol_Text, kProblem);
       ImGui::TextWrapped("source: %s [%s]", info.source.c_str(), info.state.c_str());

@@ -20,6 +20,10 @@ struct HudInfo {
   double marchingCubesMs = 0.0;
   int updatesPerRender = 1;
   size_t particles = 0, triangles = 0;
+  // The particle mesh shown is the tesselator's Marching Cubes stand-in (its own had a hole or a pinch, or cut a part
+  // off: standInCutOff); and how many of the particle meshes shown so far (particleMeshes) were one.
+  bool standIn = false, standInCutOff = false;
+  uint64_t particleMeshes = 0, standIns = 0;
   std::string source;         // "hand" / "replay: NAME" / device name
   std::string state;          // "posing", "playing (loop 2)", "Streaming" …
   bool problem = false;       // the source is not delivering (no device, lost, reconnecting): state in a warning colour
@@ -43,6 +47,11 @@ struct HudInfo {
   std::string message;        // the last key's result ("saved …", "not available yet")
   bool deviceKeys = false;    // keys o (record) and k (calibrate) work: a live device (puppeteer live)
 };
+
+// The HUD's line about the particles' Marching Cubes stand-in: "" when no particle mesh shown so far was one; else
+// "MC stand-in (part cut off | hole or pinch)  N of M meshes" for a frame showing one (in the warning colour), "MC
+// stand-ins: N of M meshes" for one that does not.
+std::string standInText(const HudInfo& info);
 
 // The key help line at the bottom of the HUD: only keys that work here (o and k only with deviceKeys).
 std::string keyHelp(bool deviceKeys);

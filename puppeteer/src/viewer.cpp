@@ -483,6 +483,7 @@ class FrameLoop {
   int64_t inFlightArrival_ = 0;  // arrival of the sample whose pose is being polygonized (0: none new)
   int64_t meshArrival_ = 0;      // arrival of the sample whose mesh is about to be drawn
   uint64_t uploadedVersion_ = ~uint64_t{0};
+  uint64_t describedVersion_ = ~uint64_t{0};  // the mesh describeMesh() last counted
   std::vector<AttachedProp> props_;  // moved by options.moveProps
   uint64_t propsVersion_ = 0;
 };
@@ -577,6 +578,12 @@ void FrameLoop::describeMesh() {
   info_.updatesPerRender = pipeline_.updatesPerRender();
   info_.particles = pipeline_.polygonizer() == Polygonizer::Particles ? ts.particles : 0;
   info_.triangles = pipeline_.mesh().triangleCount();
+  const bool particles = pipeline_.polygonizer() == Polygonizer::Particles;
+  if (particles && pipeline_.meshVersion() != describedVersion_)
+    stats_.addParticleMesh(ts.fallback, ts.cutOffParts > 0);
+  describedVersion_ = pipeline_.meshVersion();
+  info_.standIn = particles && ts.fallback, info_.standInCutOff = info_.standIn && ts.cutOffParts > 0;
+  info_.particleMeshes = stats_.particleMeshes(), info_.standIns = stats_.standIns();
   for (const ViewerActor& a : options_.others) info_.triangles += a.pipeline->mesh().triangleCount();
   if (options_.printMeshHashes)
     std::printf("frame %d hash %016llx triangles %zu\n", frame_,

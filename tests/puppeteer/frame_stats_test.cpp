@@ -165,6 +165,27 @@ TEST(FrameStats, SummaryText) {
   EXPECT_EQ(std::count(synced.begin(), synced.end(), '\n'), 3);
 }
 
+// Particle meshes replaced by the tesselator's Marching Cubes stand-in are counted and, when any was, reported.
+TEST(FrameStats, StandInsAreCountedAndReported) {
+  FrameStats stats;
+  stats.start(0);
+  stats.addParticleMesh(false, false);
+  stats.addParticleMesh(true, true);
+  stats.addParticleMesh(true, false);
+  stats.addParticleMesh(false, true);  // a cut found but not shown is no stand-in
+  EXPECT_EQ(stats.particleMeshes(), 4u);
+  EXPECT_EQ(stats.standIns(), 2u);
+  const FrameSummary s = stats.summary();
+  EXPECT_EQ(s.standInsCutOff, 1u);
+  EXPECT_NE(summaryText(s, 1, 2, 3, false)
+                .find("puppeteer: the particles' mesh was replaced by Marching Cubes in 2 of 4 particle meshes (1 for "
+                      "a part cut off, the rest for a hole or a pinch)\n"),
+            std::string::npos);
+  FrameStats none;
+  none.addParticleMesh(false, false);
+  EXPECT_EQ(summaryText(none.summary(), 1, 2, 3, false).find("Marching Cubes"), std::string::npos);
+}
+
 TEST(FrameStats, PhaseNames) {
   EXPECT_STREQ(phaseName(FramePhase::Pose), "pose");
   EXPECT_STREQ(phaseName(FramePhase::Polygonize), "polygonize");

@@ -30,5 +30,19 @@ TEST(Hud, OnlyLiveSourcesHandleTheDeviceKeys) {
   EXPECT_FALSE(replay.handlesDeviceKeys());
 }
 
+// The stand-in line: absent until a particle mesh was replaced, then the count on every frame, and why on a frame that
+// shows one.
+TEST(Hud, StandInLineSaysWhyAndHowOften) {
+  HudInfo info;
+  info.particleMeshes = 40;
+  EXPECT_EQ(standInText(info), "");
+  info.standIn = true, info.standIns = 1, info.particleMeshes = 41;
+  EXPECT_EQ(standInText(info), "MC stand-in (hole or pinch)  1 of 41 meshes");
+  info.standInCutOff = true, info.standIns = 2, info.particleMeshes = 42;
+  EXPECT_EQ(standInText(info), "MC stand-in (part cut off)  2 of 42 meshes");
+  info.standIn = info.standInCutOff = false, info.particleMeshes = 43;
+  EXPECT_EQ(standInText(info), "MC stand-ins: 2 of 43 meshes");
+}
+
 }  // namespace
 }  // namespace imps::app
