@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <string>
 
 #include "imps/check.h"
@@ -267,16 +268,89 @@ void skeletonPoints(const Primitive& p, float step, std::vector<glm::vec3>& out)
 // Whether options.cancel is set (relaxed: a late view only costs one more block).
 bool cancelled(const MarchingCubesOptions& o) { return o.cancel && o.cancel->load(std::memory_order_relaxed); }
 
-// The mean of a loop-centre vertex's loop, moved onto the surface by up to three Newton steps.
-FieldSample centreVertex(const Field& field, glm::vec3 mean, FieldScratch& scratch, glm::vec3& x) {
-  const float iso = field.iso();
+// A loop-centre vertex is accepted this close to the surface: |F - iso| / |grad F| in cells.
+constexpr float kCentreTolerance = 1e-3f;
+
+// |F - iso| / |grad F| at a sample (the distance to the surface to first order); infinite where the gradient is 0.
+float surfaceOffset(const FieldSample& s, float iso) {
+  const float g = glm::length(s.gradient);
+  return g > 0.0f ? std::abs(s.value - iso) / g : std::numeric_limits<float>::infinity();
+}
+
+// The mean of a loop-centre vertex's loop (its `count` vertices at `loop`), moved onto the surface; `reach` is its
+// cell grown by a cell on every side, where the block's candidates hold every primitive whose support reaches. Up to
+// three Newton steps first, as long as they stay in `reach`: they suffice where F is near linear over the step.
+// Where they leave the point more than kCentreTolerance cells off the surface (from deep inside the exponential blend
+// Newton creeps, lowering ln F by about 1 a step; near a support's edge, or where the mean lies in the air of a
+// saddle, a step leaves the cell), the root nearest the mean is bracketed along lines through it (the outward normal
+// there and the loop's mean normal, both ways, then the six axis directions), stepping out to a cell, and found by
+// the Illinois method to within that tolerance. Without any bracket, the better of the mean and Newton's point is
+// kept. Every point depends only on the loop, so 1 and N threads agree.
+FieldSample centreVertex(const Field& field, glm::vec3 mean, const glm::vec3* loop, int count, const Box& reach,
+                         FieldScratch& scratch, glm::vec3& x) {
+  const glm::vec3 cells = (reach.hi - reach.lo) / 3.0f;
+  const float cell = std::max({cells.x, cells.y, cells.z}), side = std::min({cells.x, cells.y, cells.z});
+  const float iso = field.iso(), tolerance = kCentreTolerance * cell;
   x = mean;
-  FieldSample fs = field.sample(x, scratch);
+  const FieldSample atMean = field.sample(x, scratch);
+  FieldSample fs = atMean;
   for (int step = 0; step < 3; ++step) {
     const float g2 = glm::dot(fs.gradient, fs.gradient);
     if (g2 <= 0.0f) break;
-    x -= (fs.value - iso) / g2 * fs.gradient;
+    const glm::vec3 next = x - (fs.value - iso) / g2 * fs.gradient;
+    if (!reach.contains(next)) break;  // beyond the candidates' reach: F there would miss primitives
+    x = next;
     fs = field.sample(x, scratch);
+  }
+  if (surfaceOffset(fs, iso) <= tolerance) return fs;
+  if (surfaceOffset(atMean, iso) < surfaceOffset(fs, iso)) x = mean, fs = atMean;
+  // The lines to search, as unit directions (each also reversed).
+  std::array<glm::vec3, 5> lines{glm::vec3(0.0f), glm::vec3(0.0f), glm::vec3(1, 0, 0), glm::vec3(0, 1, 0),
+                                 glm::vec3(0, 0, 1)};
+  if (glm::dot(atMean.gradient, atMean.gradient) > 0.0f) lines[0] = glm::normalize(atMean.gradient);
+  for (int v = 0; v < count; ++v)
+    if (const glm::vec3 g = field.sample(loop[v], scratch).gradient; glm::dot(g, g) > 0.0f)
+      lines[1] += glm::normalize(g);
+  if (glm::dot(lines[1], lines[1]) > 1e-12f) lines[1] = glm::normalize(lines[1]);
+  // F - iso along mean + t d; inside is F >= iso, as the samples are classified.
+  const float f0 = atMean.value - iso;
+  glm::vec3 d(0.0f);
+  float ta = 0.0f, fa = f0, tb = 0.0f, fb = 0.0f;
+  bool bracketed = false;
+  for (float reachOut = 0.0f, step = 0.125f; step <= 1.0f && !bracketed; reachOut = step, step *= 2.0f)
+    for (const glm::vec3& line : lines) {
+      if (glm::dot(line, line) == 0.0f) continue;
+      for (const float sign : {1.0f, -1.0f}) {
+        const float f = field.sample(mean + sign * step * side * line, scratch).value - iso;
+        if ((f >= 0.0f) == (f0 >= 0.0f)) continue;
+        // The inner end, sampled in the round before on this line, had the mean's side.
+        d = sign * line, ta = reachOut * side, tb = step * side, fb = f;
+        fa = ta > 0.0f ? field.sample(mean + ta * d, scratch).value - iso : f0;
+        bracketed = true;
+        break;
+      }
+      if (bracketed) break;
+    }
+  if (!bracketed) return fs;
+  float bestOffset = surfaceOffset(fs, iso);
+  int kept = 0;  // which end the last step kept (Illinois: halve the other end's value on a repeat)
+  for (int step = 0; step < 40 && std::abs(tb - ta) > tolerance; ++step) {
+    const float t = fb != fa ? (ta * fb - tb * fa) / (fb - fa) : 0.5f * (ta + tb);
+    const FieldSample s = field.sample(mean + t * d, scratch);
+    if (const float offset = surfaceOffset(s, iso); offset < bestOffset) {
+      x = mean + t * d, bestOffset = offset, fs = s;
+      if (offset <= tolerance) break;
+    }
+    const float f = s.value - iso;
+    if ((f >= 0.0f) == (fa >= 0.0f)) {
+      ta = t, fa = f;
+      if (kept == 1) fb *= 0.5f;
+      kept = 1;
+    } else {
+      tb = t, fb = f;
+      if (kept == -1) fa *= 0.5f;
+      kept = -1;
+    }
   }
   return fs;
 }
@@ -310,12 +384,14 @@ struct EdgeRef {
 // Resolves the cube edges of block b's cells to their vertices (the block itself or a +x, +y, +z neighbour).
 struct EdgeResolver {
   const CaseTable& table;
+  const Grid& g;
   const BlockResult& r;
+  glm::ivec3 block;
   std::array<const BlockResult*, 8> owners{};  // owners[ox | oy << 1 | oz << 2]: the block (0) and its neighbours
 
-  EdgeResolver(const CaseTable& t, const Grid& g, const std::vector<BlockResult>& blocks, const BlockResult& self,
-               glm::ivec3 block)
-      : table(t), r(self) {
+  EdgeResolver(const CaseTable& t, const Grid& grid, const std::vector<BlockResult>& blocks, const BlockResult& self,
+               glm::ivec3 blockCoords)
+      : table(t), g(grid), r(self), block(blockCoords) {
     for (int o = 0; o < 8; ++o) {
       const glm::ivec3 n = block + glm::ivec3(o & 1, (o >> 1) & 1, o >> 2);
       if (n.x < g.blocks.x && n.y < g.blocks.y && n.z < g.blocks.z)
@@ -348,23 +424,27 @@ struct EdgeResolver {
 
 // Appends cell `cell`'s loop-centre vertices (table entry entryIndex) to r, their provisional indices to centreIndex.
 // The field is prepared (block b's candidates) the first time one is needed.
-void centreVertices(const Field& field, const MarchingCubesOptions& options, const EdgeResolver& edges,
-                    uint32_t cell, size_t entryIndex, std::span<const uint32_t> candidates, bool& prepared,
-                    FieldScratch& scratch, BlockResult& r, uint32_t (&centreIndex)[2]) {
+void centreVertices(const Field& field, const MarchingCubesOptions& options, const EdgeResolver& edges, uint32_t cell,
+                    size_t entryIndex, std::span<const uint32_t> candidates, bool& prepared, FieldScratch& scratch,
+                    BlockResult& r, uint32_t (&centreIndex)[2]) {
   const CaseTable& table = edges.table;
   const auto& entry = table.entries[entryIndex];
   const uint32_t index = cell & 0xFFFFu;
   const int i = int(index) % kBlock, j = int(index) / kBlock % kBlock, k = int(index) / (kBlock * kBlock);
   const bool inside = i < kBlock - 1 && j < kBlock - 1 && k < kBlock - 1;
   const int centres = table.centreCount[entryIndex];
+  // The cell grown by a cell on every side: the block's candidates hold every primitive whose support reaches it.
+  const glm::ivec3 v = edges.block * kBlock + glm::ivec3(i, j, k);
+  const Box reach{edges.g.vertex(v.x - 1, v.y - 1, v.z - 1), edges.g.vertex(v.x + 2, v.y + 2, v.z + 2)};
   for (int centre = 0; centre < centres; ++centre) {
-    glm::vec3 sum(0.0f);
+    glm::vec3 sum(0.0f), loop[12];
     int count = 0;
     for (int t = 0; t < entry[0]; ++t) {
       if (entry[size_t(1 + 3 * t)] != kCentre + centre) continue;
       const auto [owner, local] = edges.of(index, inside, i, j, k, entry[size_t(2 + 3 * t)]);
-      sum += glm::vec3(owner->positions[3 * local], owner->positions[3 * local + 1], owner->positions[3 * local + 2]);
-      ++count;
+      loop[count] =
+          glm::vec3(owner->positions[3 * local], owner->positions[3 * local + 1], owner->positions[3 * local + 2]);
+      sum += loop[count++];
     }
     if (count == 0) break;
     if (!prepared) {
@@ -372,7 +452,7 @@ void centreVertices(const Field& field, const MarchingCubesOptions& options, con
       prepared = true;
     }
     glm::vec3 x;
-    const FieldSample fs = centreVertex(field, sum / float(count), scratch, x);
+    const FieldSample fs = centreVertex(field, sum / float(count), loop, count, reach, scratch, x);
     centreIndex[centre] = kProvisional | uint32_t(r.centrePositions.size() / 3);
     r.centrePositions.insert(r.centrePositions.end(), {x.x, x.y, x.z});
     const float len = glm::length(fs.gradient);
@@ -900,8 +980,15 @@ void findEdgeRoots(const Field& field, RootTransform tf, bool shade, WorkerScrat
         if (e.side == 1) e.ga *= m > 0.0f ? m : 0.5f;
         e.side = 1;
       }
-      e.t = e.ta + (e.tb - e.ta) * e.ga / (e.ga - e.gb);
-      if (it + 1 < e.iterations) ws.stillActive.push_back(ws.active[q]);
+      // Past its regula falsi steps an edge whose bracket is still wide (F not monotonic along it: a dip between
+      // two blobs, a hard blend's clamped tail) is bisected until the bracket is narrow: the vertex is then on the
+      // root the bracket holds, never between.
+      const bool bisect = it + 1 >= e.iterations;
+      e.t = bisect ? 0.5f * (e.ta + e.tb) : e.ta + (e.tb - e.ta) * e.ga / (e.ga - e.gb);
+      if (!bisect || (e.tb - e.ta > kRootBracket && it < e.iterations + kMaxBisections))
+        ws.stillActive.push_back(ws.active[q]);
+      else
+        e.t = e.ta + (e.tb - e.ta) * e.ga / (e.ga - e.gb);  // the narrow bracket's interpolated root
     }
     ws.active.swap(ws.stillActive);
   }

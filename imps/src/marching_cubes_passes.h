@@ -47,6 +47,8 @@ inline constexpr uint32_t kProvisional = 0x80000000u;     // triangle index of a
 inline constexpr int kSubBlock = kBlock / 2;              // cells per sub-block side (cullSubBlocks)
 inline constexpr int kSubBlocks = 8;                      // sub-blocks per block
 inline constexpr size_t kSubBlockMinCandidates = 4;       // fewer candidates: every sub-block is sampled
+inline constexpr float kRootBracket = 5e-4f;  // findEdgeRoots: bisect past the steps while a bracket is wider (edges)
+inline constexpr int kMaxBisections = 16;     // findEdgeRoots: at most this many (2^-11 is already below kRootBracket)
 enum SubBlockClass : uint8_t { kLive, kOutside, kInside };  // cullSubBlocks' verdicts
 
 inline int sampleIndex(int i, int j, int k) { return i + kBlockVerts * (j + kBlockVerts * k); }
@@ -209,11 +211,13 @@ void sampleBlock(const Field& field, const Grid& g, glm::ivec3 block, const Bloc
 // has a surface cell.
 bool classifyBlock(float iso, int rootIterations, const BlockAxes& axes, BlockResult& r, WorkerScratch& ws);
 
-// 4e. Root finding on ws.edges: their parameters t in (0, 1) along pa -> pb, at most each edge's iterations batched
-// evaluations of the true field after the first estimate: the root of the polynomial through ws.ends and the known
-// ws.outer, or of the line through ws.ends when ws.outer is empty. With `shade` and ws.outer the evaluations are whole
-// samples, and an edge whose root is an evaluated point (it met the tolerance) gets that sample in ws.samples and a 1
-// in ws.shaded; every other edge a 0. ws.field must be prepared for the block.
+// 4e. Root finding on ws.edges: their parameters t in (0, 1) along pa -> pb. The first estimate is the root of the
+// polynomial through ws.ends and the known ws.outer, or of the line through ws.ends when ws.outer is empty; then at
+// most each edge's iterations batched evaluations of the true field (regula falsi), and for an edge whose bracket is
+// still wider than kRootBracket of the edge after them, up to kMaxBisections bisections, so that its vertex is on
+// the root its bracket holds. With `shade` and ws.outer the evaluations are whole samples, and an edge whose root is
+// an evaluated point (it met the tolerance) gets that sample in ws.samples and a 1 in ws.shaded; every other edge a
+// 0. ws.field must be prepared for the block.
 void findEdgeRoots(const Field& field, RootTransform transform, bool shade, WorkerScratch& ws);
 
 // 4f. r.positions (and, as the options ask, r.normals and r.colors) of ws.edges' vertices, 3 floats per vertex: the

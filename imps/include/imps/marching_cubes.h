@@ -9,9 +9,11 @@
 //    faces alone (the asymptotic decider resolves ambiguous faces from the face's four samples), so neighbouring
 //    cells always agree on the contour across their shared face; the grid has a one-cell margin outside the
 //    surface's conservative bounds, so no surface reaches the grid boundary. Shared vertices (indexed mesh).
-//  * Vertices lie on the surface: each is found by root finding along its edge (Illinois method) on the true field,
-//    not only linear interpolation. Normals are the normalised negative field gradient; colours are the materials
-//    blended by each primitive's share of the field.
+//  * Vertices lie on the surface: each is found by root finding along its edge (Anderson-Bjorck regula falsi, then
+//    bisection where the steps run out with a wide bracket) on the true field, not only linear interpolation; a
+//    loop-centre vertex by Newton steps from its loop's mean, else by a bracketed root on a line through it. Normals
+//    are the normalised negative field gradient; colours are the materials blended by each primitive's share of the
+//    field.
 //  * The unwanted-blending rule holds (the Field's blend sets), unlike the thesis's Marching Cubes.
 //  * Thin features survive coarse grids (preserveThinFeatures): every primitive's skeleton (metaball centre,
 //    ellipsoid major axis, line segment) is sampled at half-cell spacing; a grid vertex nearest to a skeleton point
