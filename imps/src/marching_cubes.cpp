@@ -983,12 +983,10 @@ void findEdgeRoots(const Field& field, RootTransform tf, bool shade, WorkerScrat
       // Past its regula falsi steps an edge whose bracket is still wide (F not monotonic along it: a dip between
       // two blobs, a hard blend's clamped tail) is bisected until the bracket is narrow: the vertex is then on the
       // root the bracket holds, never between.
-      const bool bisect = it + 1 >= e.iterations;
+      const bool steps = it + 1 < e.iterations,
+                 bisect = !steps && e.tb - e.ta > kRootBracket && it < e.iterations + kMaxBisections;
       e.t = bisect ? 0.5f * (e.ta + e.tb) : e.ta + (e.tb - e.ta) * e.ga / (e.ga - e.gb);
-      if (!bisect || (e.tb - e.ta > kRootBracket && it < e.iterations + kMaxBisections))
-        ws.stillActive.push_back(ws.active[q]);
-      else
-        e.t = e.ta + (e.tb - e.ta) * e.ga / (e.ga - e.gb);  // the narrow bracket's interpolated root
+      if (steps || bisect) ws.stillActive.push_back(ws.active[q]);
     }
     ws.active.swap(ws.stillActive);
   }

@@ -572,13 +572,13 @@ void FrameLoop::upload(bool drawParticles) {
 // What the HUD and the hashes say about this mesh, read before the worker rewrites it.
 void FrameLoop::describeMesh() {
   const TesselatorStats& ts = pipeline_.tesselator().stats();
-  info_.polygonizer = pipeline_.polygonizer() == Polygonizer::Particles ? "particles" : "Marching Cubes";
+  const bool particles = pipeline_.polygonizer() == Polygonizer::Particles;
+  info_.polygonizer = particles ? "particles" : "Marching Cubes";
   info_.simulateMs = ts.simulateMs, info_.addDeleteMs = ts.addDeleteMs, info_.meshMs = ts.meshMs;
   info_.marchingCubesMs = pipeline_.marchingCubesStats().milliseconds;
   info_.updatesPerRender = pipeline_.updatesPerRender();
-  info_.particles = pipeline_.polygonizer() == Polygonizer::Particles ? ts.particles : 0;
+  info_.particles = particles ? ts.particles : 0;
   info_.triangles = pipeline_.mesh().triangleCount();
-  const bool particles = pipeline_.polygonizer() == Polygonizer::Particles;
   if (particles && pipeline_.meshVersion() != describedVersion_)
     stats_.addParticleMesh(ts.fallback, ts.cutOffParts > 0);
   describedVersion_ = pipeline_.meshVersion();
