@@ -244,6 +244,8 @@ inline float lnPositive(float x) {
   return s * series + float(e) * 0.69314718f;
 }
 
+// The most points one primitive's skeleton is sampled at (an accepted grid's diagonal is far below it).
+constexpr int kMaxSkeletonPoints = 1 << 20;
 
 // Skeleton points of primitive p at spacing <= step.
 void skeletonPoints(const Primitive& p, float step, std::vector<glm::vec3>& out) {
@@ -261,7 +263,10 @@ void skeletonPoints(const Primitive& p, float step, std::vector<glm::vec3>& out)
     a = p.center - axis;
     b = p.center + axis;
   }
-  const int n = std::max(1, int(std::ceil(glm::length(b - a) / step)));
+  // In double: a far endpoint's squared length overflows a float (an infinite count). A grid the planner accepted
+  // holds the whole skeleton, so the count is bounded by its cells; the clamp only guards a non-finite step.
+  const double count = std::ceil(glm::length(glm::dvec3(b - a)) / double(step));
+  const int n = count >= 1.0 ? int(std::min(count, double(kMaxSkeletonPoints))) : 1;
   for (int s = 0; s <= n; ++s) out.push_back(a + (b - a) * (float(s) / float(n)));
 }
 
